@@ -1,0 +1,304 @@
+// manibench: the host program. Loads plugins by name and runs them.
+//   manibench list | info TASK | run TASK --policy P --seed S | demo
+// Exit codes: 0 success, 1 failure (reported on stderr), 2 usage error.
+#include <manibench/environment.hpp>
+#include <manibench/plugin_registry.hpp>
+
+#include <cstdio>
+#include <cstdlib>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace mb = manibench;
+
+namespace {
+
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+const char* kMainUsage = R"(usage: manibench <command> [options]
+
+Commands:
+  list                      every loaded plugin: kind, name, version, library
+  info TASK                 observation and action layout, success conditions,
+                            masks and objects of a task
+  run TASK --policy NAME    run one episode and print steps, return, success
+  demo                      list the plugins, then run the example task with its
+                            scripted expert
+
+Run `manibench <command> --help` for a command's options.
+Plugins are searched in $MANIBENCH_PLUGIN_PATH, ~/.local/lib/manibench/plugins,
+the install prefix and the build tree, in that order.
+)";
+
+const char* kListUsage = R"(usage: manibench list
+
+Lists every plugin library found on the search path with what it registered
+(kind, name, library version, file), then any library that was refused and why.
+)";
+
+const char* kInfoUsage = R"(usage: manibench info TASK [--controller NAME]
+
+Prints the task's observation layout, the controller's action layout, the
+success conditions, segmentation masks and the objects of each split.
+)";
+
+const char* kRunUsage = R"(usage: manibench run TASK --policy NAME|PATH.so [options]
+
+Options:
+  --policy NAME|PATH.so   policy plugin by name, or a library file to load
+  --seed S                episode seed (default 0)
+  --object ID             object id (default: drawn from the split by the seed)
+  --split train|test      split to draw the object from (default train)
+  --controller NAME       override the task's default controller
+  --no-early-stop         run to the time limit even after success
+)";
+
+// Minimal argument reader: positional words and --key value / --flag.
+struct Arguments {
+  std::vector<std::string> positional;
+  std::map<std::string, std::string> options;
+  bool help = false;
+};
+
+Arguments parseArguments(int argc, char** argv, int first, const std::vector<std::string>& valued,
+                         const std::vector<std::string>& flags) {
+  Arguments args;
+  for (int i = first; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word == "--help" || word == "-h") {
+      args.help = true;
+    } else if (word.rfind("--", 0) == 0) {
+      std::string key = word.substr(2);
+      std::string value;
+      const std::size_t eq = key.find('=');
+      if (eq != std::string::npos) {
+        value = key.substr(eq + 1);
+        key = key.substr(0, eq);
+      }
+      const bool is_valued = std::find(valued.begin(), valued.end(), key) != valued.end();
+      const bool is_flag = std::find(flags.begin(), flags.end(), key) != flags.end();
+      if (!is_valued && !is_flag) throw UsageError("unknown option '" + word + "'");
+      if (is_valued && eq == std::string::npos) {
+        if (i + 1 >= argc) throw UsageError("option '--" + key + "' needs a value");
+        value = argv[++i];
+      }
+      if (is_flag && eq != std::string::npos)
+        throw UsageError("option '--" + key + "' takes no value");
+      args.options[key] = value;
+    } else {
+      args.positional.push_back(word);
+    }
+  }
+  return args;
+}
+
+uint64_t parseSeed(const std::string& text) {
+  try {
+    std::size_t used = 0;
+    const unsigned long long value = std::stoull(text, &used);
+    if (used != text.size() || text.find('-') != std::string::npos) throw std::invalid_argument(text);
+    return value;
+  } catch (const std::exception&) {
+    throw UsageError("--seed needs a non-negative integer, got '" + text + "'");
+  }
+}
+
+std::string valueOr(const Arguments& args, const std::string& key, const std::string& fallback) {
+  const auto it = args.options.find(key);
+  return it == args.options.end() ? fallback : it->second;
+}
+
+void loadPlugins(mb::PluginRegistry& registry) { registry.loadSearchPath(); }
+
+int commandList(int argc, char** argv) {
+  const Arguments args = parseArguments(argc, argv, 2, {}, {});
+  if (args.help) {
+    std::cout << kListUsage;
+    return 0;
+  }
+  if (!args.positional.empty()) throw UsageError("list takes no arguments");
+  mb::PluginRegistry registry;
+  loadPlugins(registry);
+  std::cout << "search path:\n";
+  for (const std::string& dir : mb::PluginRegistry::calcDefaultSearchPath())
+    std::cout << "  " << dir << "\n";
+  std::cout << "\n" << std::left << std::setw(12) << "KIND" << std::setw(26) << "NAME"
+            << std::setw(10) << "VERSION" << "LIBRARY\n";
+  for (const mb::PluginEntry& e : registry.getEntries()) {
+    const mb::LoadedLibrary& lib = registry.getLibraries()[e.library];
+    std::cout << std::left << std::setw(12) << mb::toString(e.kind) << std::setw(26) << e.name
+              << std::setw(10) << lib.version << lib.path << "\n";
+  }
+  if (!registry.getFailures().empty()) {
+    std::cout << "\nrefused libraries:\n";
+    for (const mb::LoadFailure& f : registry.getFailures()) std::cout << "  " << f.message << "\n";
+  }
+  return 0;
+}
+
+void printSegments(const std::vector<mb::SegmentDescription>& segments) {
+  for (const auto& s : segments) {
+    std::ostringstream range;
+    range << "[" << s.offset << ", " << s.offset + s.size << ")";
+    std::cout << "  " << std::left << std::setw(12) << range.str() << std::setw(22) << s.name
+              << s.description << "\n";
+  }
+}
+
+int commandInfo(int argc, char** argv) {
+  const Arguments args = parseArguments(argc, argv, 2, {"controller"}, {});
+  if (args.help) {
+    std::cout << kInfoUsage;
+    return 0;
+  }
+  if (args.positional.size() != 1) throw UsageError("info needs exactly one TASK");
+  mb::PluginRegistry registry;
+  loadPlugins(registry);
+  mb::EnvironmentOptions options;
+  options.controller = valueOr(args, "controller", "");
+  mb::Environment env(registry, args.positional[0], options);
+  const mb::TaskDescription& task = env.getTaskDescription();
+  const std::vector<std::string> train = env.listObjects("train");
+  const std::vector<std::string> test = env.listObjects("test");
+  if (train.empty()) throw std::runtime_error("task '" + task.name + "' has no train objects");
+  env.reset(train.front(), 0);  // the action layout needs the robot's joints
+  const mb::ControllerDescription& controller = env.getControllerDescription();
+
+  std::cout << "task " << task.name << " ("
+            << registry.getLibraries()[registry.getEntry(mb::PluginKind::Task, task.name).library].path
+            << ")\n";
+  std::cout << "control " << task.control_frequency << " Hz, frame skip " << task.frame_skip
+            << ", " << task.max_episode_steps << " steps per episode\n\n";
+  std::cout << "observation (state), " << task.observation_dim << " values:\n";
+  printSegments(task.observation_segments);
+  std::cout << "\naction, " << controller.action_dim << " values in [-1, 1], controller '"
+            << controller.name << "'"
+            << ((controller.flags & MB_CONTROLLER_BALANCE_PASSIVE_FORCES) ? " (balances gravity)" : "")
+            << ":\n";
+  printSegments(controller.action_segments);
+  std::cout << "\nsuccess conditions:";
+  for (const std::string& c : task.success_conditions) std::cout << " " << c;
+  std::cout << "\nmasks:";
+  if (task.masks.empty()) std::cout << " (none)";
+  for (const std::string& m : task.masks) std::cout << " " << m;
+  std::cout << "\nobjects: " << train.size() << " train, " << test.size() << " test\n";
+  return 0;
+}
+
+// Resolves --policy: a registered name, or a library path to load first.
+std::string resolvePolicy(mb::PluginRegistry& registry, const std::string& policy) {
+  const bool is_path = policy.find('/') != std::string::npos ||
+                       (policy.size() > 3 && policy.compare(policy.size() - 3, 3, ".so") == 0);
+  if (!is_path) return policy;
+  const std::size_t library = registry.loadLibrary(policy);
+  std::vector<std::string> policies;
+  for (const mb::PluginEntry& e : registry.getEntries())
+    if (e.kind == mb::PluginKind::Policy && e.library == library) policies.push_back(e.name);
+  if (policies.size() != 1)
+    throw std::runtime_error("library " + policy + " registers " + std::to_string(policies.size()) +
+                             " policies; give one by name with MANIBENCH_PLUGIN_PATH instead");
+  return policies.front();
+}
+
+std::string chooseObject(const std::vector<std::string>& objects, uint64_t seed,
+                         const std::string& split) {
+  if (objects.empty()) throw std::runtime_error("the " + split + " split has no objects");
+  std::mt19937_64 rng(seed);
+  return objects[rng() % objects.size()];
+}
+
+void printEpisode(const mb::EpisodeResult& r) {
+  std::cout << "object " << r.object_id << ", seed " << r.seed << ": " << r.steps << " steps, return "
+            << std::fixed << std::setprecision(3) << r.total_reward << "\n";
+  for (std::size_t i = 0; i < r.condition_names.size(); ++i)
+    std::cout << "  " << std::left << std::setw(16) << r.condition_names[i]
+              << (r.final_flags[i] ? "yes" : "no ") << "  (" << std::setprecision(4)
+              << r.final_values[i] << ")\n";
+  std::cout.unsetf(std::ios::fixed);
+}
+
+int runOne(mb::PluginRegistry& registry, const std::string& task_name, const std::string& policy_arg,
+           uint64_t seed, const std::string& object_arg, const std::string& split,
+           const std::string& controller, bool stop_on_success) {
+  const std::string policy_name = resolvePolicy(registry, policy_arg);
+  registry.getEntry(mb::PluginKind::Policy, policy_name);  // fail before building anything
+  mb::EnvironmentOptions options;
+  options.controller = controller;
+  options.stop_on_success = stop_on_success;
+  mb::Environment env(registry, task_name, options);
+  const std::string object =
+      object_arg.empty() ? chooseObject(env.listObjects(split), seed, split) : object_arg;
+  env.reset(object, seed);
+  mb::PolicyInstance policy(registry, policy_name, "", env.calcPolicyLayout("state"));
+  std::cout << "task " << task_name << ", policy " << policy_name << ", controller "
+            << env.getControllerDescription().name << "\n";
+  const mb::EpisodeResult result = mb::runEpisode(env, policy, object, seed);
+  printEpisode(result);
+  return 0;
+}
+
+int commandRun(int argc, char** argv) {
+  const Arguments args = parseArguments(argc, argv, 2, {"policy", "seed", "object", "split", "controller"},
+                                        {"no-early-stop"});
+  if (args.help) {
+    std::cout << kRunUsage;
+    return 0;
+  }
+  if (args.positional.size() != 1) throw UsageError("run needs exactly one TASK");
+  if (!args.options.count("policy")) throw UsageError("run needs --policy NAME");
+  const std::string split = valueOr(args, "split", "train");
+  if (split != "train" && split != "test") throw UsageError("--split must be train or test");
+  mb::PluginRegistry registry;
+  loadPlugins(registry);
+  return runOne(registry, args.positional[0], args.options.at("policy"),
+                parseSeed(valueOr(args, "seed", "0")), valueOr(args, "object", ""), split,
+                valueOr(args, "controller", ""), !args.options.count("no-early-stop"));
+}
+
+int commandDemo(int argc, char** argv) {
+  const Arguments args = parseArguments(argc, argv, 2, {}, {});
+  if (args.help) {
+    std::cout << "usage: manibench demo\n\nLists the plugins, then runs one episode of the "
+                 "example task Reach-v0 with its scripted expert and one with a random policy.\n";
+    return 0;
+  }
+  if (!args.positional.empty()) throw UsageError("demo takes no arguments");
+  commandList(2, argv);
+  std::cout << "\n";
+  mb::PluginRegistry registry;
+  loadPlugins(registry);
+  runOne(registry, "Reach-v0", "reach_expert", 0, "", "test", "", true);
+  std::cout << "\n";
+  return runOne(registry, "Reach-v0", "random", 0, "", "test", "", true);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string command = argc > 1 ? argv[1] : "";
+  try {
+    if (command == "--help" || command == "-h" || command == "help") {
+      std::cout << kMainUsage;
+      return 0;
+    }
+    if (command == "list") return commandList(argc, argv);
+    if (command == "info") return commandInfo(argc, argv);
+    if (command == "run") return commandRun(argc, argv);
+    if (command == "demo") return commandDemo(argc, argv);
+    throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'");
+  } catch (const UsageError& e) {
+    std::cerr << "manibench: " << e.what() << "\n\n" << kMainUsage;
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "manibench: error: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,178 @@
+// Joint-space controllers of supplement B.7.
+//
+// joint_velocity: action in [-1, 1] scaled to each joint's maximum velocity,
+//   smoothed by a first-order low-pass filter (exponential moving average),
+//   then tracked by a damping drive (stiffness 0). The host balances gravity
+//   and Coriolis forces by inverse dynamics (MB_CONTROLLER_BALANCE_PASSIVE_FORCES).
+// joint_position: action in [-1, 1] mapped onto each joint's range as a
+//   position target; a PID on the position error gives the velocity target
+//   of the same velocity stage.
+//
+// Configuration (YAML, all optional):
+//   damping: 100          drive damping, N m s/rad (ManiSkill's arm value)
+//   cutoff_hz: 40         low-pass cutoff; ManiSkill: 40 Hz at 100 Hz control
+//   max_velocity: 3.14    rad/s or m/s for action 1; default: the joint's
+//                         URDF velocity limit, else 3.14
+//   kp: 10, ki: 0, kd: 0  (joint_position only)
+#include <manibench/sdk.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace {
+
+using manibench::sdk::Config;
+using manibench::sdk::ControllerContext;
+using manibench::sdk::ControllerSpec;
+using manibench::sdk::DriveCommand;
+using manibench::sdk::Error;
+using manibench::sdk::Segment;
+using manibench::sdk::SceneView;
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Smoothing factor of an exponential moving average whose -3 dB point is
+// `cutoff_hz` when sampled at `sample_hz` (first-order IIR design).
+double calcLowPassAlpha(double cutoff_hz, double sample_hz) {
+  const double y = 1.0 - std::cos(2.0 * kPi * cutoff_hz / sample_hz);
+  return -y + std::sqrt(y * y + 2.0 * y);
+}
+
+double requirePositive(const Config& config, const std::string& key, double fallback) {
+  const double value = config.get<double>(key, fallback);
+  if (!(value > 0) || !std::isfinite(value))
+    throw Error("controller configuration: '" + key + "' must be a positive number, got " +
+                    std::to_string(value),
+                MB_INVALID_ARGUMENT);
+  return value;
+}
+
+// The velocity stage shared by both controllers: scale, filter, drive.
+class VelocityStage {
+ public:
+  VelocityStage(const Config& config, const ControllerContext& context)
+      : damping_(requirePositive(config, "damping", 100.0)),
+        alpha_(calcLowPassAlpha(requirePositive(config, "cutoff_hz", 40.0),
+                                context.control_frequency)),
+        filtered_(Eigen::VectorXd::Zero(Eigen::Index(context.joints.size()))) {
+    if (config.has("cutoff_hz") && config.get<double>("cutoff_hz", 0) >= context.control_frequency / 2)
+      throw Error("controller configuration: cutoff_hz must be below half the control frequency (" +
+                      std::to_string(context.control_frequency / 2) + " Hz)",
+                  MB_INVALID_ARGUMENT);
+    for (const auto& joint : context.joints) {
+      const double fallback = joint.velocity_limit > 0 ? joint.velocity_limit : 3.14;
+      max_velocity_.push_back(requirePositive(config, "max_velocity", fallback));
+    }
+  }
+  double getMaxVelocity(std::size_t joint) const { return max_velocity_[joint]; }
+  void reset() { filtered_.setZero(); }
+  // `velocity` in joint units; writes one damping drive per joint.
+  void apply(const Eigen::VectorXd& velocity, std::vector<DriveCommand>& drives) {
+    filtered_ = alpha_ * velocity + (1.0 - alpha_) * filtered_;
+    for (std::size_t j = 0; j < drives.size(); ++j) {
+      DriveCommand& d = drives[j];
+      d.position_target = 0;
+      d.stiffness = 0;
+      d.velocity_target = filtered_[Eigen::Index(j)];
+      d.damping = damping_;
+      d.force = 0;
+    }
+  }
+
+ private:
+  double damping_;
+  double alpha_;
+  std::vector<double> max_velocity_;
+  Eigen::VectorXd filtered_;
+};
+
+std::vector<Segment> perJointSegments(const ControllerContext& context, const std::string& what) {
+  std::vector<Segment> segments;
+  for (const auto& joint : context.joints) segments.push_back({joint.name, 1, what});
+  return segments;
+}
+
+class JointVelocityController : public manibench::sdk::Controller {
+ public:
+  JointVelocityController(const Config& config, const ControllerContext& context)
+      : context_(context), stage_(config, context) {}
+
+  ControllerSpec describe() const override {
+    return {perJointSegments(context_, "velocity target / max velocity"),
+            MB_CONTROLLER_BALANCE_PASSIVE_FORCES};
+  }
+  void reset(const SceneView&) override { stage_.reset(); }
+  void compute(const SceneView&, Eigen::Map<const Eigen::VectorXd> action,
+               std::vector<DriveCommand>& drives) override {
+    Eigen::VectorXd velocity(action.size());
+    for (Eigen::Index j = 0; j < action.size(); ++j)
+      velocity[j] = action[j] * stage_.getMaxVelocity(std::size_t(j));
+    stage_.apply(velocity, drives);
+  }
+
+ private:
+  ControllerContext context_;
+  VelocityStage stage_;
+};
+
+class JointPositionController : public manibench::sdk::Controller {
+ public:
+  JointPositionController(const Config& config, const ControllerContext& context)
+      : context_(context),
+        stage_(config, context),
+        kp_(requirePositive(config, "kp", 10.0)),
+        ki_(config.get<double>("ki", 0.0)),
+        kd_(config.get<double>("kd", 0.0)),
+        dt_(1.0 / context.control_frequency) {
+    for (const auto& joint : context.joints) {
+      const bool limited = std::isfinite(joint.lower) && std::isfinite(joint.upper);
+      lower_.push_back(limited ? joint.lower : -kPi);
+      upper_.push_back(limited ? joint.upper : kPi);
+    }
+    integral_ = previous_error_ = Eigen::VectorXd::Zero(Eigen::Index(context.joints.size()));
+  }
+
+  ControllerSpec describe() const override {
+    return {perJointSegments(context_, "position target over the joint range, -1 = lower limit"),
+            MB_CONTROLLER_BALANCE_PASSIVE_FORCES};
+  }
+  void reset(const SceneView&) override {
+    stage_.reset();
+    integral_.setZero();
+    previous_error_.setZero();
+    first_step_ = true;
+  }
+  void compute(const SceneView& scene, Eigen::Map<const Eigen::VectorXd> action,
+               std::vector<DriveCommand>& drives) override {
+    const Eigen::VectorXd q = scene.getJointPositions(context_.articulation);
+    Eigen::VectorXd velocity(action.size());
+    for (Eigen::Index j = 0; j < action.size(); ++j) {
+      const std::size_t i = std::size_t(j);
+      const double target = lower_[i] + 0.5 * (action[j] + 1.0) * (upper_[i] - lower_[i]);
+      const double error = target - q[Eigen::Index(context_.joints[i].index)];
+      integral_[j] += error * dt_;
+      const double derivative = first_step_ ? 0.0 : (error - previous_error_[j]) / dt_;
+      previous_error_[j] = error;
+      const double limit = stage_.getMaxVelocity(i);
+      velocity[j] = std::clamp(kp_ * error + ki_ * integral_[j] + kd_ * derivative, -limit, limit);
+    }
+    first_step_ = false;
+    stage_.apply(velocity, drives);
+  }
+
+ private:
+  ControllerContext context_;
+  VelocityStage stage_;
+  double kp_, ki_, kd_, dt_;
+  std::vector<double> lower_, upper_;
+  Eigen::VectorXd integral_, previous_error_;
+  bool first_step_ = true;
+};
+
+}  // namespace
+
+MANIBENCH_REGISTER_CONTROLLER(JointVelocityController, "joint_velocity",
+                              "joint velocity targets, low-pass filtered, damping drive, gravity balanced (B.7)");
+MANIBENCH_REGISTER_CONTROLLER(JointPositionController, "joint_position",
+                              "joint position targets through a PID onto joint_velocity (B.7)");
+MANIBENCH_PLUGIN_LIBRARY("manibench_controllers", "0.1.0");

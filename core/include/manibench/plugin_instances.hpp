@@ -1,0 +1,151 @@
+// Host-side owners of plugin objects. Each wraps one handle created through
+// the C ABI, destroys it exactly once, and turns every failed call into a
+// PluginCallError naming the plugin, the call and the plugin's message.
+#pragma once
+
+#include <manibench/abi.h>
+#include <manibench/plugin_registry.hpp>
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace manibench {
+
+class Scene;
+
+class PluginCallError : public std::runtime_error {
+ public:
+  PluginCallError(const std::string& message, mb_status status)
+      : std::runtime_error(message), status_(status) {}
+  mb_status status() const { return status_; }
+
+ private:
+  mb_status status_;
+};
+
+struct SegmentDescription {
+  std::string name;
+  uint32_t offset = 0;
+  uint32_t size = 0;
+  std::string description;
+};
+
+struct TaskDescription {
+  std::string name;
+  uint32_t observation_dim = 0;
+  std::vector<SegmentDescription> observation_segments;
+  std::vector<std::string> success_conditions;  // "success" is last
+  std::vector<std::string> masks;
+  std::string robot_articulation;
+  std::vector<std::string> actuated_joints;
+  std::string default_controller;
+  std::string controller_config;
+  double control_frequency = 100;
+  uint32_t frame_skip = 5;
+  uint32_t max_episode_steps = 200;
+};
+
+struct ControllerDescription {
+  std::string name;
+  uint32_t action_dim = 0;
+  std::vector<SegmentDescription> action_segments;
+  uint32_t flags = 0;
+};
+
+// The host's implementation of mb_scene_api over a Scene; one per Scene.
+// Phases guard misuse: adds only while building, setters only in resets.
+class SceneBridge {
+ public:
+  explicit SceneBridge(Scene& scene);
+  ~SceneBridge();
+  SceneBridge(const SceneBridge&) = delete;
+  SceneBridge& operator=(const SceneBridge&) = delete;
+
+  static const mb_scene_api* getApi();
+  mb_scene* getHandle();
+  void setBuilding(bool building);
+  void setStateChangesAllowed(bool allowed);
+
+ private:
+  mb_scene* handle_;
+};
+
+class TaskInstance {
+ public:
+  TaskInstance(const PluginRegistry& registry, const std::string& name,
+               const std::string& config_yaml);
+  ~TaskInstance();
+  TaskInstance(const TaskInstance&) = delete;
+  TaskInstance& operator=(const TaskInstance&) = delete;
+
+  const TaskDescription& getDescription() const { return description_; }
+  const std::string& getLibraryPath() const { return library_path_; }
+  std::vector<std::string> listObjects(const std::string& split) const;
+  void buildScene(SceneBridge& scene, const std::string& object_id);
+  void reset(SceneBridge& scene, uint64_t seed);
+  void observe(SceneBridge& scene, Eigen::VectorXd& out);
+  double computeReward(SceneBridge& scene, const Eigen::VectorXd& action);
+  void evaluateSuccess(SceneBridge& scene, std::vector<uint8_t>& flags,
+                       std::vector<double>& values);
+
+ private:
+  const mb_task_descriptor* descriptor_;
+  mb_task* handle_ = nullptr;
+  std::string library_path_;
+  TaskDescription description_;
+};
+
+class ControllerInstance {
+ public:
+  ControllerInstance(const PluginRegistry& registry, const std::string& name,
+                     const std::string& config_yaml,
+                     const mb_controller_context& context);
+  ~ControllerInstance();
+  ControllerInstance(const ControllerInstance&) = delete;
+  ControllerInstance& operator=(const ControllerInstance&) = delete;
+
+  const ControllerDescription& getDescription() const { return description_; }
+  void reset(SceneBridge& scene);
+  void compute(SceneBridge& scene, const Eigen::VectorXd& action,
+               std::vector<mb_drive_command>& drives);
+
+ private:
+  const mb_controller_descriptor* descriptor_;
+  mb_controller* handle_ = nullptr;
+  ControllerDescription description_;
+};
+
+struct PolicyLayout {
+  std::string task_name;
+  std::string observation_mode = "state";
+  uint32_t observation_dim = 0;
+  std::vector<SegmentDescription> observation_segments;
+  uint32_t action_dim = 0;
+  std::vector<SegmentDescription> action_segments;
+};
+
+class PolicyInstance {
+ public:
+  PolicyInstance(const PluginRegistry& registry, const std::string& name,
+                 const std::string& config_yaml, const PolicyLayout& layout);
+  ~PolicyInstance();
+  PolicyInstance(const PolicyInstance&) = delete;
+  PolicyInstance& operator=(const PolicyInstance&) = delete;
+
+  const std::string& getName() const { return name_; }
+  const std::string& getLibraryPath() const { return library_path_; }
+  void reset(uint64_t seed);
+  // Writes the raw action; validation is the environment's job.
+  void act(const Eigen::VectorXd& observation, uint32_t step,
+           Eigen::VectorXd& action);
+
+ private:
+  const mb_policy_descriptor* descriptor_;
+  mb_policy* handle_ = nullptr;
+  std::string name_;
+  std::string library_path_;
+  uint32_t action_dim_ = 0;
+};
+
+}  // namespace manibench

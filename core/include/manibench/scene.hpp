@@ -1,0 +1,172 @@
+// The physics scene: articulations loaded from URDF into one Simbody
+// multibody system, stepped in control ticks, queried by tasks, controllers
+// and (later) the renderer. Simbody stays behind a pimpl so that code which
+// includes this header needs neither Simbody's headers nor its no-NDEBUG rule.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace manibench {
+
+struct Pose {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+};
+
+struct Twist {
+  Eigen::Vector3d angular = Eigen::Vector3d::Zero();  // world frame, rad/s
+  Eigen::Vector3d linear = Eigen::Vector3d::Zero();   // of the link origin, m/s
+};
+
+enum class JointType { Revolute = 1, Continuous = 2, Prismatic = 3 };
+
+// A movable one-dof joint. Fixed joints are merged into the parent body; a
+// floating root is reached through the root pose, not the joint vector.
+struct JointDescription {
+  std::string name;
+  JointType type = JointType::Revolute;
+  int index = 0;  // position in the articulation's joint vector
+  double lower = -std::numeric_limits<double>::infinity();
+  double upper = std::numeric_limits<double>::infinity();
+  double velocity_limit = 0;  // 0: unknown
+  double effort_limit = 0;    // 0: unlimited
+  double damping = 0;         // from URDF <dynamics>, overridable per episode
+  double friction = 0;        // Coulomb, from URDF <dynamics>
+};
+
+// Same meaning as mb_drive_command in sdk/include/manibench/abi.h:
+// tau = stiffness (position_target - q) + damping (velocity_target - qdot)
+//       + force, clamped to the effort limit when one is set.
+struct DriveCommand {
+  double position_target = 0;
+  double velocity_target = 0;
+  double stiffness = 0;
+  double damping = 0;
+  double force = 0;
+};
+
+struct PhysicsSettings {
+  double gravity_z = -9.81;
+  // "cpodes" (stiff articulated scenes), "rk_merson" (many free bodies).
+  std::string integrator = "cpodes";
+  double accuracy = 1e-2;
+  // Contact material used for every pair until per-body materials exist.
+  double contact_stiffness = 1e6;   // N/m^2 (Hertz-style plane strain)
+  double contact_dissipation = 1.0; // s/m (Hunt-Crossley)
+  double static_friction = 0.8;
+  double dynamic_friction = 0.6;
+  double viscous_friction = 0.0;
+  // Density that gives mass to links with collision geometry but no
+  // <inertial> (as in PartNet-Mobility), kg/m^3.
+  double default_density = 1000;
+  // Any generalized speed above this (rad/s or m/s) counts as divergence.
+  double divergence_speed_limit = 1e3;
+};
+
+// Bad input (malformed URDF, unknown name, wrong vector size, misuse of the
+// build/run phases). The message names the file, link or joint at fault.
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// The state became NaN or exploded; the message names the body and the time.
+class SimulationDiverged : public std::runtime_error {
+ public:
+  SimulationDiverged(const std::string& message, std::string body, double time)
+      : std::runtime_error(message), body_(std::move(body)), time_(time) {}
+  const std::string& body() const { return body_; }
+  double time() const { return time_; }
+
+ private:
+  std::string body_;
+  double time_;
+};
+
+// Opaque full snapshot of a finalized scene's state (time, q, u, drives).
+class SceneState {
+ public:
+  SceneState();
+  SceneState(const SceneState&);
+  SceneState& operator=(const SceneState&);
+  ~SceneState();
+  struct Data;
+  std::unique_ptr<Data> data;
+};
+
+class Scene {
+ public:
+  explicit Scene(PhysicsSettings settings = {});
+  ~Scene();
+  Scene(const Scene&) = delete;
+  Scene& operator=(const Scene&) = delete;
+
+  // --- building: before finalize() ---------------------------------------
+  void addGround(double height);
+  // Returns the articulation id. `name` must be unique in the scene.
+  int addUrdfFile(const std::string& path, const std::string& name,
+                  const Pose& root, bool fixed_base);
+  int addUrdfString(const std::string& urdf_xml, const std::string& base_dir,
+                    const std::string& name, const Pose& root,
+                    bool fixed_base);
+  // Builds the multibody system; afterwards no more adds. All joints start
+  // at 0 (or the nearest limit), velocities 0, roots where they were added.
+  void finalize();
+  bool isFinalized() const;
+
+  // --- lookup: any time after the add ------------------------------------
+  int getArticulationCount() const;
+  const std::string& getArticulationName(int articulation) const;
+  int findArticulation(const std::string& name) const;  // -1 if none
+  // Link ids are global in the scene; links merged by fixed joints keep ids.
+  int findLink(int articulation, const std::string& link_name) const;  // -1
+  const std::string& getLinkName(int link) const;
+  const std::vector<JointDescription>& getJoints(int articulation) const;
+  int findJoint(int articulation, const std::string& joint_name) const;  // -1
+
+  // --- state: after finalize() -------------------------------------------
+  double getTime() const;
+  Eigen::VectorXd getJointPositions(int articulation) const;
+  Eigen::VectorXd getJointVelocities(int articulation) const;
+  Pose getRootPose(int articulation) const;
+  Pose getLinkPose(int link) const;
+  Twist getLinkTwist(int link) const;
+  // Contact force on link_a from link_b (from anything if link_b < 0), world.
+  Eigen::Vector3d getContactForce(int link_a, int link_b) const;
+  double calcKineticEnergy() const;
+
+  void setJointPositions(int articulation, const Eigen::VectorXd& q);
+  void setJointVelocities(int articulation, const Eigen::VectorXd& qdot);
+  void setRootPose(int articulation, const Pose& pose);  // floating roots
+  void setJointDynamics(int articulation, int joint, double damping,
+                        double friction);
+
+  // --- actuation ----------------------------------------------------------
+  // Drive commands hold until replaced; joints without one are passive.
+  void setDriveCommands(int articulation, const std::vector<int>& joints,
+                        const std::vector<DriveCommand>& commands);
+  // Inverse-dynamics cancelling of gravity and Coriolis forces on `joints`
+  // at every physics evaluation (supplement B.7).
+  void setPassiveForceBalancing(int articulation,
+                                const std::vector<int>& joints, bool enabled);
+
+  // Integrates `dt` seconds without re-initializing the integrator (unless a
+  // setter changed the state). Throws SimulationDiverged on NaN/explosion.
+  void advance(double dt);
+
+  SceneState saveState() const;
+  void restoreState(const SceneState& state);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace manibench

@@ -1,0 +1,234 @@
+#include <manibench/plugin_instances.hpp>
+
+#include <cstring>
+
+namespace manibench {
+namespace {
+
+constexpr std::size_t kErrorCapacity = 2048;
+
+// Calls a plugin function with a fresh error buffer; a failure becomes a
+// PluginCallError "<kind> '<name>' <call> failed: <plugin's message>".
+template <class Fn, class... Args>
+void callPlugin(const char* kind, const std::string& name, const char* call, Fn fn,
+                Args... args) {
+  char buffer[kErrorCapacity] = {0};
+  mb_error err{buffer, sizeof(buffer)};
+  const mb_status status = fn(args..., &err);
+  if (status != MB_OK) {
+    std::string message = std::string(kind) + " '" + name + "' " + call + " failed";
+    message += buffer[0] ? std::string(": ") + buffer : " (status " + std::to_string(status) + ", no message)";
+    throw PluginCallError(message, status);
+  }
+}
+
+std::vector<SegmentDescription> toSegments(const mb_segment* segments, uint32_t count,
+                                           uint32_t dim, const char* what,
+                                           const std::string& owner) {
+  std::vector<SegmentDescription> out;
+  for (uint32_t i = 0; i < count; ++i) {
+    const mb_segment& s = segments[i];
+    if (s.offset + s.size > dim)
+      throw PluginCallError(owner + ": " + what + " segment '" + (s.name ? s.name : "?") +
+                                "' [" + std::to_string(s.offset) + ", " +
+                                std::to_string(s.offset + s.size) + ") exceeds the dimension " +
+                                std::to_string(dim),
+                            MB_ERROR);
+    out.push_back({s.name ? s.name : "", s.offset, s.size, s.description ? s.description : ""});
+  }
+  return out;
+}
+
+std::vector<std::string> toStrings(const char* const* strings, uint32_t count) {
+  std::vector<std::string> out;
+  for (uint32_t i = 0; i < count; ++i) out.push_back(strings && strings[i] ? strings[i] : "");
+  return out;
+}
+
+std::vector<mb_segment> toCSegments(const std::vector<SegmentDescription>& segments) {
+  std::vector<mb_segment> out;
+  for (const SegmentDescription& s : segments)
+    out.push_back({s.name.c_str(), s.offset, s.size, s.description.c_str()});
+  return out;
+}
+
+}  // namespace
+
+// ---- task --------------------------------------------------------------
+
+TaskInstance::TaskInstance(const PluginRegistry& registry, const std::string& name,
+                           const std::string& config_yaml)
+    : descriptor_(&registry.getTask(name)) {
+  library_path_ = registry.getLibraries()[registry.getEntry(PluginKind::Task, name).library].path;
+  callPlugin("task", name, "create", descriptor_->create, config_yaml.c_str(), &handle_);
+  if (handle_ == nullptr) throw PluginCallError("task '" + name + "' create returned no task", MB_ERROR);
+
+  mb_task_info info{};
+  info.struct_size = sizeof(info);
+  try {
+    callPlugin("task", name, "get_info", descriptor_->get_info, handle_, &info);
+    // Fields of a plugin older than this host stay zero-initialized.
+    description_.name = name;
+    description_.observation_dim = info.observation_dim;
+    description_.observation_segments =
+        toSegments(info.observation_segments, info.observation_segment_count,
+                   info.observation_dim, "observation", "task '" + name + "'");
+    description_.success_conditions =
+        toStrings(info.success_conditions, info.success_condition_count);
+    if (description_.success_conditions.empty() ||
+        description_.success_conditions.back() != "success")
+      throw PluginCallError("task '" + name + "': its last success condition must be \"success\"",
+                            MB_ERROR);
+    description_.masks = toStrings(info.masks, info.mask_count);
+    description_.robot_articulation = info.robot_articulation ? info.robot_articulation : "";
+    description_.actuated_joints = toStrings(info.actuated_joints, info.actuated_joint_count);
+    description_.default_controller = info.default_controller ? info.default_controller : "";
+    description_.controller_config = info.controller_config ? info.controller_config : "";
+    description_.control_frequency = info.control_frequency;
+    description_.frame_skip = info.frame_skip;
+    description_.max_episode_steps = info.max_episode_steps;
+    if (!(description_.control_frequency > 0) || description_.frame_skip == 0 ||
+        description_.max_episode_steps == 0)
+      throw PluginCallError("task '" + name +
+                                "': control_frequency, frame_skip and max_episode_steps must be positive",
+                            MB_ERROR);
+  } catch (...) {
+    descriptor_->destroy(handle_);
+    throw;
+  }
+}
+
+TaskInstance::~TaskInstance() {
+  if (handle_) descriptor_->destroy(handle_);
+}
+
+std::vector<std::string> TaskInstance::listObjects(const std::string& split) const {
+  const char* const* ids = nullptr;
+  uint32_t count = 0;
+  callPlugin("task", description_.name, "list_objects", descriptor_->list_objects, handle_,
+             split.c_str(), &ids, &count);
+  return toStrings(ids, count);
+}
+
+void TaskInstance::buildScene(SceneBridge& scene, const std::string& object_id) {
+  callPlugin("task", description_.name, "build_scene", descriptor_->build_scene, handle_,
+             SceneBridge::getApi(), scene.getHandle(), object_id.c_str());
+}
+
+void TaskInstance::reset(SceneBridge& scene, uint64_t seed) {
+  callPlugin("task", description_.name, "reset", descriptor_->reset, handle_,
+             SceneBridge::getApi(), scene.getHandle(), seed);
+}
+
+void TaskInstance::observe(SceneBridge& scene, Eigen::VectorXd& out) {
+  out.resize(description_.observation_dim);
+  callPlugin("task", description_.name, "observe", descriptor_->observe, handle_,
+             SceneBridge::getApi(), scene.getHandle(), out.data(),
+             static_cast<uint32_t>(out.size()));
+}
+
+double TaskInstance::computeReward(SceneBridge& scene, const Eigen::VectorXd& action) {
+  double reward = 0;
+  callPlugin("task", description_.name, "compute_reward", descriptor_->compute_reward, handle_,
+             SceneBridge::getApi(), scene.getHandle(), action.data(),
+             static_cast<uint32_t>(action.size()), &reward);
+  return reward;
+}
+
+void TaskInstance::evaluateSuccess(SceneBridge& scene, std::vector<uint8_t>& flags,
+                                   std::vector<double>& values) {
+  const std::size_t n = description_.success_conditions.size();
+  flags.assign(n, 0);
+  values.assign(n, 0.0);
+  callPlugin("task", description_.name, "evaluate_success", descriptor_->evaluate_success,
+             handle_, SceneBridge::getApi(), scene.getHandle(), flags.data(), values.data(),
+             static_cast<uint32_t>(n));
+}
+
+// ---- controller ----------------------------------------------------------
+
+ControllerInstance::ControllerInstance(const PluginRegistry& registry, const std::string& name,
+                                       const std::string& config_yaml,
+                                       const mb_controller_context& context)
+    : descriptor_(&registry.getController(name)) {
+  callPlugin("controller", name, "create", descriptor_->create, config_yaml.c_str(), &context,
+             &handle_);
+  if (handle_ == nullptr)
+    throw PluginCallError("controller '" + name + "' create returned no controller", MB_ERROR);
+  mb_controller_info info{};
+  info.struct_size = sizeof(info);
+  try {
+    callPlugin("controller", name, "get_info", descriptor_->get_info, handle_, &info);
+    description_.name = name;
+    description_.action_dim = info.action_dim;
+    description_.action_segments = toSegments(info.action_segments, info.action_segment_count,
+                                              info.action_dim, "action", "controller '" + name + "'");
+    description_.flags = info.flags;
+  } catch (...) {
+    descriptor_->destroy(handle_);
+    throw;
+  }
+}
+
+ControllerInstance::~ControllerInstance() {
+  if (handle_) descriptor_->destroy(handle_);
+}
+
+void ControllerInstance::reset(SceneBridge& scene) {
+  callPlugin("controller", description_.name, "reset", descriptor_->reset, handle_,
+             SceneBridge::getApi(), scene.getHandle());
+}
+
+void ControllerInstance::compute(SceneBridge& scene, const Eigen::VectorXd& action,
+                                 std::vector<mb_drive_command>& drives) {
+  callPlugin("controller", description_.name, "compute", descriptor_->compute, handle_,
+             SceneBridge::getApi(), scene.getHandle(), action.data(),
+             static_cast<uint32_t>(action.size()), drives.data(),
+             static_cast<uint32_t>(drives.size()));
+}
+
+// ---- policy ----------------------------------------------------------------
+
+PolicyInstance::PolicyInstance(const PluginRegistry& registry, const std::string& name,
+                               const std::string& config_yaml, const PolicyLayout& layout)
+    : descriptor_(&registry.getPolicy(name)), name_(name), action_dim_(layout.action_dim) {
+  library_path_ =
+      registry.getLibraries()[registry.getEntry(PluginKind::Policy, name).library].path;
+  const std::vector<mb_segment> observation = toCSegments(layout.observation_segments);
+  const std::vector<mb_segment> action = toCSegments(layout.action_segments);
+  mb_policy_context context{};
+  context.struct_size = sizeof(context);
+  context.task_name = layout.task_name.c_str();
+  context.observation_mode = layout.observation_mode.c_str();
+  context.observation_dim = layout.observation_dim;
+  context.observation_segment_count = static_cast<uint32_t>(observation.size());
+  context.observation_segments = observation.data();
+  context.action_dim = layout.action_dim;
+  context.action_segment_count = static_cast<uint32_t>(action.size());
+  context.action_segments = action.data();
+  callPlugin("policy", name, "create", descriptor_->create, config_yaml.c_str(), &context,
+             &handle_);
+  if (handle_ == nullptr) throw PluginCallError("policy '" + name + "' create returned no policy", MB_ERROR);
+}
+
+PolicyInstance::~PolicyInstance() {
+  if (handle_) descriptor_->destroy(handle_);
+}
+
+void PolicyInstance::reset(uint64_t seed) {
+  callPlugin("policy", name_, "reset", descriptor_->reset, handle_, seed);
+}
+
+void PolicyInstance::act(const Eigen::VectorXd& observation, uint32_t step,
+                         Eigen::VectorXd& action) {
+  mb_observation obs{};
+  obs.struct_size = sizeof(obs);
+  obs.state = observation.data();
+  obs.state_dim = static_cast<uint32_t>(observation.size());
+  obs.step = step;
+  action.setZero(action_dim_);
+  callPlugin("policy", name_, "act", descriptor_->act, handle_, &obs, action.data(),
+             static_cast<uint32_t>(action.size()));
+}
+
+}  // namespace manibench

@@ -1,0 +1,65 @@
+// Every per-joint generalized force of a scene in one Force::Custom: drives,
+// passive damping, Coulomb friction and passive-force balancing. One element
+// per scene keeps the per-evaluation cost to a single loop and a single
+// inverse-dynamics pass, however many joints are balanced.
+#pragma once
+
+#include <vector>
+
+#include "Simbody.h"
+#include "manibench/scene.hpp"
+
+namespace manibench {
+namespace scene_detail {
+
+// Coulomb friction is tanh(qdot / kFrictionSpeed) * friction: a joint
+// loaded below its friction creeps at well under this speed (rad/s or m/s).
+// Smaller values stiffen the ODE (slope friction / kFrictionSpeed); 1e-2
+// keeps it within what the drive dampings already demand of CPodes.
+constexpr double kFrictionSpeed = 1e-2;
+
+// A movable joint as the force element sees it. Joints are numbered across
+// the scene: articulation a's joint j is slot joint_offset[a] + j.
+struct JointSlot {
+  SimTK::MobilizedBodyIndex mobod;
+  double effort_limit = 0;  // 0: unlimited
+};
+
+// The values a controller or task changes during an episode. They live
+// outside the SimTK::State (drives change every control tick and must not
+// restart the integrator) and travel with SceneState instead.
+struct JointControls {
+  std::vector<DriveCommand> drives;
+  std::vector<char> driven;    // joint has a drive command
+  std::vector<char> balanced;  // gravity/Coriolis cancelled on this joint
+  std::vector<double> damping;
+  std::vector<double> friction;
+};
+
+class JointForces : public SimTK::Force::Custom::Implementation {
+ public:
+  JointForces(const SimTK::SimbodyMatterSubsystem& matter,
+              const SimTK::Force::Gravity& gravity,
+              std::vector<JointSlot> slots, JointControls controls);
+
+  const JointControls& getControls() const { return controls_; }
+  // Callers must invalidate the state's Dynamics stage after a change.
+  JointControls& updControls() { return controls_; }
+
+  void calcForce(const SimTK::State& state,
+                 SimTK::Vector_<SimTK::SpatialVec>& body_forces,
+                 SimTK::Vector_<SimTK::Vec3>& particle_forces,
+                 SimTK::Vector& mobility_forces) const override;
+  SimTK::Real calcPotentialEnergy(const SimTK::State&) const override {
+    return 0;
+  }
+
+ private:
+  const SimTK::SimbodyMatterSubsystem& matter_;
+  SimTK::Force::Gravity gravity_;  // a handle to the scene's gravity element
+  std::vector<JointSlot> slots_;
+  JointControls controls_;
+};
+
+}  // namespace scene_detail
+}  // namespace manibench

@@ -1,0 +1,919 @@
+// Scene: URDF articulations in one Simbody MultibodySystem.
+//
+// Life cycle. Before finalize() the scene only collects validated
+// articulation descriptions (scene_detail::ArticulationModel); finalize()
+// turns them into mobilized bodies, force elements and contact surfaces and
+// realizes the topology. Afterwards the current state lives either in
+// Impl::state (right after finalize, a setter or a restore: the integrator
+// must be (re)initialized from it) or in the integrator (while stepping).
+// Re-initializing costs ~0.8 ms and restarts CPodes' history, so the control
+// tick path (setDriveCommands + advance) never does it.
+#include "manibench/scene.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cassert>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "Simbody.h"
+#include "scene/joint_forces.hpp"
+#include "scene/urdf_model.hpp"
+
+namespace manibench {
+
+using scene_detail::ArticulationModel;
+using scene_detail::CollisionShape;
+using scene_detail::JointControls;
+using scene_detail::JointForces;
+using scene_detail::JointSlot;
+
+namespace {
+
+// A body a joint moves needs mass; links with neither <inertial> nor
+// collision geometry (pure frames) get this much.
+constexpr double kTinyMass = 1e-3;     // kg
+constexpr double kTinyInertia = 1e-6;  // kg m^2, about the body origin
+// Joint limit stops: Hunt-Crossley-like f = -k x (1 + d qdot). 1e5 keeps a
+// 1 kg slider within 0.1 mm of its limit under gravity, a 10 N m load within
+// 0.1 mrad. d = 10 makes hitting a stop practically inelastic; with d = 1 a
+// slider resting on its stop kept chattering at CPodes' default accuracy.
+constexpr double kLimitStiffness = 1e5;     // N/m or N m/rad
+constexpr double kLimitDissipation = 10.0;  // s/m or s/rad
+// Divergence by step size: an advance() whose integrator steps average
+// below kMinMeanStepSize (after kMinStepBudget steps) is a blow-up, not a
+// stiff but healthy system (those take ~10-30 us steps even explicitly).
+// stepTo() returns every kStepsPerCall internal steps so that this is
+// checked; without it a runaway CPodes creeps forward in 1e-14 s steps.
+constexpr double kMinMeanStepSize = 1e-6;  // s
+constexpr int kMinStepBudget = 10000;
+constexpr int kStepsPerCall = 1000;
+
+std::uint64_t newSceneId() {
+  static std::atomic<std::uint64_t> next{1};
+  return next++;
+}
+
+SimTK::Transform toTransform(const Pose& pose) {
+  const Eigen::Quaterniond q = pose.orientation.normalized();
+  return SimTK::Transform(
+      SimTK::Rotation(SimTK::Quaternion(q.w(), q.x(), q.y(), q.z())),
+      SimTK::Vec3(pose.position.x(), pose.position.y(), pose.position.z()));
+}
+
+Pose toPose(const SimTK::Transform& X) {
+  const SimTK::Quaternion q = X.R().convertRotationToQuaternion();
+  Pose pose;
+  pose.position = Eigen::Vector3d(X.p()[0], X.p()[1], X.p()[2]);
+  pose.orientation = Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
+  return pose;
+}
+
+Eigen::Vector3d toEigen(const SimTK::Vec3& v) {
+  return Eigen::Vector3d(v[0], v[1], v[2]);
+}
+
+bool isValidPose(const Pose& pose) {
+  return pose.position.allFinite() && pose.orientation.coeffs().allFinite() &&
+         pose.orientation.norm() > 1e-12;
+}
+
+SimTK::ContactSurface makeContactSurface(const CollisionShape& shape,
+                                         SimTK::ContactCliqueId clique,
+                                         const SimTK::ContactMaterial& material) {
+  SimTK::ContactSurface surface =
+      shape.kind == CollisionShape::Kind::Sphere
+          ? SimTK::ContactSurface(SimTK::ContactGeometry::Sphere(shape.size[0]), material)
+          : SimTK::ContactSurface(SimTK::ContactGeometry::Brick(shape.size), material);
+  // Links of one articulation never collide with each other.
+  surface.joinClique(clique);
+  return surface;
+}
+
+// SimTK::Integrator's destructor is not virtual: delete as the real type.
+using IntegratorPtr = std::unique_ptr<SimTK::Integrator, void (*)(SimTK::Integrator*)>;
+
+IntegratorPtr makeIntegrator(const SimTK::MultibodySystem& system,
+                             const PhysicsSettings& settings, int steps_per_call) {
+  IntegratorPtr integrator(nullptr, [](SimTK::Integrator*) {});
+  if (settings.integrator == "cpodes")
+    integrator = IntegratorPtr(
+        new SimTK::CPodesIntegrator(system, SimTK::CPodes::BDF, SimTK::CPodes::Newton),
+        [](SimTK::Integrator* p) { delete static_cast<SimTK::CPodesIntegrator*>(p); });
+  else
+    integrator = IntegratorPtr(
+        new SimTK::RungeKuttaMersonIntegrator(system),
+        [](SimTK::Integrator* p) { delete static_cast<SimTK::RungeKuttaMersonIntegrator*>(p); });
+  integrator->setAccuracy(settings.accuracy);
+  integrator->setInternalStepLimit(steps_per_call);
+  // Land exactly on each control tick so that commands switch there.
+  integrator->setAllowInterpolation(false);
+  return integrator;
+}
+
+std::string formatTime(double t) {
+  std::ostringstream s;
+  s << t;
+  return s.str();
+}
+
+}  // namespace
+
+// --- SceneState ---------------------------------------------------------
+
+struct SceneState::Data {
+  std::uint64_t scene_id = 0;  // the scene this state belongs to
+  SimTK::State state;
+  JointControls controls;
+};
+
+SceneState::SceneState() = default;
+SceneState::SceneState(const SceneState& other)
+    : data(other.data ? std::make_unique<Data>(*other.data) : nullptr) {}
+SceneState& SceneState::operator=(const SceneState& other) {
+  if (this != &other)
+    data = other.data ? std::make_unique<Data>(*other.data) : nullptr;
+  return *this;
+}
+SceneState::~SceneState() = default;
+
+// --- Scene::Impl -------------------------------------------------------------
+
+struct Scene::Impl {
+  struct Articulation {
+    std::string name;
+    ArticulationModel model;
+    std::string base_dir;  // for mesh files, once meshes are loaded
+    SimTK::Transform X_root;
+    bool fixed_base = false;
+    int first_link = 0;   // global id of model.links[0]
+    int first_joint = 0;  // global slot of model.joints[0]
+    std::vector<SimTK::MobilizedBodyIndex> body_mobods;  // after finalize
+  };
+  // Where a link's frame sits, after finalize.
+  struct LinkFrame {
+    SimTK::MobilizedBodyIndex mobod;
+    SimTK::Transform X_BL;
+  };
+  struct SurfaceRecord {  // a contact surface and the link it came from
+    SimTK::MobilizedBodyIndex mobod;
+    int ordinal = 0;
+    int link = -1;  // -1: the ground plane
+  };
+
+  explicit Impl(const PhysicsSettings& s)
+      : settings(s),
+        id(newSceneId()),
+        matter(system),
+        forces(system),
+        tracker(system),
+        contact(system, tracker),
+        gravity(forces, matter, SimTK::Vec3(0, 0, s.gravity_z)) {}
+
+  PhysicsSettings settings;
+  std::uint64_t id;
+
+  // Building.
+  bool has_ground = false;
+  double ground_height = 0;
+  std::vector<Articulation> articulations;
+  std::vector<std::pair<int, int>> links;  // global id -> (articulation, local)
+  int joint_count = 0;
+
+  // Simbody. Declaration order is construction order.
+  SimTK::MultibodySystem system;
+  SimTK::SimbodyMatterSubsystem matter;
+  SimTK::GeneralForceSubsystem forces;
+  SimTK::ContactTrackerSubsystem tracker;
+  SimTK::CompliantContactSubsystem contact;
+  SimTK::Force::Gravity gravity;
+  JointForces* joint_forces = nullptr;  // owned by `forces`
+  IntegratorPtr integrator{nullptr, [](SimTK::Integrator*) {}};
+  SimTK::State state;       // current state while needs_init
+  bool needs_init = true;
+  bool finalized = false;
+
+  // Maps made by finalize().
+  std::vector<LinkFrame> link_frames;                     // per global link
+  std::vector<SimTK::MobilizedBodyIndex> joint_mobods;    // per joint slot
+  std::vector<int> mobod_link;        // MobilizedBodyIndex -> global link
+  std::vector<SimTK::MobilizedBodyIndex> q_mobod, u_mobod;  // per coordinate
+  std::vector<SurfaceRecord> surfaces;
+  std::vector<int> surface_link;      // ContactSurfaceIndex -> global link
+
+  // --- phases and lookups ---
+  void requireBuilding(const char* method) const {
+    if (finalized)
+      throw SceneError(std::string("Scene::") + method +
+                       ": the scene is already finalized; add everything "
+                       "before finalize()");
+  }
+  void requireFinalized(const char* method) const {
+    if (!finalized)
+      throw SceneError(std::string("Scene::") + method +
+                       ": the scene is not finalized yet; call finalize() "
+                       "first");
+  }
+  const Articulation& getArticulation(int a, const char* method) const {
+    if (a < 0 || a >= static_cast<int>(articulations.size()))
+      throw SceneError(std::string("Scene::") + method + ": no articulation " +
+                       std::to_string(a) + " (the scene has " +
+                       std::to_string(articulations.size()) + ")");
+    return articulations[a];
+  }
+  void checkLink(int link, const char* method) const {
+    if (link < 0 || link >= static_cast<int>(links.size()))
+      throw SceneError(std::string("Scene::") + method + ": no link " +
+                       std::to_string(link) + " (the scene has " +
+                       std::to_string(links.size()) + ")");
+  }
+  int getJointSlot(const Articulation& art, int joint, const char* method) const {
+    const int n = static_cast<int>(art.model.joints.size());
+    if (joint < 0 || joint >= n)
+      throw SceneError(std::string("Scene::") + method + ": articulation '" +
+                       art.name + "' has no joint " + std::to_string(joint) +
+                       " (it has " + std::to_string(n) + ")");
+    return art.first_joint + joint;
+  }
+  void checkJointVector(const Articulation& art, const Eigen::VectorXd& v,
+                        const char* method) const {
+    if (v.size() != static_cast<Eigen::Index>(art.model.joints.size()))
+      throw SceneError(std::string("Scene::") + method + ": articulation '" +
+                       art.name + "' has " +
+                       std::to_string(art.model.joints.size()) +
+                       " joints, got " + std::to_string(v.size()) + " values");
+    if (!v.allFinite())
+      throw SceneError(std::string("Scene::") + method + ": articulation '" +
+                       art.name + "': the values must be finite");
+  }
+
+  // --- state access ---
+  const SimTK::State& getState() const {
+    return needs_init ? state : integrator->getState();
+  }
+  // The state to modify; the integrator restarts from it on the next
+  // advance().
+  SimTK::State& updStateAndRestart() {
+    if (!needs_init) {
+      state = integrator->getState();
+      needs_init = true;
+    }
+    return state;
+  }
+  const SimTK::State& getRealizedState(SimTK::Stage stage) const {
+    const SimTK::State& s = getState();
+    system.realize(s, stage);
+    return s;
+  }
+  // Joint controls changed: forces cached in the current state are stale.
+  // No restart needed; the integrator picks the new forces up.
+  void invalidateForces() {
+    SimTK::State& s = needs_init ? state : integrator->updAdvancedState();
+    s.invalidateAllCacheAtOrAbove(SimTK::Stage::Dynamics);
+  }
+  JointControls& updControls() { return joint_forces->updControls(); }
+
+  // --- building ---
+  int addArticulation(const std::string& xml, const std::string& source,
+                      const std::string& base_dir, const std::string& name,
+                      const Pose& root, bool fixed_base);
+  void finalize();
+  void buildArticulation(Articulation& art, SimTK::ContactCliqueId clique,
+                         const SimTK::ContactMaterial& material);
+
+  // --- stepping ---
+  void advance(double dt);
+  std::string describeMobod(SimTK::MobilizedBodyIndex mobod) const;
+  const std::string& getMobodLinkName(SimTK::MobilizedBodyIndex mobod) const;
+  // Finds a non-finite or too fast coordinate; returns false if none.
+  bool findDivergence(const SimTK::State& s, SimTK::MobilizedBodyIndex& mobod,
+                      std::string& what) const;
+  [[noreturn]] void throwDiverged(const std::string& cause);
+};
+
+int Scene::Impl::addArticulation(const std::string& xml,
+                                 const std::string& source,
+                                 const std::string& base_dir,
+                                 const std::string& name, const Pose& root,
+                                 bool fixed_base) {
+  if (name.empty()) throw SceneError("URDF " + source + ": the articulation name is empty");
+  for (const Articulation& other : articulations)
+    if (other.name == name)
+      throw SceneError("URDF " + source + ": an articulation named '" + name +
+                       "' already exists in the scene");
+  if (!isValidPose(root))
+    throw SceneError("URDF " + source + ": the root pose of articulation '" +
+                     name + "' is not finite or has a zero quaternion");
+
+  Articulation art;
+  art.name = name;
+  art.model = scene_detail::buildArticulationModel(xml, source,
+                                                   settings.default_density);
+  art.base_dir = base_dir;
+  art.X_root = toTransform(root);
+  art.fixed_base = fixed_base;
+  art.first_link = static_cast<int>(links.size());
+  art.first_joint = joint_count;
+
+  if (!art.model.unsimulated.empty()) {
+    std::string list;
+    for (const std::string& item : art.model.unsimulated)
+      list += (list.empty() ? "" : ", ") + item;
+    std::fprintf(stderr,
+                 "manibench: URDF %s: collision geometry not simulated yet "
+                 "(only spheres and boxes are): %s\n",
+                 source.c_str(), list.c_str());
+  }
+
+  const int a = static_cast<int>(articulations.size());
+  for (int l = 0; l < static_cast<int>(art.model.links.size()); ++l)
+    links.emplace_back(a, l);
+  joint_count += static_cast<int>(art.model.joints.size());
+  articulations.push_back(std::move(art));
+  return a;
+}
+
+void Scene::Impl::buildArticulation(Articulation& art,
+                                    SimTK::ContactCliqueId clique,
+                                    const SimTK::ContactMaterial& material) {
+  const ArticulationModel& model = art.model;
+  art.body_mobods.resize(model.bodies.size());
+  for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+    const scene_detail::BodyModel& body = model.bodies[b];
+    // A fixed root is merged into Ground at the root pose; its frame then
+    // sits at X_root in Ground, which every offset below must include.
+    const bool on_ground = b == 0 && art.fixed_base;
+    if (on_ground) {
+      SimTK::Body& ground = matter.updGround().updBody();
+      for (const CollisionShape& shape : body.shapes) {
+        const int ordinal = ground.addContactSurface(
+            art.X_root * shape.X_BS, makeContactSurface(shape, clique, material));
+        surfaces.push_back({SimTK::GroundIndex, ordinal, art.first_link + shape.link});
+      }
+      art.body_mobods[b] = SimTK::GroundIndex;
+      continue;
+    }
+    const SimTK::MassProperties mass =
+        body.mass > 0
+            ? SimTK::MassProperties(body.mass, body.first_moment / body.mass, body.inertia)
+            : SimTK::MassProperties(kTinyMass, SimTK::Vec3(0), SimTK::Inertia(kTinyInertia));
+    SimTK::Body::Rigid rigid(mass);
+    // The mobod index is known only once the mobilized body exists; the
+    // surface ordinals are known now.
+    std::vector<std::pair<int, int>> ordinals;  // (ordinal, global link)
+    for (const CollisionShape& shape : body.shapes)
+      ordinals.emplace_back(
+          rigid.addContactSurface(shape.X_BS, makeContactSurface(shape, clique, material)),
+          art.first_link + shape.link);
+
+    SimTK::MobilizedBody mobod;
+    if (b == 0) {
+      // Floating root: Free from the Ground origin; q is the root pose.
+      mobod = SimTK::MobilizedBody::Free(matter.updGround(), SimTK::Transform(),
+                                         rigid, SimTK::Transform());
+    } else {
+      const JointDescription& joint = model.joints[body.joint];
+      SimTK::MobilizedBody& parent =
+          matter.updMobilizedBody(art.body_mobods[body.parent]);
+      const SimTK::Transform X_PJ =
+          body.parent == 0 && art.fixed_base ? art.X_root * body.X_PJ : body.X_PJ;
+      // Pin turns about Z of its F and M frames, Slider moves along X: turn
+      // both frames so that axis is the URDF axis; at q = 0 the child frame
+      // then coincides with the URDF joint frame.
+      if (joint.type == JointType::Prismatic) {
+        const SimTK::Rotation R(body.axis, SimTK::XAxis);
+        mobod = SimTK::MobilizedBody::Slider(parent, X_PJ * SimTK::Transform(R),
+                                             rigid, SimTK::Transform(R));
+      } else {
+        const SimTK::Rotation R(body.axis, SimTK::ZAxis);
+        mobod = SimTK::MobilizedBody::Pin(parent, X_PJ * SimTK::Transform(R),
+                                          rigid, SimTK::Transform(R));
+      }
+      if (joint.lower > -SimTK::Infinity || joint.upper < SimTK::Infinity)
+        SimTK::Force::MobilityLinearStop(forces, mobod, SimTK::MobilizerQIndex(0),
+                                         kLimitStiffness, kLimitDissipation,
+                                         joint.lower, joint.upper);
+    }
+    art.body_mobods[b] = mobod.getMobilizedBodyIndex();
+    for (const auto& [ordinal, link] : ordinals)
+      surfaces.push_back({mobod.getMobilizedBodyIndex(), ordinal, link});
+  }
+}
+
+void Scene::Impl::finalize() {
+  const SimTK::ContactMaterial material(
+      settings.contact_stiffness, settings.contact_dissipation,
+      settings.static_friction, settings.dynamic_friction,
+      settings.viscous_friction);
+  for (Articulation& art : articulations)
+    buildArticulation(art, SimTK::ContactSurface::createNewContactClique(), material);
+
+  if (has_ground) {
+    // A HalfSpace fills x > 0 of its frame; turning x to -z makes it the
+    // region below z = height with the surface normal +z.
+    const int ordinal = matter.updGround().updBody().addContactSurface(
+        SimTK::Transform(SimTK::Rotation(SimTK::Pi / 2, SimTK::YAxis),
+                         SimTK::Vec3(0, 0, ground_height)),
+        SimTK::ContactSurface(SimTK::ContactGeometry::HalfSpace(), material));
+    surfaces.push_back({SimTK::GroundIndex, ordinal, -1});
+  }
+
+  // Joint slots and their URDF dynamics.
+  std::vector<JointSlot> slots;
+  JointControls controls;
+  for (const Articulation& art : articulations) {
+    for (const JointDescription& joint : art.model.joints) {
+      SimTK::MobilizedBodyIndex mobod;
+      for (std::size_t b = 0; b < art.model.bodies.size(); ++b)
+        if (art.model.bodies[b].joint == joint.index) mobod = art.body_mobods[b];
+      assert(mobod.isValid());
+      slots.push_back({mobod, joint.effort_limit});
+      joint_mobods.push_back(mobod);
+      controls.damping.push_back(joint.damping);
+      controls.friction.push_back(joint.friction);
+    }
+  }
+  controls.drives.assign(slots.size(), DriveCommand());
+  controls.driven.assign(slots.size(), 0);
+  controls.balanced.assign(slots.size(), 0);
+  joint_forces = new JointForces(matter, gravity, std::move(slots), std::move(controls));
+  SimTK::Force::Custom(forces, joint_forces);
+
+  state = system.realizeTopology();
+  system.realizeModel(state);
+
+  // Coordinate and surface maps for divergence reports and contact queries.
+  mobod_link.assign(matter.getNumBodies(), -1);
+  for (const Articulation& art : articulations)
+    for (std::size_t b = 0; b < art.model.bodies.size(); ++b)
+      if (art.body_mobods[b] != SimTK::GroundIndex)
+        mobod_link[art.body_mobods[b]] = art.first_link + art.model.bodies[b].link;
+  q_mobod.assign(state.getNQ(), SimTK::MobilizedBodyIndex());
+  u_mobod.assign(state.getNU(), SimTK::MobilizedBodyIndex());
+  for (SimTK::MobilizedBodyIndex m(1); m < matter.getNumBodies(); ++m) {
+    const SimTK::MobilizedBody& mobod = matter.getMobilizedBody(m);
+    for (int i = 0; i < mobod.getNumQ(state); ++i) q_mobod[mobod.getFirstQIndex(state) + i] = m;
+    for (int i = 0; i < mobod.getNumU(state); ++i) u_mobod[mobod.getFirstUIndex(state) + i] = m;
+  }
+  surface_link.assign(tracker.getNumSurfaces(), -1);
+  for (const SurfaceRecord& surface : surfaces)
+    surface_link[tracker.getContactSurfaceIndex(surface.mobod, surface.ordinal)] = surface.link;
+
+  link_frames.resize(links.size());
+  for (const Articulation& art : articulations) {
+    for (std::size_t l = 0; l < art.model.links.size(); ++l) {
+      const scene_detail::LinkModel& link = art.model.links[l];
+      LinkFrame& frame = link_frames[art.first_link + l];
+      frame.mobod = art.body_mobods[link.body];
+      frame.X_BL = frame.mobod == SimTK::GroundIndex ? art.X_root * link.X_BL : link.X_BL;
+    }
+  }
+
+  // Initial configuration: joints at 0 or the nearest limit, roots posed.
+  for (const Articulation& art : articulations) {
+    for (const JointDescription& joint : art.model.joints)
+      matter.getMobilizedBody(joint_mobods[art.first_joint + joint.index])
+          .setOneQ(state, 0, std::min(std::max(0.0, joint.lower), joint.upper));
+    if (!art.fixed_base)
+      matter.getMobilizedBody(art.body_mobods[0]).setQToFitTransform(state, art.X_root);
+  }
+  system.realize(state, SimTK::Stage::Position);
+
+  needs_init = true;
+
+  // Simbody has no box-box or box-sphere contact; say so once per scene
+  // where such a pair could occur.
+  int with_boxes = 0, with_shapes = 0;
+  for (const Articulation& art : articulations) {
+    bool box = false, any = false;
+    for (const auto& body : art.model.bodies)
+      for (const CollisionShape& shape : body.shapes) {
+        any = true;
+        box = box || shape.kind == CollisionShape::Kind::Box;
+      }
+    with_boxes += box;
+    with_shapes += any;
+  }
+  if (with_boxes > 0 && with_shapes > 1)
+    std::fprintf(stderr,
+                 "manibench: box-box and box-sphere contacts are not simulated "
+                 "yet; boxes only touch the ground and spheres touch spheres\n");
+}
+
+const std::string& Scene::Impl::getMobodLinkName(SimTK::MobilizedBodyIndex mobod) const {
+  static const std::string ground = "ground";
+  const int link = mobod.isValid() ? mobod_link[mobod] : -1;
+  if (link < 0) return ground;
+  const auto& [a, l] = links[link];
+  return articulations[a].model.links[l].name;
+}
+
+std::string Scene::Impl::describeMobod(SimTK::MobilizedBodyIndex mobod) const {
+  const int link = mobod.isValid() ? mobod_link[mobod] : -1;
+  if (link < 0) return "ground";
+  return "link '" + getMobodLinkName(mobod) + "' of articulation '" +
+         articulations[links[link].first].name + "'";
+}
+
+bool Scene::Impl::findDivergence(const SimTK::State& s,
+                                 SimTK::MobilizedBodyIndex& mobod,
+                                 std::string& what) const {
+  const SimTK::Vector& q = s.getQ();
+  for (int i = 0; i < q.size(); ++i)
+    if (!std::isfinite(q[i])) {
+      mobod = q_mobod[i];
+      what = "non-finite position";
+      return true;
+    }
+  const SimTK::Vector& u = s.getU();
+  const double limit = settings.divergence_speed_limit;
+  for (int i = 0; i < u.size(); ++i)
+    if (!(std::abs(u[i]) <= limit)) {
+      mobod = u_mobod[i];
+      if (!std::isfinite(u[i])) {
+        what = "non-finite velocity";
+      } else {
+        std::ostringstream m;
+        m << "speed " << std::abs(u[i]) << " above divergence_speed_limit " << limit;
+        what = m.str();
+      }
+      return true;
+    }
+  return false;
+}
+
+void Scene::Impl::throwDiverged(const std::string& cause) {
+  // Whatever the integrator holds becomes the current state; the next
+  // advance() restarts from it (and will fail again unless a restore or a
+  // setter repaired it).
+  // (If initialize() itself failed, `state` already is that state.)
+  if (!needs_init) state = integrator->getState();
+  needs_init = true;
+  SimTK::MobilizedBodyIndex mobod;
+  std::string what;
+  if (!findDivergence(state, mobod, what)) {
+    // The state itself is finite (the integrator gave up before accepting a
+    // bad step): blame the first body with a non-finite acceleration.
+    try {
+      system.realize(state, SimTK::Stage::Acceleration);
+      const SimTK::Vector& udot = state.getUDot();
+      for (int i = 0; i < udot.size(); ++i)
+        if (!std::isfinite(udot[i])) {
+          mobod = u_mobod[i];
+          what = "non-finite acceleration";
+          break;
+        }
+    } catch (const std::exception&) {
+    }
+  }
+  const double t = state.getTime();
+  std::string message = "simulation diverged at t=" + formatTime(t) + " s";
+  if (mobod.isValid()) message += ": " + describeMobod(mobod) + ": " + what;
+  if (!cause.empty()) message += " (" + cause + ")";
+  throw SimulationDiverged(message, mobod.isValid() ? getMobodLinkName(mobod) : "", t);
+}
+
+void Scene::Impl::advance(double dt) {
+  if (!(dt > 0) || !std::isfinite(dt))
+    throw SceneError("Scene::advance: dt must be positive and finite, got " + formatTime(dt));
+  if (state.getNY() == 0) {
+    // Nothing moves (only ground and fixed bodies): just the clock runs.
+    state.updTime() += dt;
+    return;
+  }
+  try {
+    if (needs_init) {
+      // A fresh integrator rather than initialize() again: CPodes leaks ~2
+      // kB per re-initialization (Simbody 3.7), too much at one per episode.
+      integrator = makeIntegrator(system, settings, kStepsPerCall);
+      integrator->initialize(state);
+      needs_init = false;
+    }
+    const double t_end = integrator->getTime() + dt;
+    const int first_step = integrator->getNumStepsTaken();
+    const double budget = std::max<double>(kMinStepBudget, std::ceil(dt / kMinMeanStepSize));
+    while (integrator->getTime() < t_end) {
+      const SimTK::Integrator::SuccessfulStepStatus status = integrator->stepTo(t_end);
+      if (status == SimTK::Integrator::EndOfSimulation)
+        throw std::runtime_error("the integrator ended the simulation");
+      if (status != SimTK::Integrator::ReachedStepLimit) continue;
+      SimTK::MobilizedBodyIndex mobod;
+      std::string what;
+      if (findDivergence(integrator->getState(), mobod, what)) throwDiverged("");
+      const int steps = integrator->getNumStepsTaken() - first_step;
+      if (steps > budget) {
+        std::ostringstream cause;
+        cause << "the integrator took " << steps << " steps and reached only t="
+              << integrator->getTime() << " s";
+        throw std::runtime_error(cause.str());
+      }
+    }
+  } catch (const SimulationDiverged&) {
+    throw;
+  } catch (const std::exception& e) {
+    std::string cause = e.what();
+    // Simbody's messages span lines; keep the first few for the report.
+    std::replace(cause.begin(), cause.end(), '\n', ' ');
+    if (cause.size() > 400) cause = cause.substr(0, 400) + "...";
+    throwDiverged("integrator failed: " + cause);
+  }
+  SimTK::MobilizedBodyIndex mobod;
+  std::string what;
+  if (findDivergence(integrator->getState(), mobod, what)) throwDiverged("");
+}
+
+// --- Scene -------------------------------------------------------------------
+
+Scene::Scene(PhysicsSettings settings) {
+  auto positive = [](double v) { return v > 0 && std::isfinite(v); };
+  auto non_negative = [](double v) { return v >= 0 && std::isfinite(v); };
+  if (settings.integrator != "cpodes" && settings.integrator != "rk_merson")
+    throw SceneError("PhysicsSettings: unknown integrator '" + settings.integrator +
+                     "' (expected 'cpodes' or 'rk_merson')");
+  if (!positive(settings.accuracy) || !std::isfinite(settings.gravity_z) ||
+      !positive(settings.contact_stiffness) ||
+      !non_negative(settings.contact_dissipation) ||
+      !non_negative(settings.dynamic_friction) ||
+      !(settings.static_friction >= settings.dynamic_friction) ||
+      !std::isfinite(settings.static_friction) ||
+      !non_negative(settings.viscous_friction) ||
+      !positive(settings.default_density) ||
+      !positive(settings.divergence_speed_limit))
+    throw SceneError(
+        "PhysicsSettings: accuracy, contact_stiffness, default_density and "
+        "divergence_speed_limit must be positive, dissipation and frictions "
+        "non-negative with static_friction >= dynamic_friction, all finite");
+  impl_ = std::make_unique<Impl>(settings);
+}
+
+Scene::~Scene() = default;
+
+void Scene::addGround(double height) {
+  impl_->requireBuilding("addGround");
+  if (impl_->has_ground) throw SceneError("Scene::addGround: the scene already has a ground");
+  if (!std::isfinite(height)) throw SceneError("Scene::addGround: the height must be finite");
+  impl_->has_ground = true;
+  impl_->ground_height = height;
+}
+
+int Scene::addUrdfFile(const std::string& path, const std::string& name,
+                       const Pose& root, bool fixed_base) {
+  impl_->requireBuilding("addUrdfFile");
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+    throw SceneError("URDF '" + path + "': cannot open the file: " + std::strerror(errno));
+  std::ostringstream xml;
+  xml << in.rdbuf();
+  if (in.bad()) throw SceneError("URDF '" + path + "': cannot read the file");
+  const std::size_t slash = path.find_last_of('/');
+  const std::string base_dir = slash == std::string::npos ? "." : path.substr(0, slash);
+  return impl_->addArticulation(xml.str(), "'" + path + "'", base_dir, name, root, fixed_base);
+}
+
+int Scene::addUrdfString(const std::string& urdf_xml, const std::string& base_dir,
+                         const std::string& name, const Pose& root, bool fixed_base) {
+  impl_->requireBuilding("addUrdfString");
+  return impl_->addArticulation(urdf_xml, "<string> of articulation '" + name + "'",
+                                base_dir, name, root, fixed_base);
+}
+
+void Scene::finalize() {
+  impl_->requireBuilding("finalize");
+  try {
+    impl_->finalize();
+  } catch (const SimTK::Exception::Base& e) {
+    throw SceneError(std::string("Scene::finalize: Simbody rejected the model: ") + e.what());
+  }
+  impl_->finalized = true;
+}
+
+bool Scene::isFinalized() const { return impl_->finalized; }
+
+int Scene::getArticulationCount() const {
+  return static_cast<int>(impl_->articulations.size());
+}
+
+const std::string& Scene::getArticulationName(int articulation) const {
+  return impl_->getArticulation(articulation, "getArticulationName").name;
+}
+
+int Scene::findArticulation(const std::string& name) const {
+  for (std::size_t a = 0; a < impl_->articulations.size(); ++a)
+    if (impl_->articulations[a].name == name) return static_cast<int>(a);
+  return -1;
+}
+
+int Scene::findLink(int articulation, const std::string& link_name) const {
+  const Impl::Articulation& art = impl_->getArticulation(articulation, "findLink");
+  for (std::size_t l = 0; l < art.model.links.size(); ++l)
+    if (art.model.links[l].name == link_name) return art.first_link + static_cast<int>(l);
+  return -1;
+}
+
+const std::string& Scene::getLinkName(int link) const {
+  impl_->checkLink(link, "getLinkName");
+  const auto& [a, l] = impl_->links[link];
+  return impl_->articulations[a].model.links[l].name;
+}
+
+const std::vector<JointDescription>& Scene::getJoints(int articulation) const {
+  return impl_->getArticulation(articulation, "getJoints").model.joints;
+}
+
+int Scene::findJoint(int articulation, const std::string& joint_name) const {
+  for (const JointDescription& joint : getJoints(articulation))
+    if (joint.name == joint_name) return joint.index;
+  return -1;
+}
+
+double Scene::getTime() const {
+  impl_->requireFinalized("getTime");
+  return impl_->getState().getTime();
+}
+
+Eigen::VectorXd Scene::getJointPositions(int articulation) const {
+  impl_->requireFinalized("getJointPositions");
+  const Impl::Articulation& art = impl_->getArticulation(articulation, "getJointPositions");
+  const SimTK::State& s = impl_->getState();
+  Eigen::VectorXd q(art.model.joints.size());
+  for (Eigen::Index j = 0; j < q.size(); ++j)
+    q[j] = impl_->matter.getMobilizedBody(impl_->joint_mobods[art.first_joint + j]).getOneQ(s, 0);
+  return q;
+}
+
+Eigen::VectorXd Scene::getJointVelocities(int articulation) const {
+  impl_->requireFinalized("getJointVelocities");
+  const Impl::Articulation& art = impl_->getArticulation(articulation, "getJointVelocities");
+  const SimTK::State& s = impl_->getState();
+  Eigen::VectorXd u(art.model.joints.size());
+  for (Eigen::Index j = 0; j < u.size(); ++j)
+    u[j] = impl_->matter.getMobilizedBody(impl_->joint_mobods[art.first_joint + j]).getOneU(s, 0);
+  return u;
+}
+
+Pose Scene::getRootPose(int articulation) const {
+  impl_->requireFinalized("getRootPose");
+  return getLinkPose(impl_->getArticulation(articulation, "getRootPose").first_link);
+}
+
+Pose Scene::getLinkPose(int link) const {
+  impl_->requireFinalized("getLinkPose");
+  impl_->checkLink(link, "getLinkPose");
+  const Impl::LinkFrame& frame = impl_->link_frames[link];
+  const SimTK::State& s = impl_->getRealizedState(SimTK::Stage::Position);
+  return toPose(impl_->matter.getMobilizedBody(frame.mobod).getBodyTransform(s) * frame.X_BL);
+}
+
+Twist Scene::getLinkTwist(int link) const {
+  impl_->requireFinalized("getLinkTwist");
+  impl_->checkLink(link, "getLinkTwist");
+  const Impl::LinkFrame& frame = impl_->link_frames[link];
+  const SimTK::State& s = impl_->getRealizedState(SimTK::Stage::Velocity);
+  const SimTK::MobilizedBody& mobod = impl_->matter.getMobilizedBody(frame.mobod);
+  Twist twist;
+  twist.angular = toEigen(mobod.getBodyAngularVelocity(s));
+  twist.linear = toEigen(mobod.findStationVelocityInGround(s, frame.X_BL.p()));
+  return twist;
+}
+
+Eigen::Vector3d Scene::getContactForce(int link_a, int link_b) const {
+  impl_->requireFinalized("getContactForce");
+  impl_->checkLink(link_a, "getContactForce");
+  if (link_b >= 0) impl_->checkLink(link_b, "getContactForce");
+  const SimTK::State& s = impl_->getRealizedState(SimTK::Stage::Dynamics);
+  const SimTK::ContactSnapshot& contacts = impl_->tracker.getActiveContacts(s);
+  SimTK::Vec3 total(0);
+  for (int n = 0; n < impl_->contact.getNumContactForces(s); ++n) {
+    const SimTK::ContactForce& force = impl_->contact.getContactForce(s, n);
+    const SimTK::Contact& c = contacts.getContactById(force.getContactId());
+    const int link1 = impl_->surface_link[c.getSurface1()];
+    const int link2 = impl_->surface_link[c.getSurface2()];
+    const SimTK::Vec3& on2 = force.getForceOnSurface2()[1];
+    if (link1 == link_a && (link_b < 0 || link2 == link_b)) total -= on2;
+    if (link2 == link_a && (link_b < 0 || link1 == link_b)) total += on2;
+  }
+  return toEigen(total);
+}
+
+double Scene::calcKineticEnergy() const {
+  impl_->requireFinalized("calcKineticEnergy");
+  return impl_->matter.calcKineticEnergy(impl_->getRealizedState(SimTK::Stage::Velocity));
+}
+
+void Scene::setJointPositions(int articulation, const Eigen::VectorXd& q) {
+  impl_->requireFinalized("setJointPositions");
+  const Impl::Articulation& art = impl_->getArticulation(articulation, "setJointPositions");
+  impl_->checkJointVector(art, q, "setJointPositions");
+  SimTK::State& s = impl_->updStateAndRestart();
+  for (Eigen::Index j = 0; j < q.size(); ++j)
+    impl_->matter.getMobilizedBody(impl_->joint_mobods[art.first_joint + j]).setOneQ(s, 0, q[j]);
+}
+
+void Scene::setJointVelocities(int articulation, const Eigen::VectorXd& qdot) {
+  impl_->requireFinalized("setJointVelocities");
+  const Impl::Articulation& art = impl_->getArticulation(articulation, "setJointVelocities");
+  impl_->checkJointVector(art, qdot, "setJointVelocities");
+  SimTK::State& s = impl_->updStateAndRestart();
+  for (Eigen::Index j = 0; j < qdot.size(); ++j)
+    impl_->matter.getMobilizedBody(impl_->joint_mobods[art.first_joint + j]).setOneU(s, 0, qdot[j]);
+}
+
+void Scene::setRootPose(int articulation, const Pose& pose) {
+  impl_->requireFinalized("setRootPose");
+  const Impl::Articulation& art = impl_->getArticulation(articulation, "setRootPose");
+  if (art.fixed_base)
+    throw SceneError("Scene::setRootPose: articulation '" + art.name +
+                     "' has a fixed base; its root pose is set when it is added");
+  if (!isValidPose(pose))
+    throw SceneError("Scene::setRootPose: articulation '" + art.name +
+                     "': the pose is not finite or has a zero quaternion");
+  SimTK::State& s = impl_->updStateAndRestart();
+  impl_->matter.getMobilizedBody(art.body_mobods[0]).setQToFitTransform(s, toTransform(pose));
+}
+
+void Scene::setJointDynamics(int articulation, int joint, double damping, double friction) {
+  impl_->requireFinalized("setJointDynamics");
+  const Impl::Articulation& art = impl_->getArticulation(articulation, "setJointDynamics");
+  const int slot = impl_->getJointSlot(art, joint, "setJointDynamics");
+  if (!(damping >= 0) || !(friction >= 0) || !std::isfinite(damping) || !std::isfinite(friction))
+    throw SceneError("Scene::setJointDynamics: joint '" + art.model.joints[joint].name +
+                     "' of articulation '" + art.name +
+                     "': damping and friction must be finite and non-negative");
+  JointControls& controls = impl_->updControls();
+  controls.damping[slot] = damping;
+  controls.friction[slot] = friction;
+  impl_->invalidateForces();
+}
+
+void Scene::setDriveCommands(int articulation, const std::vector<int>& joints,
+                             const std::vector<DriveCommand>& commands) {
+  impl_->requireFinalized("setDriveCommands");
+  const Impl::Articulation& art = impl_->getArticulation(articulation, "setDriveCommands");
+  if (joints.size() != commands.size())
+    throw SceneError("Scene::setDriveCommands: articulation '" + art.name + "': " +
+                     std::to_string(joints.size()) + " joints but " +
+                     std::to_string(commands.size()) + " commands");
+  std::vector<int> slots;
+  slots.reserve(joints.size());
+  for (int joint : joints) slots.push_back(impl_->getJointSlot(art, joint, "setDriveCommands"));
+  // Non-finite commands are accepted on purpose: they make the simulation
+  // diverge, which advance() reports with the body at fault.
+  JointControls& controls = impl_->updControls();
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    controls.drives[slots[i]] = commands[i];
+    controls.driven[slots[i]] = 1;
+  }
+  impl_->invalidateForces();
+}
+
+void Scene::setPassiveForceBalancing(int articulation, const std::vector<int>& joints,
+                                     bool enabled) {
+  impl_->requireFinalized("setPassiveForceBalancing");
+  const Impl::Articulation& art =
+      impl_->getArticulation(articulation, "setPassiveForceBalancing");
+  std::vector<int> slots;
+  for (int joint : joints)
+    slots.push_back(impl_->getJointSlot(art, joint, "setPassiveForceBalancing"));
+  JointControls& controls = impl_->updControls();
+  for (int slot : slots) controls.balanced[slot] = enabled ? 1 : 0;
+  impl_->invalidateForces();
+}
+
+void Scene::advance(double dt) {
+  impl_->requireFinalized("advance");
+  impl_->advance(dt);
+}
+
+SceneState Scene::saveState() const {
+  impl_->requireFinalized("saveState");
+  SceneState saved;
+  saved.data = std::make_unique<SceneState::Data>();
+  saved.data->scene_id = impl_->id;
+  saved.data->state = impl_->getState();
+  saved.data->controls = impl_->joint_forces->getControls();
+  // Restart the integrator here too: the trajectory after a save is then
+  // bit-identical to the trajectory after restoring that save (a restored
+  // state always starts the integrator afresh; CPodes' history can't be
+  // saved).
+  impl_->updStateAndRestart();
+  return saved;
+}
+
+void Scene::restoreState(const SceneState& saved) {
+  impl_->requireFinalized("restoreState");
+  if (!saved.data)
+    throw SceneError("Scene::restoreState: the SceneState is empty (not from saveState())");
+  if (saved.data->scene_id != impl_->id)
+    throw SceneError("Scene::restoreState: the SceneState was saved from another scene");
+  impl_->state = saved.data->state;
+  impl_->needs_init = true;
+  impl_->updControls() = saved.data->controls;
+  impl_->invalidateForces();
+}
+
+}  // namespace manibench

@@ -1,0 +1,295 @@
+// The host's mb_scene_api: C trampolines over Scene. Nothing thrown here may
+// reach the plugin; every exception becomes a status and a message.
+#include <manibench/plugin_instances.hpp>
+#include <manibench/scene.hpp>
+
+#include <cstring>
+#include <set>
+#include <string>
+
+struct mb_scene {
+  manibench::Scene* scene = nullptr;
+  bool building = false;
+  bool state_changes_allowed = false;
+  // Names handed to plugins must outlive any later add_*; a std::set's nodes
+  // never move.
+  std::set<std::string> interned;
+};
+
+namespace manibench {
+namespace {
+
+void writeError(mb_error* err, const std::string& message) {
+  if (err == nullptr || err->message == nullptr || err->capacity == 0) return;
+  const std::size_t n = std::min(message.size(), err->capacity - 1);
+  std::memcpy(err->message, message.data(), n);
+  err->message[n] = '\0';
+}
+
+template <class Body>
+mb_status guarded(mb_scene* s, mb_error* err, Body&& body) noexcept {
+  try {
+    if (s == nullptr || s->scene == nullptr) {
+      writeError(err, "no scene");
+      return MB_INVALID_ARGUMENT;
+    }
+    body(*s);
+    return MB_OK;
+  } catch (const SimulationDiverged& e) {
+    writeError(err, e.what());
+    return MB_DIVERGED;
+  } catch (const SceneError& e) {
+    writeError(err, e.what());
+    return MB_INVALID_ARGUMENT;
+  } catch (const std::exception& e) {
+    writeError(err, e.what());
+    return MB_ERROR;
+  } catch (...) {
+    writeError(err, "unknown error in the host scene");
+    return MB_ERROR;
+  }
+}
+
+void requireBuilding(const mb_scene& s, const char* call) {
+  if (!s.building)
+    throw SceneError(std::string(call) + " is only allowed while a task builds its scene");
+}
+void requireStateChanges(const mb_scene& s, const char* call) {
+  if (!s.state_changes_allowed)
+    throw SceneError(std::string(call) +
+                     " is only allowed in a reset (observe, reward and success must not change the state)");
+}
+void requireCount(const Scene& scene, mb_id articulation, uint32_t count) {
+  const std::size_t n = scene.getJoints(articulation).size();
+  if (n != count)
+    throw SceneError("articulation '" + scene.getArticulationName(articulation) + "' has " +
+                     std::to_string(n) + " joints, the call passed " + std::to_string(count));
+}
+void requirePointer(const void* p, const char* what) {
+  if (p == nullptr) throw SceneError(std::string(what) + " is null");
+}
+
+Pose toPose(const mb_pose* p) {
+  requirePointer(p, "pose");
+  Pose out;
+  out.position = Eigen::Vector3d(p->position[0], p->position[1], p->position[2]);
+  out.orientation = Eigen::Quaterniond(p->quaternion[0], p->quaternion[1], p->quaternion[2],
+                                       p->quaternion[3]);
+  const double norm = out.orientation.norm();
+  if (!(std::abs(norm - 1.0) < 1e-6))
+    throw SceneError("pose quaternion has norm " + std::to_string(norm) + ", expected 1");
+  return out;
+}
+void fromPose(const Pose& p, mb_pose* out) {
+  for (int i = 0; i < 3; ++i) out->position[i] = p.position[i];
+  out->quaternion[0] = p.orientation.w();
+  out->quaternion[1] = p.orientation.x();
+  out->quaternion[2] = p.orientation.y();
+  out->quaternion[3] = p.orientation.z();
+}
+
+mb_status addGround(mb_scene* s, double height, mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requireBuilding(m, "add_ground");
+    m.scene->addGround(height);
+  });
+}
+mb_status addUrdfFile(mb_scene* s, const char* path, const char* name, const mb_pose* root,
+                      int32_t fixed_base, mb_id* out, mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requireBuilding(m, "add_urdf_file");
+    requirePointer(path, "path");
+    requirePointer(name, "name");
+    requirePointer(out, "output id");
+    *out = m.scene->addUrdfFile(path, name, toPose(root), fixed_base != 0);
+  });
+}
+mb_status addUrdfString(mb_scene* s, const char* xml, const char* base_dir, const char* name,
+                        const mb_pose* root, int32_t fixed_base, mb_id* out, mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requireBuilding(m, "add_urdf_string");
+    requirePointer(xml, "URDF text");
+    requirePointer(name, "name");
+    requirePointer(out, "output id");
+    *out = m.scene->addUrdfString(xml, base_dir ? base_dir : "", name, toPose(root),
+                                  fixed_base != 0);
+  });
+}
+mb_status findArticulation(mb_scene* s, const char* name, mb_id* out, mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requirePointer(name, "name");
+    requirePointer(out, "output id");
+    *out = m.scene->findArticulation(name);
+    if (*out < 0) throw SceneError(std::string("no articulation named '") + name + "'");
+  });
+}
+mb_status findLink(mb_scene* s, mb_id articulation, const char* link, mb_id* out, mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requirePointer(link, "link name");
+    requirePointer(out, "output id");
+    *out = m.scene->findLink(articulation, link);
+    if (*out < 0)
+      throw SceneError(std::string("articulation '") + m.scene->getArticulationName(articulation) +
+                       "' has no link named '" + link + "'");
+  });
+}
+mb_status getJointCount(mb_scene* s, mb_id articulation, uint32_t* out, mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requirePointer(out, "output count");
+    *out = static_cast<uint32_t>(m.scene->getJoints(articulation).size());
+  });
+}
+mb_status getJointInfo(mb_scene* s, mb_id articulation, uint32_t index, mb_joint_info* out,
+                       mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requirePointer(out, "output joint info");
+    const auto& joints = m.scene->getJoints(articulation);
+    if (index >= joints.size())
+      throw SceneError("joint index " + std::to_string(index) + " out of range: articulation '" +
+                       m.scene->getArticulationName(articulation) + "' has " +
+                       std::to_string(joints.size()) + " joints");
+    const JointDescription& j = joints[index];
+    out->name = m.interned.insert(j.name).first->c_str();
+    out->type = static_cast<uint32_t>(j.type);
+    out->index = static_cast<uint32_t>(j.index);
+    out->lower = j.lower;
+    out->upper = j.upper;
+    out->velocity_limit = j.velocity_limit;
+    out->effort_limit = j.effort_limit;
+  });
+}
+mb_status findJoint(mb_scene* s, mb_id articulation, const char* name, uint32_t* out,
+                    mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requirePointer(name, "joint name");
+    requirePointer(out, "output index");
+    const int index = m.scene->findJoint(articulation, name);
+    if (index < 0)
+      throw SceneError(std::string("articulation '") + m.scene->getArticulationName(articulation) +
+                       "' has no movable joint named '" + name + "'");
+    *out = static_cast<uint32_t>(index);
+  });
+}
+mb_status getTime(mb_scene* s, double* out, mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requirePointer(out, "output time");
+    *out = m.scene->getTime();
+  });
+}
+mb_status getJointPositions(mb_scene* s, mb_id articulation, double* out, uint32_t count,
+                            mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requireCount(*m.scene, articulation, count);
+    requirePointer(out, "output array");
+    Eigen::Map<Eigen::VectorXd>(out, count) = m.scene->getJointPositions(articulation);
+  });
+}
+mb_status getJointVelocities(mb_scene* s, mb_id articulation, double* out, uint32_t count,
+                             mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requireCount(*m.scene, articulation, count);
+    requirePointer(out, "output array");
+    Eigen::Map<Eigen::VectorXd>(out, count) = m.scene->getJointVelocities(articulation);
+  });
+}
+mb_status getRootPose(mb_scene* s, mb_id articulation, mb_pose* out, mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requirePointer(out, "output pose");
+    fromPose(m.scene->getRootPose(articulation), out);
+  });
+}
+mb_status getLinkPose(mb_scene* s, mb_id link, mb_pose* out, mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requirePointer(out, "output pose");
+    fromPose(m.scene->getLinkPose(link), out);
+  });
+}
+mb_status getLinkTwist(mb_scene* s, mb_id link, double out[6], mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requirePointer(out, "output twist");
+    const Twist t = m.scene->getLinkTwist(link);
+    for (int i = 0; i < 3; ++i) {
+      out[i] = t.angular[i];
+      out[3 + i] = t.linear[i];
+    }
+  });
+}
+mb_status getContactForce(mb_scene* s, mb_id a, mb_id b, double out[3], mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requirePointer(out, "output force");
+    const Eigen::Vector3d f = m.scene->getContactForce(a, b);
+    for (int i = 0; i < 3; ++i) out[i] = f[i];
+  });
+}
+mb_status setJointPositions(mb_scene* s, mb_id articulation, const double* q, uint32_t count,
+                            mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requireStateChanges(m, "set_joint_positions");
+    requireCount(*m.scene, articulation, count);
+    requirePointer(q, "positions");
+    m.scene->setJointPositions(articulation, Eigen::Map<const Eigen::VectorXd>(q, count));
+  });
+}
+mb_status setJointVelocities(mb_scene* s, mb_id articulation, const double* v, uint32_t count,
+                             mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requireStateChanges(m, "set_joint_velocities");
+    requireCount(*m.scene, articulation, count);
+    requirePointer(v, "velocities");
+    m.scene->setJointVelocities(articulation, Eigen::Map<const Eigen::VectorXd>(v, count));
+  });
+}
+mb_status setRootPose(mb_scene* s, mb_id articulation, const mb_pose* pose, mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requireStateChanges(m, "set_root_pose");
+    m.scene->setRootPose(articulation, toPose(pose));
+  });
+}
+mb_status setJointDynamics(mb_scene* s, mb_id articulation, uint32_t joint, double damping,
+                           double friction, mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requireStateChanges(m, "set_joint_dynamics");
+    if (!(damping >= 0) || !(friction >= 0))
+      throw SceneError("joint damping and friction must be finite and >= 0, got " +
+                       std::to_string(damping) + " and " + std::to_string(friction));
+    m.scene->setJointDynamics(articulation, static_cast<int>(joint), damping, friction);
+  });
+}
+
+const mb_scene_api kSceneApi = [] {
+  mb_scene_api api{};
+  api.struct_size = sizeof(mb_scene_api);
+  api.abi_major = MB_ABI_MAJOR;
+  api.abi_minor = MB_ABI_MINOR;
+  api.add_ground = &addGround;
+  api.add_urdf_file = &addUrdfFile;
+  api.add_urdf_string = &addUrdfString;
+  api.find_articulation = &findArticulation;
+  api.find_link = &findLink;
+  api.get_joint_count = &getJointCount;
+  api.get_joint_info = &getJointInfo;
+  api.find_joint = &findJoint;
+  api.get_time = &getTime;
+  api.get_joint_positions = &getJointPositions;
+  api.get_joint_velocities = &getJointVelocities;
+  api.get_root_pose = &getRootPose;
+  api.get_link_pose = &getLinkPose;
+  api.get_link_twist = &getLinkTwist;
+  api.get_contact_force = &getContactForce;
+  api.set_joint_positions = &setJointPositions;
+  api.set_joint_velocities = &setJointVelocities;
+  api.set_root_pose = &setRootPose;
+  api.set_joint_dynamics = &setJointDynamics;
+  return api;
+}();
+
+}  // namespace
+
+SceneBridge::SceneBridge(Scene& scene) : handle_(new mb_scene) { handle_->scene = &scene; }
+SceneBridge::~SceneBridge() { delete handle_; }
+const mb_scene_api* SceneBridge::getApi() { return &kSceneApi; }
+mb_scene* SceneBridge::getHandle() { return handle_; }
+void SceneBridge::setBuilding(bool building) { handle_->building = building; }
+void SceneBridge::setStateChangesAllowed(bool allowed) { handle_->state_changes_allowed = allowed; }
+
+}  // namespace manibench

@@ -1,0 +1,185 @@
+#include "reach.hpp"
+
+#include <cmath>
+#include <random>
+#include <sstream>
+
+namespace reach {
+
+using manibench::sdk::Condition;
+using manibench::sdk::Config;
+using manibench::sdk::Error;
+using manibench::sdk::Pose;
+using manibench::sdk::SceneView;
+using manibench::sdk::TaskSpec;
+
+namespace {
+
+constexpr int kTrainObjects = 8;
+constexpr int kTestObjects = 4;
+
+// Rod inertia about its centre, for a link of `mass` and `length` along x.
+std::string inertialXml(double mass, double length) {
+  const double across = mass * length * length / 12.0;
+  std::ostringstream xml;
+  xml << "<inertial><origin xyz=\"" << length / 2 << " 0 0\"/><mass value=\"" << mass
+      << "\"/><inertia ixx=\"1e-4\" ixy=\"0\" ixz=\"0\" iyy=\"" << across
+      << "\" iyz=\"0\" izz=\"" << across << "\"/></inertial>";
+  return xml.str();
+}
+
+std::string visualXml(double length) {
+  std::ostringstream xml;
+  xml << "<visual><origin xyz=\"" << length / 2 << " 0 0\"/><geometry><box size=\"" << length
+      << " 0.04 0.04\"/></geometry></visual>";
+  return xml.str();
+}
+
+// Both joints rotate about +y: the arm moves in the world x-z plane.
+std::string makeArmUrdf(const ArmGeometry& g) {
+  std::ostringstream xml;
+  xml << "<?xml version=\"1.0\"?>\n<robot name=\"reach_arm\">\n"
+      << "<link name=\"pedestal\"><inertial><mass value=\"5\"/>"
+         "<inertia ixx=\"0.1\" ixy=\"0\" ixz=\"0\" iyy=\"0.1\" iyz=\"0\" izz=\"0.1\"/></inertial></link>\n"
+      << "<link name=\"upper_arm\">" << inertialXml(1.0, g.upper_length)
+      << visualXml(g.upper_length) << "</link>\n"
+      << "<link name=\"forearm\">" << inertialXml(0.6, g.fore_length) << visualXml(g.fore_length)
+      << "</link>\n"
+      << "<link name=\"fingertip\"/>\n"
+      << "<joint name=\"shoulder\" type=\"revolute\"><parent link=\"pedestal\"/>"
+         "<child link=\"upper_arm\"/><origin xyz=\"0 0 0\"/><axis xyz=\"0 1 0\"/>"
+         "<limit lower=\"-3.1\" upper=\"3.1\" velocity=\"2.0\" effort=\"60\"/>"
+         "<dynamics damping=\"0.05\" friction=\"0.0\"/></joint>\n"
+      << "<joint name=\"elbow\" type=\"revolute\"><parent link=\"upper_arm\"/>"
+         "<child link=\"forearm\"/><origin xyz=\""
+      << g.upper_length
+      << " 0 0\"/><axis xyz=\"0 1 0\"/>"
+         "<limit lower=\"-2.6\" upper=\"2.6\" velocity=\"2.0\" effort=\"30\"/>"
+         "<dynamics damping=\"0.05\" friction=\"0.0\"/></joint>\n"
+      << "<joint name=\"tip_mount\" type=\"fixed\"><parent link=\"forearm\"/>"
+         "<child link=\"fingertip\"/><origin xyz=\""
+      << g.fore_length << " 0 0\"/></joint>\n"
+      << "</robot>\n";
+  return xml.str();
+}
+
+int parseObjectId(const std::string& object_id) {
+  std::size_t used = 0;
+  int id = -1;
+  try {
+    id = std::stoi(object_id, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != object_id.size() || id < 0 || id >= kTrainObjects + kTestObjects)
+    throw Error("Reach has no object '" + object_id + "' (ids 0-" +
+                    std::to_string(kTrainObjects + kTestObjects - 1) + ")",
+                MB_NOT_FOUND);
+  return id;
+}
+
+}  // namespace
+
+ArmGeometry getArmGeometry(const std::string& object_id) {
+  const int id = parseObjectId(object_id);
+  if (id < kTrainObjects)  // train: upper 0.35-0.45 m, forearm 0.25-0.31 m
+    return {0.35 + 0.1 * (id % 4) / 3.0, 0.25 + 0.02 * (id / 4) * 3.0};
+  // test: longer arms than any train object (0.50-0.55 m / 0.33-0.36 m)
+  const int k = id - kTrainObjects;
+  return {0.50 + 0.05 * (k % 2), 0.33 + 0.03 * (k / 2)};
+}
+
+ReachTask::ReachTask(const Config& config)
+    : reach_tolerance_(config.get<double>("reach_tolerance", 0.03)),
+      static_speed_(config.get<double>("static_speed", 0.05)),
+      hold_steps_(config.get<uint32_t>("hold_steps", 5)) {
+  if (!(reach_tolerance_ > 0) || !(static_speed_ > 0))
+    throw Error("Reach: reach_tolerance and static_speed must be positive", MB_INVALID_ARGUMENT);
+}
+
+TaskSpec ReachTask::describe() const {
+  TaskSpec spec;
+  spec.observation = {
+      {"joint_positions", 2, "shoulder, elbow (rad)"},
+      {"joint_velocities", 2, "shoulder, elbow (rad/s)"},
+      {"tip_position", 3, "fingertip, world frame (m)"},
+      {"target_position", 3, "target point, world frame (m)"},
+      {"link_lengths", 2, "upper arm, forearm (m): the object's parameters"},
+      {"shoulder_position", 3, "shoulder joint, world frame (m)"},
+  };
+  spec.success_conditions = {"reached", "static", "success"};
+  spec.masks = {"robot"};
+  spec.robot_articulation = "arm";
+  spec.actuated_joints = {"shoulder", "elbow"};
+  spec.default_controller = "joint_velocity";
+  spec.control_frequency = 100;
+  spec.frame_skip = 5;
+  spec.max_episode_steps = 100;
+  return spec;
+}
+
+std::vector<std::string> ReachTask::listObjects(const std::string& split) const {
+  std::vector<std::string> ids;
+  if (split == "train") {
+    for (int i = 0; i < kTrainObjects; ++i) ids.push_back(std::to_string(i));
+  } else if (split == "test") {
+    for (int i = kTrainObjects; i < kTrainObjects + kTestObjects; ++i) ids.push_back(std::to_string(i));
+  } else {
+    throw Error("unknown split '" + split + "' (use train or test)", MB_INVALID_ARGUMENT);
+  }
+  return ids;
+}
+
+void ReachTask::buildScene(SceneView& scene, const std::string& object_id) {
+  geometry_ = getArmGeometry(object_id);
+  Pose root;
+  root.position = kShoulder;
+  scene.addGround(0.0);
+  robot_ = scene.addUrdfString(makeArmUrdf(geometry_), "", "arm", root, /*fixed_base=*/true);
+  tip_ = scene.findLink(robot_, "fingertip");
+}
+
+void ReachTask::reset(SceneView& scene, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double l1 = geometry_.upper_length, l2 = geometry_.fore_length;
+  // A target the arm can reach without touching its joint limits.
+  const double radius = std::abs(l1 - l2) + 0.2 + unit(rng) * (l1 + l2 - 0.05 - std::abs(l1 - l2) - 0.2);
+  const double angle = -0.5 + unit(rng) * 2.0;  // below and in front of the shoulder
+  target_ = kShoulder + Eigen::Vector3d(radius * std::cos(angle), 0.0, -radius * std::sin(angle));
+  Eigen::VectorXd q(2);
+  q << -0.3 + 0.6 * unit(rng), -0.3 + 0.6 * unit(rng);
+  scene.setJointPositions(robot_, q);
+  scene.setJointVelocities(robot_, Eigen::VectorXd::Zero(2));
+  held_steps_ = 0;
+}
+
+void ReachTask::observe(const SceneView& scene, Eigen::Map<Eigen::VectorXd> out) {
+  using L = ObservationLayout;
+  out.segment<2>(L::kJointPositions) = scene.getJointPositions(robot_);
+  out.segment<2>(L::kJointVelocities) = scene.getJointVelocities(robot_);
+  out.segment<3>(L::kTip) = scene.getLinkPose(tip_).position;
+  out.segment<3>(L::kTarget) = target_;
+  out.segment<2>(L::kLinkLengths) << geometry_.upper_length, geometry_.fore_length;
+  out.segment<3>(L::kShoulder) = kShoulder;
+}
+
+double ReachTask::computeReward(const SceneView& scene, Eigen::Map<const Eigen::VectorXd> action) {
+  const double distance = (scene.getLinkPose(tip_).position - target_).norm();
+  const double speed = scene.getLinkTwist(tip_).linear.norm();
+  // Approach stage: closer is better. Near the target, a bonus that exceeds
+  // any approach reward, minus a speed penalty to settle.
+  if (distance > reach_tolerance_) return -distance;
+  return 1.0 - std::min(speed, 1.0);
+}
+
+std::vector<Condition> ReachTask::evaluateSuccess(const SceneView& scene) {
+  const double distance = (scene.getLinkPose(tip_).position - target_).norm();
+  const double speed = scene.getLinkTwist(tip_).linear.norm();
+  const bool reached = distance <= reach_tolerance_;
+  const bool still = speed <= static_speed_;
+  held_steps_ = (reached && still) ? held_steps_ + 1 : 0;  // called once per env step
+  return {{reached, distance}, {still, speed}, {held_steps_ >= hold_steps_, double(held_steps_)}};
+}
+
+}  // namespace reach

@@ -1,0 +1,347 @@
+/*
+ * manibench plugin ABI: the only thing that crosses the boundary between the
+ * host (core + apps) and a plugin library (tasks, controllers, policies).
+ *
+ * Rules (see README.md, "Writing a plugin"):
+ *  - Plain C: no C++ types, Eigen, exceptions or STL containers cross it.
+ *  - Every growable struct starts with `struct_size`. Structs only grow at
+ *    the end; a reader touches a field only if the field lies below the
+ *    struct_size the writer set (MB_HAS_FIELD).
+ *  - Output structs (mb_task_info, mb_controller_info, ...) are allocated by
+ *    the caller, who sets struct_size to the size it knows; the callee fills
+ *    only the fields that fit.
+ *  - Frozen records (mb_pose, mb_segment, mb_joint_info, mb_drive_command)
+ *    never change within a major version; new data goes into new records.
+ *  - Every call that can fail returns mb_status and takes a caller-owned
+ *    mb_error buffer; the callee writes a NUL-terminated message that fits.
+ *  - Strings and arrays a plugin returns stay valid as long as the handle
+ *    they came from (or, for descriptors and manifests, for the life of the
+ *    process: libraries are never unloaded).
+ *  - A minor version adds functions or fields at the end of structs, new
+ *    flag bits, new kinds. A major version is anything else.
+ *
+ * Entry point: a plugin library exports one data symbol named
+ * MB_ENTRY_POINT_NAME ("manibench_plugin_entry") of type `const void*`
+ * holding the address of an `mb_entry_fn`. Boost.DLL's BOOST_DLL_ALIAS makes
+ * exactly that; the C++ SDK's MANIBENCH_PLUGIN_LIBRARY macro uses it.
+ */
+#ifndef MANIBENCH_ABI_H
+#define MANIBENCH_ABI_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MB_ABI_MAJOR 1
+#define MB_ABI_MINOR 0
+#define MB_ENTRY_POINT_NAME "manibench_plugin_entry"
+
+/* True when `field` of struct type `type` lies within `size` bytes. */
+#define MB_HAS_FIELD(type, field, size) \
+  (offsetof(type, field) + sizeof(((type*)0)->field) <= (size_t)(size))
+
+/* ---- status and errors ------------------------------------------------ */
+
+typedef int32_t mb_status;
+#define MB_OK 0
+#define MB_ERROR 1            /* generic failure; message in the buffer */
+#define MB_INVALID_ARGUMENT 2 /* bad input from the caller */
+#define MB_NOT_FOUND 3        /* unknown name or id */
+#define MB_UNSUPPORTED 4      /* valid request this side cannot serve */
+#define MB_DIVERGED 5         /* the simulation produced NaN or blew up */
+
+/* Caller-owned message buffer. A callee writes at most `capacity` bytes,
+ * always NUL-terminated when capacity > 0. */
+typedef struct mb_error {
+  char* message;
+  size_t capacity;
+} mb_error;
+
+/* ---- shared records (frozen within a major version) ------------------- */
+
+typedef int32_t mb_id; /* articulation or link id; negative = none */
+
+typedef struct mb_pose {
+  double position[3];
+  double quaternion[4]; /* w, x, y, z; unit length */
+} mb_pose;
+
+/* A named slice [offset, offset + size) of a flat vector. */
+typedef struct mb_segment {
+  const char* name;
+  uint32_t offset;
+  uint32_t size;
+  const char* description;
+} mb_segment;
+
+#define MB_JOINT_REVOLUTE 1
+#define MB_JOINT_CONTINUOUS 2
+#define MB_JOINT_PRISMATIC 3
+
+/* One movable, single-degree-of-freedom joint of an articulation. Fixed
+ * joints are merged into their parent and floating roots are reached through
+ * the root pose, so neither appears in joint lists. */
+typedef struct mb_joint_info {
+  const char* name;
+  uint32_t type;         /* MB_JOINT_* */
+  uint32_t index;        /* position in the articulation's joint vector */
+  double lower, upper;   /* limits; -inf/+inf when unlimited */
+  double velocity_limit; /* rad/s or m/s; 0 when unknown */
+  double effort_limit;   /* N m or N; 0 when unlimited */
+} mb_joint_info;
+
+/* What a controller asks of one joint's drive for the next control step.
+ * The host applies, at every physics evaluation,
+ *   tau = stiffness (position_target - q) + damping (velocity_target - qdot)
+ *         + force
+ * clamped to the joint's effort limit when one is set. */
+typedef struct mb_drive_command {
+  double position_target;
+  double velocity_target;
+  double stiffness;
+  double damping;
+  double force;
+} mb_drive_command;
+
+/* ---- host scene API (the host implements it, plugins call it) --------- */
+
+typedef struct mb_scene mb_scene; /* opaque, owned by the host */
+
+typedef struct mb_scene_api {
+  uint32_t struct_size;
+  uint16_t abi_major;
+  uint16_t abi_minor;
+
+  /* Building: only valid while the host runs a task's build_scene. */
+  mb_status (*add_ground)(mb_scene* scene, double height, mb_error* err);
+  /* Loads a URDF file; `name` must be unique in the scene. A fixed base
+   * welds the root link to the world at `root`; otherwise it floats. */
+  mb_status (*add_urdf_file)(mb_scene* scene, const char* path,
+                             const char* name, const mb_pose* root,
+                             int32_t fixed_base, mb_id* out_articulation,
+                             mb_error* err);
+  /* Same from text; relative mesh paths resolve against `base_dir`. */
+  mb_status (*add_urdf_string)(mb_scene* scene, const char* urdf_xml,
+                               const char* base_dir, const char* name,
+                               const mb_pose* root, int32_t fixed_base,
+                               mb_id* out_articulation, mb_error* err);
+
+  /* Lookup. */
+  mb_status (*find_articulation)(mb_scene* scene, const char* name,
+                                 mb_id* out, mb_error* err);
+  mb_status (*find_link)(mb_scene* scene, mb_id articulation,
+                         const char* link_name, mb_id* out_link,
+                         mb_error* err);
+  mb_status (*get_joint_count)(mb_scene* scene, mb_id articulation,
+                               uint32_t* out_count, mb_error* err);
+  /* `out` is a frozen record; its name stays valid as long as the scene. */
+  mb_status (*get_joint_info)(mb_scene* scene, mb_id articulation,
+                              uint32_t joint_index, mb_joint_info* out,
+                              mb_error* err);
+  mb_status (*find_joint)(mb_scene* scene, mb_id articulation,
+                          const char* joint_name, uint32_t* out_index,
+                          mb_error* err);
+
+  /* State queries; `count` must equal the articulation's joint count. */
+  mb_status (*get_time)(mb_scene* scene, double* out_seconds, mb_error* err);
+  mb_status (*get_joint_positions)(mb_scene* scene, mb_id articulation,
+                                   double* out, uint32_t count, mb_error* err);
+  mb_status (*get_joint_velocities)(mb_scene* scene, mb_id articulation,
+                                    double* out, uint32_t count,
+                                    mb_error* err);
+  mb_status (*get_root_pose)(mb_scene* scene, mb_id articulation,
+                             mb_pose* out, mb_error* err);
+  mb_status (*get_link_pose)(mb_scene* scene, mb_id link, mb_pose* out,
+                             mb_error* err);
+  /* World-frame twist of the link frame origin: angular[3], then linear[3]. */
+  mb_status (*get_link_twist)(mb_scene* scene, mb_id link, double out[6],
+                              mb_error* err);
+  /* Total contact force on link_a from link_b (world frame, N); link_b < 0
+   * means from anything. */
+  mb_status (*get_contact_force)(mb_scene* scene, mb_id link_a, mb_id link_b,
+                                 double out[3], mb_error* err);
+
+  /* State setters: valid in a task's reset (and by the host). */
+  mb_status (*set_joint_positions)(mb_scene* scene, mb_id articulation,
+                                   const double* q, uint32_t count,
+                                   mb_error* err);
+  mb_status (*set_joint_velocities)(mb_scene* scene, mb_id articulation,
+                                    const double* qdot, uint32_t count,
+                                    mb_error* err);
+  mb_status (*set_root_pose)(mb_scene* scene, mb_id articulation,
+                             const mb_pose* pose, mb_error* err);
+  /* Passive joint dynamics (B.2 randomizes them per episode): viscous
+   * damping (N m s/rad or N s/m) and Coulomb friction (N m or N). */
+  mb_status (*set_joint_dynamics)(mb_scene* scene, mb_id articulation,
+                                  uint32_t joint_index, double damping,
+                                  double friction, mb_error* err);
+} mb_scene_api;
+
+/* ---- descriptors ------------------------------------------------------ */
+
+#define MB_KIND_TASK 1u
+#define MB_KIND_CONTROLLER 2u
+#define MB_KIND_POLICY 3u
+
+/* Every descriptor starts with this header; struct_size is the size of the
+ * whole kind-specific descriptor. */
+typedef struct mb_descriptor {
+  uint32_t struct_size;
+  uint32_t kind; /* MB_KIND_* */
+  const char* name;
+  const char* summary;
+} mb_descriptor;
+
+typedef struct mb_manifest {
+  uint32_t struct_size;
+  uint16_t abi_major;
+  uint16_t abi_minor;
+  const char* library_name;
+  const char* library_version;
+  uint32_t descriptor_count;
+  const mb_descriptor* const* descriptors;
+} mb_manifest;
+
+typedef const mb_manifest* (*mb_entry_fn)(void);
+
+/* ---- task ------------------------------------------------------------- */
+
+typedef struct mb_task mb_task; /* opaque, owned by the plugin */
+
+typedef struct mb_task_info {
+  uint32_t struct_size;
+  uint32_t observation_dim; /* the `state` observation vector */
+  uint32_t observation_segment_count;
+  const mb_segment* observation_segments;
+  uint32_t success_condition_count; /* named conditions; `success` is last */
+  const char* const* success_conditions;
+  uint32_t mask_count; /* segmentation masks, in observation order */
+  const char* const* masks;
+  const char* robot_articulation; /* name given to add_urdf_* */
+  uint32_t actuated_joint_count;  /* joints the controller drives, in order */
+  const char* const* actuated_joints;
+  const char* default_controller; /* controller name */
+  const char* controller_config;  /* YAML for it; may be NULL */
+  double control_frequency;       /* Hz */
+  uint32_t frame_skip;            /* control steps per environment step */
+  uint32_t max_episode_steps;
+} mb_task_info;
+
+typedef struct mb_task_descriptor {
+  mb_descriptor header;
+  /* config_yaml: the task's configuration as YAML text (may be empty). */
+  mb_status (*create)(const char* config_yaml, mb_task** out, mb_error* err);
+  void (*destroy)(mb_task* task);
+  mb_status (*get_info)(mb_task* task, mb_task_info* out, mb_error* err);
+  /* Object ids of a split ("train" or "test"). */
+  mb_status (*list_objects)(mb_task* task, const char* split,
+                            const char* const** out_ids, uint32_t* out_count,
+                            mb_error* err);
+  /* Adds the robot and `object_id` to an empty scene. */
+  mb_status (*build_scene)(mb_task* task, const mb_scene_api* api,
+                           mb_scene* scene, const char* object_id,
+                           mb_error* err);
+  /* Starts an episode: sets initial states and randomizes from `seed`. */
+  mb_status (*reset)(mb_task* task, const mb_scene_api* api, mb_scene* scene,
+                     uint64_t seed, mb_error* err);
+  mb_status (*observe)(mb_task* task, const mb_scene_api* api,
+                       mb_scene* scene, double* out, uint32_t dim,
+                       mb_error* err);
+  /* Called once per environment step, after physics, before observe. */
+  mb_status (*compute_reward)(mb_task* task, const mb_scene_api* api,
+                              mb_scene* scene, const double* action,
+                              uint32_t action_dim, double* out_reward,
+                              mb_error* err);
+  /* One flag and one value per success condition. */
+  mb_status (*evaluate_success)(mb_task* task, const mb_scene_api* api,
+                                mb_scene* scene, uint8_t* out_flags,
+                                double* out_values, uint32_t count,
+                                mb_error* err);
+} mb_task_descriptor;
+
+/* ---- controller ------------------------------------------------------- */
+
+typedef struct mb_controller mb_controller; /* opaque, owned by the plugin */
+
+/* Handed to a controller at creation: which joints it drives. */
+typedef struct mb_controller_context {
+  uint32_t struct_size;
+  mb_id articulation;
+  uint32_t joint_count;
+  const mb_joint_info* joints; /* actuated joints, in action order */
+  double control_frequency;    /* Hz */
+} mb_controller_context;
+
+/* The host cancels gravity and Coriolis forces of the driven joints by
+ * inverse dynamics at every physics evaluation (supplement B.7). */
+#define MB_CONTROLLER_BALANCE_PASSIVE_FORCES (1u << 0)
+
+typedef struct mb_controller_info {
+  uint32_t struct_size;
+  uint32_t action_dim;
+  uint32_t action_segment_count;
+  const mb_segment* action_segments;
+  uint32_t flags; /* MB_CONTROLLER_* */
+} mb_controller_info;
+
+typedef struct mb_controller_descriptor {
+  mb_descriptor header;
+  mb_status (*create)(const char* config_yaml,
+                      const mb_controller_context* context,
+                      mb_controller** out, mb_error* err);
+  void (*destroy)(mb_controller* controller);
+  mb_status (*get_info)(mb_controller* controller, mb_controller_info* out,
+                        mb_error* err);
+  mb_status (*reset)(mb_controller* controller, const mb_scene_api* api,
+                     mb_scene* scene, mb_error* err);
+  /* One control step: a normalized action in [-1, 1] (already validated and
+   * clipped by the host) to one drive command per joint. */
+  mb_status (*compute)(mb_controller* controller, const mb_scene_api* api,
+                       mb_scene* scene, const double* action,
+                       uint32_t action_dim, mb_drive_command* out,
+                       uint32_t joint_count, mb_error* err);
+} mb_controller_descriptor;
+
+/* ---- policy ----------------------------------------------------------- */
+
+typedef struct mb_policy mb_policy; /* opaque, owned by the plugin */
+
+typedef struct mb_policy_context {
+  uint32_t struct_size;
+  const char* task_name;
+  const char* observation_mode; /* "state", "pointcloud", "rgbd" */
+  uint32_t observation_dim;
+  uint32_t observation_segment_count;
+  const mb_segment* observation_segments;
+  uint32_t action_dim;
+  uint32_t action_segment_count;
+  const mb_segment* action_segments;
+} mb_policy_context;
+
+/* One observation; grows with the visual modes. */
+typedef struct mb_observation {
+  uint32_t struct_size;
+  const double* state;
+  uint32_t state_dim;
+  uint32_t step; /* environment step within the episode, from 0 */
+} mb_observation;
+
+typedef struct mb_policy_descriptor {
+  mb_descriptor header;
+  mb_status (*create)(const char* config_yaml,
+                      const mb_policy_context* context, mb_policy** out,
+                      mb_error* err);
+  void (*destroy)(mb_policy* policy);
+  mb_status (*reset)(mb_policy* policy, uint64_t seed, mb_error* err);
+  mb_status (*act)(mb_policy* policy, const mb_observation* observation,
+                   double* out_action, uint32_t action_dim, mb_error* err);
+} mb_policy_descriptor;
+
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+
+#endif /* MANIBENCH_ABI_H */

@@ -1,0 +1,179 @@
+// Shared pieces of the C++ SDK: errors, the exception-catching guard every
+// trampoline uses, configuration, and the records plugins describe
+// themselves with. Header-only; compiled into each plugin.
+#pragma once
+
+#include <manibench/abi.h>
+
+#include <yaml-cpp/yaml.h>
+
+#include <stdexcept>
+
+// An Eigen assertion inside a plugin (a size mismatch, say) must not abort
+// the host: it throws, and the trampolines report it. Effective when this
+// header is included before any Eigen header.
+#ifndef eigen_assert
+#define eigen_assert(condition)                                              \
+  do {                                                                       \
+    if (!(condition))                                                        \
+      throw std::logic_error("Eigen assertion failed: " #condition);         \
+  } while (false)
+#endif
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+// SDK internals are hidden in every plugin so two plugins never share (or
+// interpose) each other's registration tables.
+#define MANIBENCH_SDK_HIDDEN __attribute__((visibility("hidden")))
+
+namespace manibench::sdk {
+
+// Thrown by plugin code (or by SceneView when the host reports a failure);
+// the trampolines turn it into a status and a message for the host.
+class Error : public std::runtime_error {
+ public:
+  explicit Error(const std::string& message, mb_status status = MB_ERROR)
+      : std::runtime_error(message), status_(status) {}
+  mb_status status() const { return status_; }
+
+ private:
+  mb_status status_;
+};
+
+namespace detail {
+
+inline void writeError(mb_error* err, const char* message) noexcept {
+  if (err == nullptr || err->message == nullptr || err->capacity == 0) return;
+  std::size_t n = std::strlen(message);
+  if (n >= err->capacity) n = err->capacity - 1;
+  std::memcpy(err->message, message, n);
+  err->message[n] = '\0';
+}
+
+// Runs `body`, converting every exception into a status and a message:
+// nothing thrown inside a plugin may unwind into the host.
+template <class Body>
+mb_status guard(mb_error* err, Body&& body) noexcept {
+  try {
+    body();
+    return MB_OK;
+  } catch (const Error& e) {
+    writeError(err, e.what());
+    return e.status() == MB_OK ? MB_ERROR : e.status();
+  } catch (const YAML::Exception& e) {
+    writeError(err, (std::string("configuration: ") + e.what()).c_str());
+    return MB_INVALID_ARGUMENT;
+  } catch (const std::exception& e) {
+    writeError(err, e.what());
+    return MB_ERROR;
+  } catch (...) {
+    writeError(err, "unknown exception (not derived from std::exception)");
+    return MB_ERROR;
+  }
+}
+
+}  // namespace detail
+
+// A plugin's configuration: the YAML text the host passes at creation.
+class Config {
+ public:
+  Config() = default;
+  explicit Config(const char* yaml_text)
+      : node_(yaml_text && *yaml_text ? YAML::Load(yaml_text) : YAML::Node()) {}
+  explicit Config(YAML::Node node) : node_(std::move(node)) {}
+
+  const YAML::Node& node() const { return node_; }
+  bool has(const std::string& key) const {
+    return node_.IsMap() && node_[key].IsDefined();
+  }
+  // The value at `key`, or `fallback` when absent; a value of the wrong type
+  // is an error naming the key and the line.
+  template <class T>
+  T get(const std::string& key, const T& fallback) const {
+    if (!has(key)) return fallback;
+    const YAML::Node value = node_[key];
+    try {
+      return value.as<T>();
+    } catch (const YAML::Exception&) {
+      throw Error("configuration key '" + key + "' (line " +
+                      std::to_string(value.Mark().line + 1) +
+                      ") has the wrong type",
+                  MB_INVALID_ARGUMENT);
+    }
+  }
+  Config child(const std::string& key) const {
+    return has(key) ? Config(node_[key]) : Config();
+  }
+
+ private:
+  YAML::Node node_;
+};
+
+// A named slice of a flat vector, described by its size; offsets follow
+// from the order.
+struct Segment {
+  std::string name;
+  uint32_t size = 0;
+  std::string description;
+};
+
+// Holds segments and the C records pointing into them.
+class SegmentTable {
+ public:
+  SegmentTable() = default;
+  explicit SegmentTable(std::vector<Segment> segments)
+      : segments_(std::move(segments)) {
+    uint32_t offset = 0;
+    for (const Segment& s : segments_) {
+      records_.push_back({s.name.c_str(), offset, s.size, s.description.c_str()});
+      offset += s.size;
+    }
+    total_ = offset;
+  }
+  SegmentTable(const SegmentTable&) = delete;
+  SegmentTable& operator=(const SegmentTable&) = delete;
+  uint32_t total() const { return total_; }
+  uint32_t count() const { return static_cast<uint32_t>(records_.size()); }
+  const mb_segment* data() const { return records_.data(); }
+
+ private:
+  std::vector<Segment> segments_;
+  std::vector<mb_segment> records_;
+  uint32_t total_ = 0;
+};
+
+// Holds strings and the C array of pointers to them.
+class StringTable {
+ public:
+  StringTable() = default;
+  explicit StringTable(std::vector<std::string> strings)
+      : strings_(std::move(strings)) {
+    for (const std::string& s : strings_) pointers_.push_back(s.c_str());
+  }
+  StringTable(const StringTable&) = delete;
+  StringTable& operator=(const StringTable&) = delete;
+  uint32_t count() const { return static_cast<uint32_t>(pointers_.size()); }
+  const char* const* data() const { return pointers_.data(); }
+  const std::vector<std::string>& strings() const { return strings_; }
+
+ private:
+  std::vector<std::string> strings_;
+  std::vector<const char*> pointers_;
+};
+
+inline void checkVectorSize(const char* what, std::size_t expected,
+                            std::size_t got) {
+  if (expected != got)
+    throw Error(std::string(what) + ": expected " + std::to_string(expected) +
+                    " values, got " + std::to_string(got),
+                MB_INVALID_ARGUMENT);
+}
+
+}  // namespace manibench::sdk

@@ -1,0 +1,157 @@
+// Writing a controller: derive from sdk::Controller, construct from
+// (const sdk::Config&, const sdk::ControllerContext&), register it:
+//   MANIBENCH_REGISTER_CONTROLLER(MyController, "my_controller", "summary");
+#pragma once
+
+#include <manibench/sdk/common.hpp>
+#include <manibench/sdk/registry.hpp>
+#include <manibench/sdk/scene_view.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace manibench::sdk {
+
+struct JointInfo {
+  std::string name;
+  uint32_t type = MB_JOINT_REVOLUTE;
+  uint32_t index = 0;  // in the articulation's joint vector
+  double lower = 0, upper = 0, velocity_limit = 0, effort_limit = 0;
+};
+
+struct ControllerContext {
+  mb_id articulation = -1;
+  std::vector<JointInfo> joints;  // the driven joints, in action order
+  double control_frequency = 100;
+};
+
+struct ControllerSpec {
+  std::vector<Segment> action;  // normalized [-1, 1] action layout
+  uint32_t flags = 0;           // MB_CONTROLLER_*
+};
+
+using DriveCommand = mb_drive_command;
+
+class Controller {
+ public:
+  virtual ~Controller() = default;
+  virtual ControllerSpec describe() const = 0;
+  virtual void reset(const SceneView& scene) {}
+  // One control step: `drives` has one entry per context joint.
+  virtual void compute(const SceneView& scene,
+                       Eigen::Map<const Eigen::VectorXd> action,
+                       std::vector<DriveCommand>& drives) = 0;
+};
+
+namespace detail {
+
+struct ControllerHandle {
+  std::unique_ptr<Controller> controller;
+  SegmentTable action;
+  uint32_t flags;
+  std::size_t joint_count;
+  std::vector<DriveCommand> drives;
+  ControllerHandle(std::unique_ptr<Controller> c, const ControllerSpec& spec,
+                   std::size_t joints)
+      : controller(std::move(c)), action(spec.action), flags(spec.flags),
+        joint_count(joints), drives(joints) {}
+};
+
+inline ControllerHandle* asController(mb_controller* c) {
+  return reinterpret_cast<ControllerHandle*>(c);
+}
+
+inline ControllerContext toContext(const mb_controller_context* c) {
+  if (c == nullptr) throw Error("no controller context", MB_INVALID_ARGUMENT);
+  ControllerContext out;
+  out.articulation = c->articulation;
+  out.control_frequency = c->control_frequency;
+  for (uint32_t i = 0; i < c->joint_count; ++i) {
+    const mb_joint_info& j = c->joints[i];
+    out.joints.push_back({j.name ? j.name : "", j.type, j.index, j.lower,
+                          j.upper, j.velocity_limit, j.effort_limit});
+  }
+  return out;
+}
+
+template <class T>
+struct ControllerTrampolines {
+  static mb_status create(const char* config_yaml,
+                          const mb_controller_context* context,
+                          mb_controller** out, mb_error* err) {
+    return guard(err, [&] {
+      *out = nullptr;
+      const ControllerContext ctx = toContext(context);
+      auto controller = std::make_unique<T>(Config(config_yaml), ctx);
+      const ControllerSpec spec = controller->describe();
+      *out = reinterpret_cast<mb_controller*>(
+          new ControllerHandle(std::move(controller), spec, ctx.joints.size()));
+    });
+  }
+  static void destroy(mb_controller* c) noexcept {
+    try {
+      delete asController(c);
+    } catch (...) {
+    }
+  }
+  static mb_status getInfo(mb_controller* c, mb_controller_info* out,
+                           mb_error* err) {
+    return guard(err, [&] {
+      const ControllerHandle& h = *asController(c);
+      mb_controller_info info{};
+      info.struct_size = sizeof(mb_controller_info);
+      info.action_dim = h.action.total();
+      info.action_segment_count = h.action.count();
+      info.action_segments = h.action.data();
+      info.flags = h.flags;
+      const uint32_t n = out->struct_size < info.struct_size ? out->struct_size
+                                                             : info.struct_size;
+      std::memcpy(out, &info, n);
+      out->struct_size = n;
+    });
+  }
+  static mb_status reset(mb_controller* c, const mb_scene_api* api,
+                         mb_scene* scene, mb_error* err) {
+    return guard(err, [&] {
+      const SceneView view(api, scene);
+      asController(c)->controller->reset(view);
+    });
+  }
+  static mb_status compute(mb_controller* c, const mb_scene_api* api,
+                           mb_scene* scene, const double* action,
+                           uint32_t action_dim, mb_drive_command* out,
+                           uint32_t joint_count, mb_error* err) {
+    return guard(err, [&] {
+      ControllerHandle& h = *asController(c);
+      checkVectorSize("action", h.action.total(), action_dim);
+      checkVectorSize("drive command buffer", h.joint_count, joint_count);
+      const SceneView view(api, scene);
+      h.controller->compute(view, Eigen::Map<const Eigen::VectorXd>(action, action_dim),
+                            h.drives);
+      checkVectorSize("drive commands", h.joint_count, h.drives.size());
+      std::copy(h.drives.begin(), h.drives.end(), out);
+    });
+  }
+};
+
+template <class T>
+bool registerController(const char* name, const char* summary) {
+  static_assert(std::is_base_of_v<Controller, T>,
+                "a controller derives from manibench::sdk::Controller");
+  auto* d = newDescriptor<mb_controller_descriptor>(MB_KIND_CONTROLLER, name, summary);
+  d->create = &ControllerTrampolines<T>::create;
+  d->destroy = &ControllerTrampolines<T>::destroy;
+  d->get_info = &ControllerTrampolines<T>::getInfo;
+  d->reset = &ControllerTrampolines<T>::reset;
+  d->compute = &ControllerTrampolines<T>::compute;
+  return true;
+}
+
+}  // namespace detail
+}  // namespace manibench::sdk
+
+#define MANIBENCH_REGISTER_CONTROLLER(Class, name, summary)                 \
+  static const bool MANIBENCH_SDK_CONCAT(manibench_registered_controller_,  \
+                                         __COUNTER__) =                     \
+      ::manibench::sdk::detail::registerController<Class>(name, summary)

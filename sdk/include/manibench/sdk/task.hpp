@@ -1,0 +1,219 @@
+// Writing a task: derive from sdk::Task, describe the task in describe(),
+// and register it:
+//   MANIBENCH_REGISTER_TASK(MyTask, "MyTask-v0", "one line summary");
+// MyTask is constructed from (const sdk::Config&) if it can be, else by
+// default.
+#pragma once
+
+#include <manibench/sdk/common.hpp>
+#include <manibench/sdk/registry.hpp>
+#include <manibench/sdk/scene_view.hpp>
+
+#include <map>
+#include <memory>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+namespace manibench::sdk {
+
+struct TaskSpec {
+  std::vector<Segment> observation;  // the `state` observation, in order
+  // Named success conditions; the last one must be "success".
+  std::vector<std::string> success_conditions = {"success"};
+  std::vector<std::string> masks;  // segmentation masks (B.3)
+  std::string robot_articulation;  // name the task gives its robot
+  std::vector<std::string> actuated_joints;  // in action order
+  std::string default_controller = "joint_velocity";
+  std::string controller_config;  // YAML for the controller
+  double control_frequency = 100;
+  uint32_t frame_skip = 5;
+  uint32_t max_episode_steps = 200;
+};
+
+// One success condition's outcome: whether it holds, and the value behind
+// it (a distance, an angle, a count) for reporting.
+struct Condition {
+  bool satisfied = false;
+  double value = 0;
+};
+
+class Task {
+ public:
+  virtual ~Task() = default;
+  virtual TaskSpec describe() const = 0;
+  // Object ids of a split. Tasks without object instances have one object.
+  virtual std::vector<std::string> listObjects(const std::string& split) const {
+    if (split != "train" && split != "test")
+      throw Error("unknown split '" + split + "' (use train or test)",
+                  MB_INVALID_ARGUMENT);
+    return {"0"};
+  }
+  virtual void buildScene(SceneView& scene, const std::string& object_id) = 0;
+  virtual void reset(SceneView& scene, uint64_t seed) = 0;
+  virtual void observe(const SceneView& scene,
+                       Eigen::Map<Eigen::VectorXd> out) = 0;
+  virtual double computeReward(const SceneView& scene,
+                               Eigen::Map<const Eigen::VectorXd> action) = 0;
+  // One entry per TaskSpec::success_conditions, in that order.
+  virtual std::vector<Condition> evaluateSuccess(const SceneView& scene) = 0;
+};
+
+namespace detail {
+
+struct TaskHandle {
+  std::unique_ptr<Task> task;
+  TaskSpec spec;
+  SegmentTable observation;
+  StringTable conditions, masks, joints;
+  std::map<std::string, std::unique_ptr<StringTable>> objects;
+
+  TaskHandle(std::unique_ptr<Task> t, TaskSpec s)
+      : task(std::move(t)),
+        spec(std::move(s)),
+        observation(spec.observation),
+        conditions(spec.success_conditions),
+        masks(spec.masks),
+        joints(spec.actuated_joints) {
+    if (spec.success_conditions.empty() || spec.success_conditions.back() != "success")
+      throw Error("TaskSpec::success_conditions must end with \"success\"",
+                  MB_INVALID_ARGUMENT);
+  }
+};
+
+inline TaskHandle* asTask(mb_task* t) { return reinterpret_cast<TaskHandle*>(t); }
+
+template <class T>
+struct TaskTrampolines {
+  static mb_status create(const char* config_yaml, mb_task** out, mb_error* err) {
+    return guard(err, [&] {
+      *out = nullptr;
+      const Config config(config_yaml);
+      std::unique_ptr<Task> task;
+      if constexpr (std::is_constructible_v<T, const Config&>)
+        task = std::make_unique<T>(config);
+      else
+        task = std::make_unique<T>();
+      TaskSpec spec = task->describe();
+      *out = reinterpret_cast<mb_task*>(new TaskHandle(std::move(task), std::move(spec)));
+    });
+  }
+  static void destroy(mb_task* t) noexcept {
+    try {
+      delete asTask(t);
+    } catch (...) {
+    }
+  }
+  static mb_status getInfo(mb_task* t, mb_task_info* out, mb_error* err) {
+    return guard(err, [&] {
+      const TaskHandle& h = *asTask(t);
+      mb_task_info info{};
+      info.struct_size = sizeof(mb_task_info);
+      info.observation_dim = h.observation.total();
+      info.observation_segment_count = h.observation.count();
+      info.observation_segments = h.observation.data();
+      info.success_condition_count = h.conditions.count();
+      info.success_conditions = h.conditions.data();
+      info.mask_count = h.masks.count();
+      info.masks = h.masks.data();
+      info.robot_articulation = h.spec.robot_articulation.c_str();
+      info.actuated_joint_count = h.joints.count();
+      info.actuated_joints = h.joints.data();
+      info.default_controller = h.spec.default_controller.c_str();
+      info.controller_config = h.spec.controller_config.c_str();
+      info.control_frequency = h.spec.control_frequency;
+      info.frame_skip = h.spec.frame_skip;
+      info.max_episode_steps = h.spec.max_episode_steps;
+      // Write only what the caller's (possibly older) struct can hold.
+      const uint32_t n = out->struct_size < info.struct_size ? out->struct_size
+                                                             : info.struct_size;
+      std::memcpy(out, &info, n);
+      out->struct_size = n;
+    });
+  }
+  static mb_status listObjects(mb_task* t, const char* split,
+                               const char* const** out_ids, uint32_t* out_count,
+                               mb_error* err) {
+    return guard(err, [&] {
+      TaskHandle& h = *asTask(t);
+      const std::string key = split ? split : "";
+      auto& table = h.objects[key];
+      if (!table) table = std::make_unique<StringTable>(h.task->listObjects(key));
+      *out_ids = table->data();
+      *out_count = table->count();
+    });
+  }
+  static mb_status buildScene(mb_task* t, const mb_scene_api* api, mb_scene* scene,
+                              const char* object_id, mb_error* err) {
+    return guard(err, [&] {
+      SceneView view(api, scene);
+      asTask(t)->task->buildScene(view, object_id ? object_id : "");
+    });
+  }
+  static mb_status reset(mb_task* t, const mb_scene_api* api, mb_scene* scene,
+                         uint64_t seed, mb_error* err) {
+    return guard(err, [&] {
+      SceneView view(api, scene);
+      asTask(t)->task->reset(view, seed);
+    });
+  }
+  static mb_status observe(mb_task* t, const mb_scene_api* api, mb_scene* scene,
+                           double* out, uint32_t dim, mb_error* err) {
+    return guard(err, [&] {
+      TaskHandle& h = *asTask(t);
+      checkVectorSize("observation buffer", h.observation.total(), dim);
+      const SceneView view(api, scene);
+      h.task->observe(view, Eigen::Map<Eigen::VectorXd>(out, dim));
+    });
+  }
+  static mb_status computeReward(mb_task* t, const mb_scene_api* api,
+                                 mb_scene* scene, const double* action,
+                                 uint32_t action_dim, double* out_reward,
+                                 mb_error* err) {
+    return guard(err, [&] {
+      const SceneView view(api, scene);
+      *out_reward = asTask(t)->task->computeReward(
+          view, Eigen::Map<const Eigen::VectorXd>(action, action_dim));
+    });
+  }
+  static mb_status evaluateSuccess(mb_task* t, const mb_scene_api* api,
+                                   mb_scene* scene, uint8_t* out_flags,
+                                   double* out_values, uint32_t count,
+                                   mb_error* err) {
+    return guard(err, [&] {
+      TaskHandle& h = *asTask(t);
+      checkVectorSize("success condition buffer", h.conditions.count(), count);
+      const SceneView view(api, scene);
+      const std::vector<Condition> result = h.task->evaluateSuccess(view);
+      checkVectorSize("evaluateSuccess() result", count, result.size());
+      for (uint32_t i = 0; i < count; ++i) {
+        out_flags[i] = result[i].satisfied ? 1 : 0;
+        out_values[i] = result[i].value;
+      }
+    });
+  }
+};
+
+template <class T>
+bool registerTask(const char* name, const char* summary) {
+  static_assert(std::is_base_of_v<Task, T>, "a task derives from manibench::sdk::Task");
+  auto* d = newDescriptor<mb_task_descriptor>(MB_KIND_TASK, name, summary);
+  d->create = &TaskTrampolines<T>::create;
+  d->destroy = &TaskTrampolines<T>::destroy;
+  d->get_info = &TaskTrampolines<T>::getInfo;
+  d->list_objects = &TaskTrampolines<T>::listObjects;
+  d->build_scene = &TaskTrampolines<T>::buildScene;
+  d->reset = &TaskTrampolines<T>::reset;
+  d->observe = &TaskTrampolines<T>::observe;
+  d->compute_reward = &TaskTrampolines<T>::computeReward;
+  d->evaluate_success = &TaskTrampolines<T>::evaluateSuccess;
+  return true;
+}
+
+}  // namespace detail
+}  // namespace manibench::sdk
+
+#define MANIBENCH_REGISTER_TASK(Class, name, summary)                     \
+  static const bool MANIBENCH_SDK_CONCAT(manibench_registered_task_,      \
+                                         __COUNTER__) =                   \
+      ::manibench::sdk::detail::registerTask<Class>(name, summary)

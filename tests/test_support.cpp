@@ -1,0 +1,67 @@
+#include "test_support.hpp"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace manibench::testing {
+
+PluginRegistry& getBuildTreeRegistry() {
+  static PluginRegistry* registry = [] {
+    auto* r = new PluginRegistry();
+    r->loadDirectories({MANIBENCH_TEST_BUILD_PLUGIN_DIR});
+    return r;
+  }();
+  return *registry;
+}
+
+namespace {
+std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+}  // namespace
+
+CommandResult runCli(const std::vector<std::string>& arguments,
+                     const std::vector<std::string>& environment) {
+  char out_template[] = "/tmp/manibench_cli_out_XXXXXX";
+  char err_template[] = "/tmp/manibench_cli_err_XXXXXX";
+  const int out_fd = mkstemp(out_template);
+  const int err_fd = mkstemp(err_template);
+  if (out_fd < 0 || err_fd < 0) throw std::runtime_error("mkstemp failed");
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error("fork failed");
+  if (pid == 0) {
+    dup2(out_fd, 1);
+    dup2(err_fd, 2);
+    for (const std::string& assignment : environment) putenv(const_cast<char*>(assignment.c_str()));
+    std::vector<char*> argv;
+    std::string program = MANIBENCH_TEST_CLI;
+    argv.push_back(program.data());
+    std::vector<std::string> copies = arguments;
+    for (std::string& a : copies) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    execv(program.c_str(), argv.data());
+    _exit(127);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  close(out_fd);
+  close(err_fd);
+  CommandResult result;
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  result.out = readFile(out_template);
+  result.err = readFile(err_template);
+  std::remove(out_template);
+  std::remove(err_template);
+  return result;
+}
+
+}  // namespace manibench::testing
