@@ -87,6 +87,8 @@ TaskInstance::TaskInstance(const PluginRegistry& registry, const std::string& na
     description_.control_frequency = info.control_frequency;
     description_.frame_skip = info.frame_skip;
     description_.max_episode_steps = info.max_episode_steps;
+    if (MB_HAS_FIELD(mb_task_info, default_config, info.struct_size) && info.default_config)
+      description_.default_config = info.default_config;
     if (!(description_.control_frequency > 0) || description_.frame_skip == 0 ||
         description_.max_episode_steps == 0)
       throw PluginCallError("task '" + name +

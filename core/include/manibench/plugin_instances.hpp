@@ -44,6 +44,7 @@ struct TaskDescription {
   double control_frequency = 100;
   uint32_t frame_skip = 5;
   uint32_t max_episode_steps = 200;
+  std::string default_config;  // the task's YAML configuration layer
 };
 
 struct ControllerDescription {

@@ -228,6 +228,9 @@ typedef struct mb_task_info {
   double control_frequency;       /* Hz */
   uint32_t frame_skip;            /* control steps per environment step */
   uint32_t max_episode_steps;
+  /* The task's layer of the YAML configuration (physics, cameras, ...),
+   * between the built-in defaults and the user's file; may be NULL. */
+  const char* default_config;
 } mb_task_info;
 
 typedef struct mb_task_descriptor {

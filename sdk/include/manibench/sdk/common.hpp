@@ -57,6 +57,15 @@ inline void writeError(mb_error* err, const char* message) noexcept {
   err->message[n] = '\0';
 }
 
+// Copies a filled output struct into the caller's, which may be older and
+// smaller: only the fields below the caller's struct_size are written.
+template <class Info>
+void writeOutputStruct(Info* out, const Info& filled) noexcept {
+  const uint32_t n = out->struct_size < sizeof(Info) ? out->struct_size : uint32_t(sizeof(Info));
+  std::memcpy(out, &filled, n);
+  out->struct_size = n;
+}
+
 // Runs `body`, converting every exception into a status and a message:
 // nothing thrown inside a plugin may unwind into the host.
 template <class Body>

@@ -105,10 +105,7 @@ struct ControllerTrampolines {
       info.action_segment_count = h.action.count();
       info.action_segments = h.action.data();
       info.flags = h.flags;
-      const uint32_t n = out->struct_size < info.struct_size ? out->struct_size
-                                                             : info.struct_size;
-      std::memcpy(out, &info, n);
-      out->struct_size = n;
+      writeOutputStruct(out, info);
     });
   }
   static mb_status reset(mb_controller* c, const mb_scene_api* api,

@@ -29,6 +29,8 @@ struct TaskSpec {
   double control_frequency = 100;
   uint32_t frame_skip = 5;
   uint32_t max_episode_steps = 200;
+  // The task's layer of the YAML configuration (see docs/configuration.md).
+  std::string default_config;
 };
 
 // One success condition's outcome: whether it holds, and the value behind
@@ -124,11 +126,8 @@ struct TaskTrampolines {
       info.control_frequency = h.spec.control_frequency;
       info.frame_skip = h.spec.frame_skip;
       info.max_episode_steps = h.spec.max_episode_steps;
-      // Write only what the caller's (possibly older) struct can hold.
-      const uint32_t n = out->struct_size < info.struct_size ? out->struct_size
-                                                             : info.struct_size;
-      std::memcpy(out, &info, n);
-      out->struct_size = n;
+      info.default_config = h.spec.default_config.c_str();
+      writeOutputStruct(out, info);
     });
   }
   static mb_status listObjects(mb_task* t, const char* split,
