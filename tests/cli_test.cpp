@@ -1,16 +1,42 @@
 // The manibench host program, run as a user runs it.
+#include <manibench/config.hpp>
+
 #include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
 
 #include "test_support.hpp"
 
 namespace manibench {
 namespace {
 
+using testing::getBuildTreeRegistry;
 using testing::runCli;
 
 bool contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
 }
+
+// A file with `text`, removed with the object.
+class TempYaml {
+ public:
+  explicit TempYaml(const std::string& text) {
+    char path[] = "/tmp/manibench_cli_config_XXXXXX.yaml";
+    const int fd = mkstemps(path, 5);
+    if (fd < 0) throw std::runtime_error("mkstemps failed");
+    close(fd);
+    path_ = path;
+    std::ofstream(path_) << text;
+  }
+  ~TempYaml() { std::remove(path_.c_str()); }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
 
 TEST(Cli, HelpAndUsageErrors) {
   const auto help = runCli({"--help"});
@@ -86,6 +112,121 @@ TEST(Cli, PolicyCanBeAPathToALibrary) {
   // That library registers two policies: the host must say so, not guess.
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_TRUE(contains(r.err, "registers 2 policies")) << r.err;
+}
+
+TEST(Cli, UsageErrorsPrintTheCommandsOwnUsage) {
+  struct Case {
+    std::vector<std::string> arguments;
+    const char* usage;
+  };
+  const Case cases[] = {
+      {{"run", "Reach-v0"}, "usage: manibench run"},
+      {{"run", "Reach-v0", "--policy", "zero", "--split", "dev"}, "usage: manibench run"},
+      {{"info"}, "usage: manibench info"},
+      {{"info", "Reach-v0", "--set"}, "usage: manibench info"},
+      {{"list", "extra"}, "usage: manibench list"},
+      {{"config", "Reach-v0", "Other-v0"}, "usage: manibench config"},
+      {{"config", "--bogus"}, "usage: manibench config"},
+      {{"demo", "now"}, "usage: manibench demo"},
+  };
+  for (const Case& c : cases) {
+    const auto r = runCli(c.arguments);
+    EXPECT_EQ(r.exit_code, 2) << c.arguments.front();
+    EXPECT_TRUE(contains(r.err, c.usage)) << r.err;
+    EXPECT_FALSE(contains(r.err, "Commands:")) << r.err;  // not the main usage
+  }
+  EXPECT_TRUE(contains(runCli({"frobnicate"}).err, "Commands:"));
+  const auto help = runCli({"config", "--help"});
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_TRUE(contains(help.out, "usage: manibench config")) << help.out;
+}
+
+TEST(Cli, ConfigPrintsTheMergeAsYamlThatReadsBackEqual) {
+  const TempYaml file("physics:\n  accuracy: 0.005\ncameras:\n  - name: top\n    far: 30\n");
+  const ConfigSources sources{{file.path()}, {"control.frequency=50", "task={hold_steps: 3}"}};
+  const auto r = runCli({"config", "Reach-v0", "--config", file.path(), "--set", sources.overrides[0],
+                         "--set", sources.overrides[1]});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const ConfigNode printed = parseConfig(r.out, "stdout");
+  const ConfigNode merged = loadTaskConfig(getBuildTreeRegistry(), "Reach-v0", sources);
+  EXPECT_TRUE(isSameConfig(printed, merged)) << r.out;
+  EXPECT_EQ(printed.findPath("physics.accuracy")->scalar, "0.005");
+  EXPECT_EQ(printed.findPath("control.frequency")->scalar, "50");
+
+  // Plain `config Reach-v0` too; and the printout, fed back as a file,
+  // changes nothing.
+  const auto plain = runCli({"config", "Reach-v0"});
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  EXPECT_TRUE(isSameConfig(parseConfig(plain.out, "stdout"),
+                           loadTaskConfig(getBuildTreeRegistry(), "Reach-v0", {})));
+  const TempYaml again(plain.out);
+  EXPECT_EQ(runCli({"config", "Reach-v0", "--config", again.path()}).out, plain.out);
+  // Without a task: the built-in defaults.
+  const auto builtin = runCli({"config"});
+  ASSERT_EQ(builtin.exit_code, 0) << builtin.err;
+  EXPECT_TRUE(isSameConfig(parseConfig(builtin.out, "stdout"), calcConfig(nullptr, {})));
+}
+
+TEST(Cli, ConfigExplainNamesEveryOrigin) {
+  const TempYaml file("# tuned\nphysics:\n  default_density: 800\n");
+  const auto r = runCli({"config", "Reach-v0", "--explain", "--config", file.path(), "--set",
+                         "physics.accuracy=0.001"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(contains(r.out, "frequency: 100  # task Reach-v0 description")) << r.out;
+  EXPECT_TRUE(contains(r.out, "integrator: cpodes  # task Reach-v0 defaults:2")) << r.out;
+  EXPECT_TRUE(contains(r.out, "gravity: [0, 0, -9.81]  # built-in defaults:")) << r.out;
+  EXPECT_TRUE(contains(r.out, "default_density: 800  # " + file.path() + ":3")) << r.out;
+  EXPECT_TRUE(contains(r.out, "accuracy: 0.001  # --set physics.accuracy=0.001")) << r.out;
+}
+
+TEST(Cli, ConfigErrorsExitOneNamingFileLineAndKey) {
+  const TempYaml typo("physics:\n  acuracy: 0.1\n");
+  for (const char* command : {"config", "info", "run"}) {
+    std::vector<std::string> arguments{command, "Reach-v0", "--config", typo.path()};
+    if (std::string(command) == "run") arguments.insert(arguments.end(), {"--policy", "zero"});
+    const auto r = runCli(arguments);
+    EXPECT_EQ(r.exit_code, 1) << command;
+    EXPECT_TRUE(contains(r.err, typo.path() + ":2: physics.acuracy: unknown key (did you mean "
+                                              "physics.accuracy?)"))
+        << r.err;
+  }
+  const auto range = runCli({"config", "Reach-v0", "--set", "physics.accuracy=5"});
+  EXPECT_EQ(range.exit_code, 1);
+  EXPECT_TRUE(contains(range.err, "--set physics.accuracy=5: physics.accuracy: must be in (0, 1], got 5"))
+      << range.err;
+  const auto missing = runCli({"run", "Reach-v0", "--policy", "zero", "--config", "/nonexistent/my.yaml"});
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_TRUE(contains(missing.err, "cannot read configuration file '/nonexistent/my.yaml': No such file"))
+      << missing.err;
+  const TempYaml malformed("physics: {accuracy: 0.1\n");
+  const auto parse = runCli({"config", "--config", malformed.path()});
+  EXPECT_EQ(parse.exit_code, 1);
+  EXPECT_TRUE(contains(parse.err, malformed.path() + ":")) << parse.err;
+  EXPECT_TRUE(contains(parse.err, "malformed YAML")) << parse.err;
+  const auto no_equals = runCli({"config", "--set", "physics.accuracy"});
+  EXPECT_EQ(no_equals.exit_code, 1);
+  EXPECT_TRUE(contains(no_equals.err, "expected KEY=VALUE")) << no_equals.err;
+}
+
+TEST(Cli, InfoAndRunFollowTheConfiguration) {
+  const auto info = runCli({"info", "Reach-v0", "--set", "control.frequency=50", "--set",
+                            "control.frame_skip=2", "--controller", "joint_position"});
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_TRUE(contains(info.out, "control 50 Hz, frame skip 2, 100 steps per episode")) << info.out;
+  EXPECT_TRUE(contains(info.out, "controller 'joint_position'")) << info.out;
+
+  const TempYaml file("episode:\n  max_steps: 7\n");
+  const auto run = runCli({"run", "Reach-v0", "--policy", "zero", "--config", file.path(), "--no-early-stop"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(contains(run.out, ": 7 steps, return")) << run.out;
+}
+
+TEST(Cli, PluginErrorsAboutConfigKeysNameWhereTheyWereSet) {
+  const TempYaml file("task:\n  reach_tolerance: wide\n");
+  const auto r = runCli({"run", "Reach-v0", "--policy", "zero", "--config", file.path()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(contains(r.err, "reach_tolerance")) << r.err;
+  EXPECT_TRUE(contains(r.err, "task.reach_tolerance is set at " + file.path() + ":2")) << r.err;
 }
 
 }  // namespace

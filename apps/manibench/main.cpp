@@ -1,14 +1,17 @@
 // manibench: the host program. Loads plugins by name and runs them.
-//   manibench list | info TASK | run TASK --policy P --seed S | demo
+//   manibench list | info TASK | run TASK --policy P --seed S | config TASK | demo
 // Exit codes: 0 success, 1 failure (reported on stderr), 2 usage error.
+#include <manibench/config.hpp>
 #include <manibench/environment.hpp>
 #include <manibench/plugin_registry.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <random>
 #include <sstream>
 #include <string>
@@ -18,9 +21,15 @@ namespace mb = manibench;
 
 namespace {
 
+// A usage error carries the usage text of the command it concerns.
 class UsageError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  UsageError(const std::string& message, const char* usage)
+      : std::runtime_error(message), usage_(usage) {}
+  const char* usage() const { return usage_; }
+
+ private:
+  const char* usage_;
 };
 
 const char* kMainUsage = R"(usage: manibench <command> [options]
@@ -30,10 +39,12 @@ Commands:
   info TASK                 observation and action layout, success conditions,
                             masks and objects of a task
   run TASK --policy NAME    run one episode and print steps, return, success
+  config [TASK]             print the merged YAML configuration
   demo                      list the plugins, then run the example task with its
                             scripted expert
 
-Run `manibench <command> --help` for a command's options.
+Run `manibench <command> --help` for a command's options. info, run and
+config take --config FILE and --set KEY=VALUE (docs/configuration.md).
 Plugins are searched in $MANIBENCH_PLUGIN_PATH, ~/.local/lib/manibench/plugins,
 the install prefix and the build tree, in that order.
 )";
@@ -44,10 +55,16 @@ Lists every plugin library found on the search path with what it registered
 (kind, name, library version, file), then any library that was refused and why.
 )";
 
-const char* kInfoUsage = R"(usage: manibench info TASK [--controller NAME]
+const char* kInfoUsage = R"(usage: manibench info TASK [--controller NAME] [--config FILE]... [--set KEY=VALUE]...
 
-Prints the task's observation layout, the controller's action layout, the
-success conditions, segmentation masks and the objects of each split.
+Prints the task's timing, observation layout, the controller's action layout,
+the success conditions, segmentation masks and the objects of each split, as
+configured.
+
+Options:
+  --controller NAME       override the task's default controller
+  --config FILE           a YAML configuration layer; repeatable, later wins
+  --set KEY=VALUE         one key, e.g. --set control.frequency=50; repeatable
 )";
 
 const char* kRunUsage = R"(usage: manibench run TASK --policy NAME|PATH.so [options]
@@ -59,17 +76,44 @@ Options:
   --split train|test      split to draw the object from (default train)
   --controller NAME       override the task's default controller
   --no-early-stop         run to the time limit even after success
+  --config FILE           a YAML configuration layer; repeatable, later wins
+  --set KEY=VALUE         one key, e.g. --set physics.accuracy=0.001; repeatable
+)";
+
+const char* kConfigUsage = R"(usage: manibench config [TASK] [--config FILE]... [--set KEY=VALUE]... [--explain]
+
+Prints the merged configuration as YAML. Layers, lowest first: the built-in
+defaults, the task's description and its own YAML (when TASK is given), each
+--config FILE in the order given, each --set in the order given. Maps merge
+key by key; scalars and lists replace. Keys are checked against the schema
+in docs/configuration.md.
+
+Options:
+  --config FILE           a YAML configuration layer; repeatable, later wins
+  --set KEY=VALUE         one key; VALUE is YAML: 0.001, cpodes, [0, 0, -9.81],
+                          {reach_tolerance: 0.05}; empty means null; repeatable
+  --explain               name each value's origin (file:line, --set, task, ...)
+)";
+
+const char* kDemoUsage = R"(usage: manibench demo
+
+Lists the plugins, then runs one episode of the example task Reach-v0 with its
+scripted expert and one with a random policy.
 )";
 
 // Minimal argument reader: positional words and --key value / --flag.
+// Repeatable options (--config, --set) keep every value in order.
 struct Arguments {
   std::vector<std::string> positional;
   std::map<std::string, std::string> options;
+  std::map<std::string, std::vector<std::string>> repeated;
   bool help = false;
 };
 
+const std::vector<std::string> kRepeatable = {"config", "set"};
+
 Arguments parseArguments(int argc, char** argv, int first, const std::vector<std::string>& valued,
-                         const std::vector<std::string>& flags) {
+                         const std::vector<std::string>& flags, const char* usage) {
   Arguments args;
   for (int i = first; i < argc; ++i) {
     const std::string word = argv[i];
@@ -85,14 +129,17 @@ Arguments parseArguments(int argc, char** argv, int first, const std::vector<std
       }
       const bool is_valued = std::find(valued.begin(), valued.end(), key) != valued.end();
       const bool is_flag = std::find(flags.begin(), flags.end(), key) != flags.end();
-      if (!is_valued && !is_flag) throw UsageError("unknown option '" + word + "'");
+      if (!is_valued && !is_flag) throw UsageError("unknown option '" + word + "'", usage);
       if (is_valued && eq == std::string::npos) {
-        if (i + 1 >= argc) throw UsageError("option '--" + key + "' needs a value");
+        if (i + 1 >= argc) throw UsageError("option '--" + key + "' needs a value", usage);
         value = argv[++i];
       }
       if (is_flag && eq != std::string::npos)
-        throw UsageError("option '--" + key + "' takes no value");
-      args.options[key] = value;
+        throw UsageError("option '--" + key + "' takes no value", usage);
+      if (std::find(kRepeatable.begin(), kRepeatable.end(), key) != kRepeatable.end())
+        args.repeated[key].push_back(value);
+      else
+        args.options[key] = value;
     } else {
       args.positional.push_back(word);
     }
@@ -107,7 +154,7 @@ uint64_t parseSeed(const std::string& text) {
     if (used != text.size() || text.find('-') != std::string::npos) throw std::invalid_argument(text);
     return value;
   } catch (const std::exception&) {
-    throw UsageError("--seed needs a non-negative integer, got '" + text + "'");
+    throw UsageError("--seed needs a non-negative integer, got '" + text + "'", kRunUsage);
   }
 }
 
@@ -118,13 +165,44 @@ std::string valueOr(const Arguments& args, const std::string& key, const std::st
 
 void loadPlugins(mb::PluginRegistry& registry) { registry.loadSearchPath(); }
 
+// The user's configuration layers from --config, --set and --controller
+// (which acts as the last --set control.controller=NAME).
+mb::ConfigSources getConfigSources(const Arguments& args) {
+  mb::ConfigSources sources;
+  const auto files = args.repeated.find("config");
+  if (files != args.repeated.end()) sources.files = files->second;
+  const auto sets = args.repeated.find("set");
+  if (sets != args.repeated.end()) sources.overrides = sets->second;
+  const auto controller = args.options.find("controller");
+  if (controller != args.options.end())
+    sources.overrides.push_back("control.controller=" + controller->second);
+  return sources;
+}
+
+// An environment as configured. A plugin that rejects its configuration
+// reports lines of the text it was handed; the note added here says in
+// which file (or --set) the keys it names were written.
+std::unique_ptr<mb::Environment> makeEnvironment(const mb::PluginRegistry& registry,
+                                                 const std::string& task_name,
+                                                 const mb::ConfigSources& sources,
+                                                 bool stop_on_success) {
+  const mb::ConfigNode config = mb::loadTaskConfig(registry, task_name, sources);
+  mb::EnvironmentOptions options = mb::calcEnvironmentOptions(config);
+  options.stop_on_success = stop_on_success;
+  try {
+    return std::make_unique<mb::Environment>(registry, task_name, options);
+  } catch (const mb::PluginCallError& e) {
+    throw mb::PluginCallError(mb::annotatePluginError(config, e.what()), e.status());
+  }
+}
+
 int commandList(int argc, char** argv) {
-  const Arguments args = parseArguments(argc, argv, 2, {}, {});
+  const Arguments args = parseArguments(argc, argv, 2, {}, {}, kListUsage);
   if (args.help) {
     std::cout << kListUsage;
     return 0;
   }
-  if (!args.positional.empty()) throw UsageError("list takes no arguments");
+  if (!args.positional.empty()) throw UsageError("list takes no arguments", kListUsage);
   mb::PluginRegistry registry;
   loadPlugins(registry);
   std::cout << "search path:\n";
@@ -154,17 +232,17 @@ void printSegments(const std::vector<mb::SegmentDescription>& segments) {
 }
 
 int commandInfo(int argc, char** argv) {
-  const Arguments args = parseArguments(argc, argv, 2, {"controller"}, {});
+  const Arguments args = parseArguments(argc, argv, 2, {"controller", "config", "set"}, {}, kInfoUsage);
   if (args.help) {
     std::cout << kInfoUsage;
     return 0;
   }
-  if (args.positional.size() != 1) throw UsageError("info needs exactly one TASK");
+  if (args.positional.size() != 1) throw UsageError("info needs exactly one TASK", kInfoUsage);
   mb::PluginRegistry registry;
   loadPlugins(registry);
-  mb::EnvironmentOptions options;
-  options.controller = valueOr(args, "controller", "");
-  mb::Environment env(registry, args.positional[0], options);
+  const std::unique_ptr<mb::Environment> env_owner =
+      makeEnvironment(registry, args.positional[0], getConfigSources(args), true);
+  mb::Environment& env = *env_owner;
   const mb::TaskDescription& task = env.getTaskDescription();
   const std::vector<std::string> train = env.listObjects("train");
   const std::vector<std::string> test = env.listObjects("test");
@@ -227,13 +305,12 @@ void printEpisode(const mb::EpisodeResult& r) {
 
 int runOne(mb::PluginRegistry& registry, const std::string& task_name, const std::string& policy_arg,
            uint64_t seed, const std::string& object_arg, const std::string& split,
-           const std::string& controller, bool stop_on_success) {
+           const mb::ConfigSources& sources, bool stop_on_success) {
   const std::string policy_name = resolvePolicy(registry, policy_arg);
   registry.getEntry(mb::PluginKind::Policy, policy_name);  // fail before building anything
-  mb::EnvironmentOptions options;
-  options.controller = controller;
-  options.stop_on_success = stop_on_success;
-  mb::Environment env(registry, task_name, options);
+  const std::unique_ptr<mb::Environment> env_owner =
+      makeEnvironment(registry, task_name, sources, stop_on_success);
+  mb::Environment& env = *env_owner;
   const std::string object =
       object_arg.empty() ? chooseObject(env.listObjects(split), seed, split) : object_arg;
   env.reset(object, seed);
@@ -246,38 +323,63 @@ int runOne(mb::PluginRegistry& registry, const std::string& task_name, const std
 }
 
 int commandRun(int argc, char** argv) {
-  const Arguments args = parseArguments(argc, argv, 2, {"policy", "seed", "object", "split", "controller"},
-                                        {"no-early-stop"});
+  const Arguments args =
+      parseArguments(argc, argv, 2,
+                     {"policy", "seed", "object", "split", "controller", "config", "set"},
+                     {"no-early-stop"}, kRunUsage);
   if (args.help) {
     std::cout << kRunUsage;
     return 0;
   }
-  if (args.positional.size() != 1) throw UsageError("run needs exactly one TASK");
-  if (!args.options.count("policy")) throw UsageError("run needs --policy NAME");
+  if (args.positional.size() != 1) throw UsageError("run needs exactly one TASK", kRunUsage);
+  if (!args.options.count("policy")) throw UsageError("run needs --policy NAME", kRunUsage);
   const std::string split = valueOr(args, "split", "train");
-  if (split != "train" && split != "test") throw UsageError("--split must be train or test");
+  if (split != "train" && split != "test")
+    throw UsageError("--split must be train or test", kRunUsage);
+  const uint64_t seed = parseSeed(valueOr(args, "seed", "0"));
   mb::PluginRegistry registry;
   loadPlugins(registry);
-  return runOne(registry, args.positional[0], args.options.at("policy"),
-                parseSeed(valueOr(args, "seed", "0")), valueOr(args, "object", ""), split,
-                valueOr(args, "controller", ""), !args.options.count("no-early-stop"));
+  return runOne(registry, args.positional[0], args.options.at("policy"), seed,
+                valueOr(args, "object", ""), split, getConfigSources(args),
+                !args.options.count("no-early-stop"));
+}
+
+int commandConfig(int argc, char** argv) {
+  const Arguments args = parseArguments(argc, argv, 2, {"config", "set"}, {"explain"}, kConfigUsage);
+  if (args.help) {
+    std::cout << kConfigUsage;
+    return 0;
+  }
+  if (args.positional.size() > 1) throw UsageError("config takes at most one TASK", kConfigUsage);
+  const mb::ConfigSources sources = getConfigSources(args);
+  mb::ConfigNode config;
+  if (args.positional.empty()) {
+    config = mb::calcConfig(nullptr, sources);
+  } else {
+    mb::PluginRegistry registry;
+    loadPlugins(registry);
+    config = mb::loadTaskConfig(registry, args.positional[0], sources);
+  }
+  // What an environment would refuse (e.g. sideways gravity), refuse here too.
+  mb::calcEnvironmentOptions(config);
+  std::cout << mb::formatConfig(config, args.options.count("explain") != 0);
+  return 0;
 }
 
 int commandDemo(int argc, char** argv) {
-  const Arguments args = parseArguments(argc, argv, 2, {}, {});
+  const Arguments args = parseArguments(argc, argv, 2, {}, {}, kDemoUsage);
   if (args.help) {
-    std::cout << "usage: manibench demo\n\nLists the plugins, then runs one episode of the "
-                 "example task Reach-v0 with its scripted expert and one with a random policy.\n";
+    std::cout << kDemoUsage;
     return 0;
   }
-  if (!args.positional.empty()) throw UsageError("demo takes no arguments");
+  if (!args.positional.empty()) throw UsageError("demo takes no arguments", kDemoUsage);
   commandList(2, argv);
   std::cout << "\n";
   mb::PluginRegistry registry;
   loadPlugins(registry);
-  runOne(registry, "Reach-v0", "reach_expert", 0, "", "test", "", true);
+  runOne(registry, "Reach-v0", "reach_expert", 0, "", "test", {}, true);
   std::cout << "\n";
-  return runOne(registry, "Reach-v0", "random", 0, "", "test", "", true);
+  return runOne(registry, "Reach-v0", "random", 0, "", "test", {}, true);
 }
 
 }  // namespace
@@ -292,10 +394,12 @@ int main(int argc, char** argv) {
     if (command == "list") return commandList(argc, argv);
     if (command == "info") return commandInfo(argc, argv);
     if (command == "run") return commandRun(argc, argv);
+    if (command == "config") return commandConfig(argc, argv);
     if (command == "demo") return commandDemo(argc, argv);
-    throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'");
+    throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'",
+                     kMainUsage);
   } catch (const UsageError& e) {
-    std::cerr << "manibench: " << e.what() << "\n\n" << kMainUsage;
+    std::cerr << "manibench: " << e.what() << "\n\n" << e.usage();
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "manibench: error: " << e.what() << "\n";

@@ -1,14 +1,28 @@
 #include <manibench/environment.hpp>
 
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace manibench {
 
 Environment::Environment(const PluginRegistry& registry, const std::string& task_name,
                          EnvironmentOptions options)
     : registry_(registry), options_(std::move(options)) {
+  if (options_.control_frequency &&
+      !(std::isfinite(*options_.control_frequency) && *options_.control_frequency > 0))
+    throw std::invalid_argument("control frequency override must be a positive number of Hz, got " +
+                                std::to_string(*options_.control_frequency));
+  if (options_.frame_skip && *options_.frame_skip == 0)
+    throw std::invalid_argument("frame skip override must be at least 1");
+  if (options_.max_episode_steps && *options_.max_episode_steps == 0)
+    throw std::invalid_argument("episode length override must be at least 1 step");
   task_ = std::make_unique<TaskInstance>(registry_, task_name, options_.task_config);
-  const TaskDescription& task = task_->getDescription();
+  description_ = task_->getDescription();
+  if (options_.control_frequency) description_.control_frequency = *options_.control_frequency;
+  if (options_.frame_skip) description_.frame_skip = *options_.frame_skip;
+  if (options_.max_episode_steps) description_.max_episode_steps = *options_.max_episode_steps;
+  const TaskDescription& task = description_;
   const std::string controller =
       options_.controller.empty() ? task.default_controller : options_.controller;
   // Fail before any physics if the controller does not exist.
@@ -28,7 +42,7 @@ Environment::~Environment() {
   scene_.reset();
 }
 
-const TaskDescription& Environment::getTaskDescription() const { return task_->getDescription(); }
+const TaskDescription& Environment::getTaskDescription() const { return description_; }
 
 const ControllerDescription& Environment::getControllerDescription() const {
   return controller_->getDescription();
@@ -64,7 +78,7 @@ std::string Environment::describeEpisode() const {
 }
 
 void Environment::buildScene(const std::string& object_id) {
-  const TaskDescription& task = task_->getDescription();
+  const TaskDescription& task = description_;
   controller_.reset();
   bridge_.reset();
   scene_ = std::make_unique<Scene>(options_.physics);
@@ -75,6 +89,7 @@ void Environment::buildScene(const std::string& object_id) {
   bridge_->setBuilding(true);
   task_->buildScene(*bridge_, object_id);
   bridge_->setBuilding(false);
+  applySceneOptions(object_id);
   scene_->finalize();
 
   robot_ = scene_->findArticulation(task.robot_articulation);
@@ -119,6 +134,37 @@ void Environment::buildScene(const std::string& object_id) {
   scene_built_ = true;
 }
 
+namespace {
+// Names the articulations a scene has, for errors about one it lacks.
+std::string listArticulations(const Scene& scene) {
+  std::string names;
+  for (int i = 0; i < scene.getArticulationCount(); ++i)
+    names += (names.empty() ? "'" : ", '") + scene.getArticulationName(i) + "'";
+  return names.empty() ? "none" : names;
+}
+}  // namespace
+
+void Environment::applySceneOptions(const std::string& object_id) {
+  const std::string where = "task '" + description_.name + "', object '" + object_id + "'";
+  auto findArticulation = [&](const std::string& name, const std::string& source) {
+    const int articulation = scene_->findArticulation(name);
+    if (articulation < 0)
+      throw SceneError(source + ": the scene of " + where + " has no articulation '" + name +
+                       "' (it has " + listArticulations(*scene_) + ")");
+    return articulation;
+  };
+  if (options_.ground_material) scene_->setGroundMaterial(*options_.ground_material);
+  for (const BodyContactMaterial& body : options_.contact_materials) {
+    const int articulation = findArticulation(body.articulation, body.source);
+    if (!body.link.empty() && scene_->findLink(articulation, body.link) < 0)
+      throw SceneError(body.source + ": articulation '" + body.articulation + "' of " + where +
+                       " has no link '" + body.link + "'");
+    scene_->setContactMaterial(articulation, body.link, body.material);
+  }
+  for (const SelfCollisionSetting& setting : options_.self_collision)
+    scene_->setSelfCollision(findArticulation(setting.articulation, setting.source), setting.enabled);
+}
+
 void Environment::reset(const std::string& object_id, uint64_t seed) {
   if (!scene_built_ || object_id != object_id_) buildScene(object_id);
   // Every episode starts from the freshly built state, so its trajectory
@@ -143,7 +189,7 @@ void Environment::reset(const std::string& object_id, uint64_t seed) {
 
 StepResult Environment::step(const Eigen::VectorXd& action) {
   if (!scene_built_) throw std::logic_error("Environment::step() before reset()");
-  const TaskDescription& task = task_->getDescription();
+  const TaskDescription& task = description_;
   const uint32_t action_dim = controller_->getDescription().action_dim;
   if (action.size() != Eigen::Index(action_dim))
     throw InvalidAction(describeEpisode() + ": the action has " + std::to_string(action.size()) +

@@ -115,6 +115,17 @@ TaskSpec ReachTask::describe() const {
   spec.control_frequency = 100;
   spec.frame_skip = 5;
   spec.max_episode_steps = 100;
+  // Reach's layer of the YAML configuration (docs/configuration.md): the
+  // solver it is tuned for, and a camera that sees the whole arm from the side.
+  spec.default_config = R"(physics:
+  integrator: cpodes   # stiff velocity drives on two joints, no free bodies
+  accuracy: 1.0e-2
+cameras:
+  - name: side
+    pose: {position: [0, -2.0, 0.8], rpy: [0, 0, 1.5707963267948966]}
+    width: 320
+    height: 240
+)";
   return spec;
 }
 

@@ -28,13 +28,41 @@ class EpisodeFailure : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A contact material for one link (or every link) of an articulation,
+// set after the task has built its scene and before it is finalized.
+struct BodyContactMaterial {
+  std::string articulation;
+  std::string link;  // empty: every link of the articulation
+  ContactMaterial material;
+  std::string source;  // where it was configured ("my.yaml:7: ..."), for errors
+};
+
+// Self-collision of one articulation, set like BodyContactMaterial.
+struct SelfCollisionSetting {
+  std::string articulation;
+  bool enabled = false;
+  std::string source;
+};
+
+// What an environment is built with; manibench/config.hpp derives these
+// from the layered YAML configuration.
 struct EnvironmentOptions {
   std::string task_config;        // YAML for the task plugin
   std::string controller;         // empty: the task's default controller
   std::string controller_config;  // empty: the task's controller config
   PhysicsSettings physics;
+  // Applied in order, so a later entry for the same link wins.
+  std::vector<BodyContactMaterial> contact_materials;
+  std::optional<ContactMaterial> ground_material;  // unset: physics.default_material
+  std::vector<SelfCollisionSetting> self_collision;
   // End the episode as soon as `success` holds (as ManiSkill's done flag).
   bool stop_on_success = true;
+  // Overrides of the task's timing; unset: the task's own values. They
+  // change getTaskDescription() too, so that everything downstream (the
+  // controller's filter, policies, printing) sees the values in force.
+  std::optional<double> control_frequency;    // Hz, > 0
+  std::optional<uint32_t> frame_skip;         // >= 1
+  std::optional<uint32_t> max_episode_steps;  // >= 1
 };
 
 struct StepResult {
@@ -53,6 +81,7 @@ class Environment {
               EnvironmentOptions options = {});
   ~Environment();
 
+  // The task's description with the options' timing overrides applied.
   const TaskDescription& getTaskDescription() const;
   const ControllerDescription& getControllerDescription() const;
   PolicyLayout calcPolicyLayout(const std::string& observation_mode = "state") const;
@@ -75,11 +104,14 @@ class Environment {
 
  private:
   void buildScene(const std::string& object_id);
+  // The options' per-body settings, on a scene the task has just built.
+  void applySceneOptions(const std::string& object_id);
   std::string describeEpisode() const;
 
   const PluginRegistry& registry_;
   EnvironmentOptions options_;
   std::unique_ptr<TaskInstance> task_;
+  TaskDescription description_;  // task_'s, with the timing overrides
   std::unique_ptr<Scene> scene_;
   std::unique_ptr<SceneBridge> bridge_;
   std::unique_ptr<ControllerInstance> controller_;

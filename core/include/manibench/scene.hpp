@@ -52,17 +52,39 @@ struct DriveCommand {
   double force = 0;
 };
 
+// The contact properties of a body's surface. Two surfaces in contact
+// combine: stiffness in series (k1 k2 / (k1 + k2), so two default surfaces
+// give 1e5 N/m per contact point), dissipation weighted by compliance
+// ((c1 k2 + c2 k1) / (k1 + k2)), and each friction coefficient by geometric
+// mean (sqrt(mu1 mu2)).
+struct ContactMaterial {
+  // Per contact point: fn = k d (1 + 1.5 c ddot) at penetration d (Hunt-
+  // Crossley). A box face resting on a face touches at 4 points.
+  double stiffness = 2e5;      // N/m, this surface alone
+  double dissipation = 5.0;    // s/m
+  double static_friction = 0.8;
+  double dynamic_friction = 0.6;  // <= static_friction
+  double viscous_friction = 0.0;  // s/m: mu = dynamic + viscous * slip speed
+};
+
 struct PhysicsSettings {
   double gravity_z = -9.81;
-  // "cpodes" (stiff articulated scenes), "rk_merson" (many free bodies).
+  // "cpodes": implicit, error-controlled (stiff articulated scenes, up to
+  // ~20 free bodies); "semi_explicit_euler": fixed step `fixed_step` (many
+  // free bodies in contact, where CPodes' dense Jacobian grows with the
+  // square of the body count; stiff joint drives need h < 2 I / damping);
+  // "rk_merson": explicit, error-controlled (smooth motion; with contact it
+  // needs accuracy 1e-4 or it rings).
   std::string integrator = "cpodes";
-  double accuracy = 1e-2;
-  // Contact material used for every pair until per-body materials exist.
-  double contact_stiffness = 1e6;   // N/m^2 (Hertz-style plane strain)
-  double contact_dissipation = 1.0; // s/m (Hunt-Crossley)
-  double static_friction = 0.8;
-  double dynamic_friction = 0.6;
-  double viscous_friction = 0.0;
+  double accuracy = 1e-2;    // cpodes, rk_merson
+  double fixed_step = 5e-4;  // s, semi_explicit_euler
+  // Material of every link until Scene::setContactMaterial says otherwise,
+  // and of the ground unless Scene::setGroundMaterial does.
+  ContactMaterial default_material;
+  // Stiction: each contact point is held by a tangential spring-damper up
+  // to mu_static * fn (so a box on a slope does not creep).
+  double friction_stiffness = 1e5;  // N/m per contact point
+  double friction_damping = 20;     // N s/m per contact point
   // Density that gives mass to links with collision geometry but no
   // <inertial> (as in PartNet-Mobility), kg/m^3.
   double default_density = 1000;
@@ -116,6 +138,14 @@ class Scene {
   int addUrdfString(const std::string& urdf_xml, const std::string& base_dir,
                     const std::string& name, const Pose& root,
                     bool fixed_base);
+  // Contact material of one link of `articulation`, or of all its links if
+  // `link_name` is empty.
+  void setContactMaterial(int articulation, const std::string& link_name,
+                          const ContactMaterial& material);
+  void setGroundMaterial(const ContactMaterial& material);
+  // Whether links of `articulation` touch each other (default: no). Links
+  // joined by a joint never touch, nor do links merged by fixed joints.
+  void setSelfCollision(int articulation, bool enabled);
   // Builds the multibody system; afterwards no more adds. All joints start
   // at 0 (or the nearest limit), velocities 0, roots where they were added.
   void finalize();
@@ -145,6 +175,9 @@ class Scene {
   void setJointPositions(int articulation, const Eigen::VectorXd& q);
   void setJointVelocities(int articulation, const Eigen::VectorXd& qdot);
   void setRootPose(int articulation, const Pose& pose);  // floating roots
+  // Floating roots: angular velocity and the root link origin's velocity,
+  // world frame.
+  void setRootTwist(int articulation, const Twist& twist);
   void setJointDynamics(int articulation, int joint, double damping,
                         double friction);
 

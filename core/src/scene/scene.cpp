@@ -8,6 +8,10 @@
 // must be (re)initialized from it) or in the integrator (while stepping).
 // Re-initializing costs ~0.8 ms and restarts CPodes' history, so the control
 // tick path (setDriveCommands + advance) never does it.
+//
+// Contact is one Force::Custom (scene/contact/contact_force.hpp) that owns
+// every collision shape; Simbody's own contact subsystem is not used (it
+// skips box-box, box-sphere and every cylinder pair).
 #include "manibench/scene.hpp"
 
 #include <algorithm>
@@ -22,6 +26,7 @@
 #include <sstream>
 
 #include "Simbody.h"
+#include "scene/contact/contact_force.hpp"
 #include "scene/joint_forces.hpp"
 #include "scene/urdf_model.hpp"
 
@@ -29,6 +34,8 @@ namespace manibench {
 
 using scene_detail::ArticulationModel;
 using scene_detail::CollisionShape;
+using scene_detail::ContactForce;
+using scene_detail::ContactShape;
 using scene_detail::JointControls;
 using scene_detail::JointForces;
 using scene_detail::JointSlot;
@@ -44,6 +51,9 @@ constexpr double kTinyInertia = 1e-6;  // kg m^2, about the body origin
 // 0.1 mrad. d = 10 makes hitting a stop practically inelastic; with d = 1 a
 // slider resting on its stop kept chattering at CPodes' default accuracy.
 constexpr double kLimitStiffness = 1e5;     // N/m or N m/rad
+// See FrictionLaw::max_frequency: 2000 rad/s leaves bodies over 0.1 kg on
+// their material stiffness and lets CPodes at accuracy 1e-2 rest a 1 g cube.
+constexpr double kMaxContactFrequency = 2000;  // rad/s
 constexpr double kLimitDissipation = 10.0;  // s/m or s/rad
 // Divergence by step size: an advance() whose integrator steps average
 // below kMinMeanStepSize (after kMinStepBudget steps) is a blow-up, not a
@@ -83,16 +93,18 @@ bool isValidPose(const Pose& pose) {
          pose.orientation.norm() > 1e-12;
 }
 
-SimTK::ContactSurface makeContactSurface(const CollisionShape& shape,
-                                         SimTK::ContactCliqueId clique,
-                                         const SimTK::ContactMaterial& material) {
-  SimTK::ContactSurface surface =
-      shape.kind == CollisionShape::Kind::Sphere
-          ? SimTK::ContactSurface(SimTK::ContactGeometry::Sphere(shape.size[0]), material)
-          : SimTK::ContactSurface(SimTK::ContactGeometry::Brick(shape.size), material);
-  // Links of one articulation never collide with each other.
-  surface.joinClique(clique);
-  return surface;
+// Empty if `m` is a valid material, else what is wrong with it.
+std::string checkMaterial(const ContactMaterial& m) {
+  if (!(m.stiffness > 0) || !std::isfinite(m.stiffness)) return "stiffness must be positive";
+  if (!(m.dissipation >= 0) || !std::isfinite(m.dissipation))
+    return "dissipation must be non-negative";
+  if (!(m.dynamic_friction >= 0) || !std::isfinite(m.dynamic_friction))
+    return "dynamic_friction must be non-negative";
+  if (!(m.static_friction >= m.dynamic_friction) || !std::isfinite(m.static_friction))
+    return "static_friction must be at least dynamic_friction";
+  if (!(m.viscous_friction >= 0) || !std::isfinite(m.viscous_friction))
+    return "viscous_friction must be non-negative";
+  return "";
 }
 
 // SimTK::Integrator's destructor is not virtual: delete as the real type.
@@ -101,15 +113,25 @@ using IntegratorPtr = std::unique_ptr<SimTK::Integrator, void (*)(SimTK::Integra
 IntegratorPtr makeIntegrator(const SimTK::MultibodySystem& system,
                              const PhysicsSettings& settings, int steps_per_call) {
   IntegratorPtr integrator(nullptr, [](SimTK::Integrator*) {});
-  if (settings.integrator == "cpodes")
+  if (settings.integrator == "cpodes") {
     integrator = IntegratorPtr(
         new SimTK::CPodesIntegrator(system, SimTK::CPodes::BDF, SimTK::CPodes::Newton),
         [](SimTK::Integrator* p) { delete static_cast<SimTK::CPodesIntegrator*>(p); });
-  else
+    integrator->setAccuracy(settings.accuracy);
+    // BDF above order 2 is not A-stable: lightly damped stiff modes (a body
+    // held by its friction springs) then grow instead of decaying.
+    static_cast<SimTK::CPodesIntegrator*>(integrator.get())->setOrderLimit(2);
+  } else if (settings.integrator == "rk_merson") {
     integrator = IntegratorPtr(
         new SimTK::RungeKuttaMersonIntegrator(system),
         [](SimTK::Integrator* p) { delete static_cast<SimTK::RungeKuttaMersonIntegrator*>(p); });
-  integrator->setAccuracy(settings.accuracy);
+    integrator->setAccuracy(settings.accuracy);
+  } else {
+    assert(settings.integrator == "semi_explicit_euler");
+    integrator = IntegratorPtr(
+        new SimTK::SemiExplicitEulerIntegrator(system, settings.fixed_step),
+        [](SimTK::Integrator* p) { delete static_cast<SimTK::SemiExplicitEulerIntegrator*>(p); });
+  }
   integrator->setInternalStepLimit(steps_per_call);
   // Land exactly on each control tick so that commands switch there.
   integrator->setAllowInterpolation(false);
@@ -148,9 +170,11 @@ struct Scene::Impl {
   struct Articulation {
     std::string name;
     ArticulationModel model;
-    std::string base_dir;  // for mesh files, once meshes are loaded
+    std::string base_dir;  // for mesh files
     SimTK::Transform X_root;
     bool fixed_base = false;
+    bool self_collision = false;
+    std::vector<ContactMaterial> link_materials;  // per model link
     int first_link = 0;   // global id of model.links[0]
     int first_joint = 0;  // global slot of model.joints[0]
     std::vector<SimTK::MobilizedBodyIndex> body_mobods;  // after finalize
@@ -160,20 +184,13 @@ struct Scene::Impl {
     SimTK::MobilizedBodyIndex mobod;
     SimTK::Transform X_BL;
   };
-  struct SurfaceRecord {  // a contact surface and the link it came from
-    SimTK::MobilizedBodyIndex mobod;
-    int ordinal = 0;
-    int link = -1;  // -1: the ground plane
-  };
-
   explicit Impl(const PhysicsSettings& s)
       : settings(s),
         id(newSceneId()),
         matter(system),
         forces(system),
-        tracker(system),
-        contact(system, tracker),
-        gravity(forces, matter, SimTK::Vec3(0, 0, s.gravity_z)) {}
+        gravity(forces, matter, SimTK::Vec3(0, 0, s.gravity_z)),
+        ground_material(s.default_material) {}
 
   PhysicsSettings settings;
   std::uint64_t id;
@@ -189,10 +206,10 @@ struct Scene::Impl {
   SimTK::MultibodySystem system;
   SimTK::SimbodyMatterSubsystem matter;
   SimTK::GeneralForceSubsystem forces;
-  SimTK::ContactTrackerSubsystem tracker;
-  SimTK::CompliantContactSubsystem contact;
   SimTK::Force::Gravity gravity;
-  JointForces* joint_forces = nullptr;  // owned by `forces`
+  ContactMaterial ground_material;
+  JointForces* joint_forces = nullptr;     // owned by `forces`
+  ContactForce* contact_force = nullptr;   // owned by `forces`
   IntegratorPtr integrator{nullptr, [](SimTK::Integrator*) {}};
   SimTK::State state;       // current state while needs_init
   bool needs_init = true;
@@ -203,8 +220,7 @@ struct Scene::Impl {
   std::vector<SimTK::MobilizedBodyIndex> joint_mobods;    // per joint slot
   std::vector<int> mobod_link;        // MobilizedBodyIndex -> global link
   std::vector<SimTK::MobilizedBodyIndex> q_mobod, u_mobod;  // per coordinate
-  std::vector<SurfaceRecord> surfaces;
-  std::vector<int> surface_link;      // ContactSurfaceIndex -> global link
+  mutable std::vector<ContactForce::Report> contact_reports;  // scratch
 
   // --- phases and lookups ---
   void requireBuilding(const char* method) const {
@@ -283,8 +299,7 @@ struct Scene::Impl {
                       const std::string& base_dir, const std::string& name,
                       const Pose& root, bool fixed_base);
   void finalize();
-  void buildArticulation(Articulation& art, SimTK::ContactCliqueId clique,
-                         const SimTK::ContactMaterial& material);
+  void buildArticulation(Articulation& art, std::vector<ContactShape>& shapes);
 
   // --- stepping ---
   void advance(double dt);
@@ -312,8 +327,9 @@ int Scene::Impl::addArticulation(const std::string& xml,
 
   Articulation art;
   art.name = name;
-  art.model = scene_detail::buildArticulationModel(xml, source,
+  art.model = scene_detail::buildArticulationModel(xml, source, base_dir,
                                                    settings.default_density);
+  art.link_materials.assign(art.model.links.size(), settings.default_material);
   art.base_dir = base_dir;
   art.X_root = toTransform(root);
   art.fixed_base = fixed_base;
@@ -324,9 +340,7 @@ int Scene::Impl::addArticulation(const std::string& xml,
     std::string list;
     for (const std::string& item : art.model.unsimulated)
       list += (list.empty() ? "" : ", ") + item;
-    std::fprintf(stderr,
-                 "manibench: URDF %s: collision geometry not simulated yet "
-                 "(only spheres and boxes are): %s\n",
+    std::fprintf(stderr, "manibench: URDF %s: collision geometry without contact: %s\n",
                  source.c_str(), list.c_str());
   }
 
@@ -338,10 +352,21 @@ int Scene::Impl::addArticulation(const std::string& xml,
   return a;
 }
 
-void Scene::Impl::buildArticulation(Articulation& art,
-                                    SimTK::ContactCliqueId clique,
-                                    const SimTK::ContactMaterial& material) {
+void Scene::Impl::buildArticulation(Articulation& art, std::vector<ContactShape>& shapes) {
   const ArticulationModel& model = art.model;
+  const int articulation = static_cast<int>(&art - articulations.data());
+  auto addShape = [&](const CollisionShape& shape, SimTK::MobilizedBodyIndex mobod,
+                      const SimTK::Transform& X_BS, double inverse_mass) {
+    ContactShape contact;
+    contact.inverse_mass = inverse_mass;
+    contact.geometry = shape.geometry;
+    contact.body = mobod;
+    contact.X_BS = X_BS;
+    contact.link = art.first_link + shape.link;
+    contact.articulation = articulation;
+    contact.material = art.link_materials[shape.link];
+    shapes.push_back(std::move(contact));
+  };
   art.body_mobods.resize(model.bodies.size());
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
     const scene_detail::BodyModel& body = model.bodies[b];
@@ -349,12 +374,8 @@ void Scene::Impl::buildArticulation(Articulation& art,
     // sits at X_root in Ground, which every offset below must include.
     const bool on_ground = b == 0 && art.fixed_base;
     if (on_ground) {
-      SimTK::Body& ground = matter.updGround().updBody();
-      for (const CollisionShape& shape : body.shapes) {
-        const int ordinal = ground.addContactSurface(
-            art.X_root * shape.X_BS, makeContactSurface(shape, clique, material));
-        surfaces.push_back({SimTK::GroundIndex, ordinal, art.first_link + shape.link});
-      }
+      for (const CollisionShape& shape : body.shapes)
+        addShape(shape, SimTK::GroundIndex, art.X_root * shape.X_BS, 0);
       art.body_mobods[b] = SimTK::GroundIndex;
       continue;
     }
@@ -363,13 +384,6 @@ void Scene::Impl::buildArticulation(Articulation& art,
             ? SimTK::MassProperties(body.mass, body.first_moment / body.mass, body.inertia)
             : SimTK::MassProperties(kTinyMass, SimTK::Vec3(0), SimTK::Inertia(kTinyInertia));
     SimTK::Body::Rigid rigid(mass);
-    // The mobod index is known only once the mobilized body exists; the
-    // surface ordinals are known now.
-    std::vector<std::pair<int, int>> ordinals;  // (ordinal, global link)
-    for (const CollisionShape& shape : body.shapes)
-      ordinals.emplace_back(
-          rigid.addContactSurface(shape.X_BS, makeContactSurface(shape, clique, material)),
-          art.first_link + shape.link);
 
     SimTK::MobilizedBody mobod;
     if (b == 0) {
@@ -400,28 +414,39 @@ void Scene::Impl::buildArticulation(Articulation& art,
                                          joint.lower, joint.upper);
     }
     art.body_mobods[b] = mobod.getMobilizedBodyIndex();
-    for (const auto& [ordinal, link] : ordinals)
-      surfaces.push_back({mobod.getMobilizedBodyIndex(), ordinal, link});
+    const double inverse_mass = b == 0 ? 1 / mass.getMass() : 0;  // free roots only
+    for (const CollisionShape& shape : body.shapes)
+      addShape(shape, mobod.getMobilizedBodyIndex(), shape.X_BS, inverse_mass);
   }
 }
 
 void Scene::Impl::finalize() {
-  const SimTK::ContactMaterial material(
-      settings.contact_stiffness, settings.contact_dissipation,
-      settings.static_friction, settings.dynamic_friction,
-      settings.viscous_friction);
-  for (Articulation& art : articulations)
-    buildArticulation(art, SimTK::ContactSurface::createNewContactClique(), material);
-
-  if (has_ground) {
-    // A HalfSpace fills x > 0 of its frame; turning x to -z makes it the
-    // region below z = height with the surface normal +z.
-    const int ordinal = matter.updGround().updBody().addContactSurface(
-        SimTK::Transform(SimTK::Rotation(SimTK::Pi / 2, SimTK::YAxis),
-                         SimTK::Vec3(0, 0, ground_height)),
-        SimTK::ContactSurface(SimTK::ContactGeometry::HalfSpace(), material));
-    surfaces.push_back({SimTK::GroundIndex, ordinal, -1});
+  std::vector<ContactShape> shapes;
+  std::vector<char> self_collision;
+  for (Articulation& art : articulations) {
+    buildArticulation(art, shapes);
+    self_collision.push_back(art.self_collision ? 1 : 0);
   }
+  if (has_ground) {
+    // The region below z = height.
+    ContactShape floor;
+    floor.geometry = scene_detail::ShapeGeometry::makeHalfSpace();
+    floor.body = SimTK::GroundIndex;
+    floor.X_BS = SimTK::Transform(SimTK::Vec3(0, 0, ground_height));
+    floor.material = ground_material;
+    shapes.push_back(std::move(floor));
+  }
+  scene_detail::FrictionLaw law;
+  law.stiffness = settings.friction_stiffness;
+  law.damping = settings.friction_damping;
+  // Light free bodies: h w <= 1 for fixed explicit steps, else the rate at
+  // which CPodes at its default accuracy still resolves contact.
+  law.max_frequency = settings.integrator == "semi_explicit_euler"
+                          ? 1 / settings.fixed_step
+                          : kMaxContactFrequency;
+  contact_force =
+      new ContactForce(matter, forces, std::move(shapes), std::move(self_collision), law);
+  SimTK::Force::Custom(forces, contact_force);
 
   // Joint slots and their URDF dynamics.
   std::vector<JointSlot> slots;
@@ -460,10 +485,6 @@ void Scene::Impl::finalize() {
     for (int i = 0; i < mobod.getNumQ(state); ++i) q_mobod[mobod.getFirstQIndex(state) + i] = m;
     for (int i = 0; i < mobod.getNumU(state); ++i) u_mobod[mobod.getFirstUIndex(state) + i] = m;
   }
-  surface_link.assign(tracker.getNumSurfaces(), -1);
-  for (const SurfaceRecord& surface : surfaces)
-    surface_link[tracker.getContactSurfaceIndex(surface.mobod, surface.ordinal)] = surface.link;
-
   link_frames.resize(links.size());
   for (const Articulation& art : articulations) {
     for (std::size_t l = 0; l < art.model.links.size(); ++l) {
@@ -485,24 +506,6 @@ void Scene::Impl::finalize() {
   system.realize(state, SimTK::Stage::Position);
 
   needs_init = true;
-
-  // Simbody has no box-box or box-sphere contact; say so once per scene
-  // where such a pair could occur.
-  int with_boxes = 0, with_shapes = 0;
-  for (const Articulation& art : articulations) {
-    bool box = false, any = false;
-    for (const auto& body : art.model.bodies)
-      for (const CollisionShape& shape : body.shapes) {
-        any = true;
-        box = box || shape.kind == CollisionShape::Kind::Box;
-      }
-    with_boxes += box;
-    with_shapes += any;
-  }
-  if (with_boxes > 0 && with_shapes > 1)
-    std::fprintf(stderr,
-                 "manibench: box-box and box-sphere contacts are not simulated "
-                 "yet; boxes only touch the ground and spheres touch spheres\n");
 }
 
 const std::string& Scene::Impl::getMobodLinkName(SimTK::MobilizedBodyIndex mobod) const {
@@ -632,22 +635,21 @@ void Scene::Impl::advance(double dt) {
 Scene::Scene(PhysicsSettings settings) {
   auto positive = [](double v) { return v > 0 && std::isfinite(v); };
   auto non_negative = [](double v) { return v >= 0 && std::isfinite(v); };
-  if (settings.integrator != "cpodes" && settings.integrator != "rk_merson")
+  if (settings.integrator != "cpodes" && settings.integrator != "rk_merson" &&
+      settings.integrator != "semi_explicit_euler")
     throw SceneError("PhysicsSettings: unknown integrator '" + settings.integrator +
-                     "' (expected 'cpodes' or 'rk_merson')");
-  if (!positive(settings.accuracy) || !std::isfinite(settings.gravity_z) ||
-      !positive(settings.contact_stiffness) ||
-      !non_negative(settings.contact_dissipation) ||
-      !non_negative(settings.dynamic_friction) ||
-      !(settings.static_friction >= settings.dynamic_friction) ||
-      !std::isfinite(settings.static_friction) ||
-      !non_negative(settings.viscous_friction) ||
-      !positive(settings.default_density) ||
+                     "' (expected 'cpodes', 'rk_merson' or 'semi_explicit_euler')");
+  if (!positive(settings.accuracy) || !positive(settings.fixed_step) ||
+      !std::isfinite(settings.gravity_z) || !positive(settings.friction_stiffness) ||
+      !non_negative(settings.friction_damping) || !positive(settings.default_density) ||
       !positive(settings.divergence_speed_limit))
     throw SceneError(
-        "PhysicsSettings: accuracy, contact_stiffness, default_density and "
-        "divergence_speed_limit must be positive, dissipation and frictions "
-        "non-negative with static_friction >= dynamic_friction, all finite");
+        "PhysicsSettings: accuracy, fixed_step, friction_stiffness, default_density and "
+        "divergence_speed_limit must be positive, friction_damping non-negative, "
+        "gravity_z finite");
+  const ContactMaterial& material = settings.default_material;
+  const std::string problem = checkMaterial(material);
+  if (!problem.empty()) throw SceneError("PhysicsSettings: default_material: " + problem);
   impl_ = std::make_unique<Impl>(settings);
 }
 
@@ -680,6 +682,39 @@ int Scene::addUrdfString(const std::string& urdf_xml, const std::string& base_di
   impl_->requireBuilding("addUrdfString");
   return impl_->addArticulation(urdf_xml, "<string> of articulation '" + name + "'",
                                 base_dir, name, root, fixed_base);
+}
+
+void Scene::setContactMaterial(int articulation, const std::string& link_name,
+                               const ContactMaterial& material) {
+  impl_->requireBuilding("setContactMaterial");
+  impl_->getArticulation(articulation, "setContactMaterial");
+  Impl::Articulation& art = impl_->articulations[articulation];
+  const std::string problem = checkMaterial(material);
+  if (!problem.empty())
+    throw SceneError("Scene::setContactMaterial: articulation '" + art.name + "'" +
+                     (link_name.empty() ? "" : ", link '" + link_name + "'") + ": " + problem);
+  if (link_name.empty()) {
+    art.link_materials.assign(art.link_materials.size(), material);
+    return;
+  }
+  const int link = findLink(articulation, link_name);
+  if (link < 0)
+    throw SceneError("Scene::setContactMaterial: articulation '" + art.name +
+                     "' has no link '" + link_name + "'");
+  art.link_materials[link - art.first_link] = material;
+}
+
+void Scene::setGroundMaterial(const ContactMaterial& material) {
+  impl_->requireBuilding("setGroundMaterial");
+  const std::string problem = checkMaterial(material);
+  if (!problem.empty()) throw SceneError("Scene::setGroundMaterial: " + problem);
+  impl_->ground_material = material;
+}
+
+void Scene::setSelfCollision(int articulation, bool enabled) {
+  impl_->requireBuilding("setSelfCollision");
+  impl_->getArticulation(articulation, "setSelfCollision");
+  impl_->articulations[articulation].self_collision = enabled;
 }
 
 void Scene::finalize() {
@@ -785,17 +820,16 @@ Eigen::Vector3d Scene::getContactForce(int link_a, int link_b) const {
   impl_->requireFinalized("getContactForce");
   impl_->checkLink(link_a, "getContactForce");
   if (link_b >= 0) impl_->checkLink(link_b, "getContactForce");
-  const SimTK::State& s = impl_->getRealizedState(SimTK::Stage::Dynamics);
-  const SimTK::ContactSnapshot& contacts = impl_->tracker.getActiveContacts(s);
+  const SimTK::State& s = impl_->getRealizedState(SimTK::Stage::Velocity);
+  const ContactForce& contact = *impl_->contact_force;
+  std::vector<ContactForce::Report>& reports = impl_->contact_reports;
+  contact.calcReports(s, reports);
   SimTK::Vec3 total(0);
-  for (int n = 0; n < impl_->contact.getNumContactForces(s); ++n) {
-    const SimTK::ContactForce& force = impl_->contact.getContactForce(s, n);
-    const SimTK::Contact& c = contacts.getContactById(force.getContactId());
-    const int link1 = impl_->surface_link[c.getSurface1()];
-    const int link2 = impl_->surface_link[c.getSurface2()];
-    const SimTK::Vec3& on2 = force.getForceOnSurface2()[1];
-    if (link1 == link_a && (link_b < 0 || link2 == link_b)) total -= on2;
-    if (link2 == link_a && (link_b < 0 || link1 == link_b)) total += on2;
+  for (const ContactForce::Report& r : reports) {
+    const int link1 = contact.getShape(r.shape_a).link;
+    const int link2 = contact.getShape(r.shape_b).link;
+    if (link1 == link_a && (link_b < 0 || link2 == link_b)) total -= r.force_on_b;
+    if (link2 == link_a && (link_b < 0 || link1 == link_b)) total += r.force_on_b;
   }
   return toEigen(total);
 }
@@ -834,6 +868,24 @@ void Scene::setRootPose(int articulation, const Pose& pose) {
                      "': the pose is not finite or has a zero quaternion");
   SimTK::State& s = impl_->updStateAndRestart();
   impl_->matter.getMobilizedBody(art.body_mobods[0]).setQToFitTransform(s, toTransform(pose));
+}
+
+void Scene::setRootTwist(int articulation, const Twist& twist) {
+  impl_->requireFinalized("setRootTwist");
+  const Impl::Articulation& art = impl_->getArticulation(articulation, "setRootTwist");
+  if (art.fixed_base)
+    throw SceneError("Scene::setRootTwist: articulation '" + art.name +
+                     "' has a fixed base; its root does not move");
+  if (!twist.angular.allFinite() || !twist.linear.allFinite())
+    throw SceneError("Scene::setRootTwist: articulation '" + art.name +
+                     "': the twist is not finite");
+  SimTK::State& s = impl_->updStateAndRestart();
+  // The root body's frame is the root link's frame.
+  const SimTK::MobilizedBody& root = impl_->matter.getMobilizedBody(art.body_mobods[0]);
+  const Eigen::Vector3d& w = twist.angular;
+  const Eigen::Vector3d& v = twist.linear;
+  root.setUToFitAngularVelocity(s, SimTK::Vec3(w.x(), w.y(), w.z()));
+  root.setUToFitLinearVelocity(s, SimTK::Vec3(v.x(), v.y(), v.z()));
 }
 
 void Scene::setJointDynamics(int articulation, int joint, double damping, double friction) {

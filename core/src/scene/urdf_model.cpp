@@ -4,12 +4,16 @@
 #include <tinyxml.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <map>
 #include <mutex>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -78,14 +82,56 @@ SymMat33 toSymmetric(const Mat33& m) {
   return SymMat33().setFromLower(0.5 * (m + ~m));
 }
 
-const char* describeGeometry(int type) {
-  switch (type) {
-    case urdf::Geometry::SPHERE: return "sphere";
-    case urdf::Geometry::BOX: return "box";
-    case urdf::Geometry::CYLINDER: return "cylinder";
-    case urdf::Geometry::MESH: return "mesh";
+// Mass, centre of mass and central inertia (shape frame) of a solid shape.
+void calcShapeMass(const ShapeGeometry& g, double density, double& m, Vec3& com, Mat33& Ic) {
+  com = Vec3(0);
+  Vec3 moments(0);
+  const double r = g.radius, l = 2 * g.half_length;
+  switch (g.kind) {
+    case ShapeKind::Sphere:
+      m = density * 4.0 / 3.0 * kPi * r * r * r;
+      moments = Vec3(0.4 * m * r * r);
+      break;
+    case ShapeKind::Box: {
+      const Vec3 d = 2 * g.half;
+      m = density * d[0] * d[1] * d[2];
+      moments = m / 12 * Vec3(d[1] * d[1] + d[2] * d[2], d[0] * d[0] + d[2] * d[2],
+                              d[0] * d[0] + d[1] * d[1]);
+      break;
+    }
+    case ShapeKind::Cylinder: {
+      m = density * kPi * r * r * l;
+      const double side = m * (3 * r * r + l * l) / 12;
+      moments = Vec3(side, side, 0.5 * m * r * r);
+      break;
+    }
+    case ShapeKind::Capsule: {
+      // A cylinder plus two hemispheres (each with its centroid 3r/8 from
+      // its flat face and central inertia 83/320 m r^2 about a transverse axis).
+      const double m_cylinder = density * kPi * r * r * l;
+      const double m_half = density * 2.0 / 3.0 * kPi * r * r * r;
+      const double offset = g.half_length + 3 * r / 8;
+      const double side = m_cylinder * (3 * r * r + l * l) / 12 +
+                          2 * m_half * (83.0 / 320.0 * r * r + offset * offset);
+      m = m_cylinder + 2 * m_half;
+      moments = Vec3(side, side, 0.5 * m_cylinder * r * r + 0.4 * 2 * m_half * r * r);
+      break;
+    }
+    case ShapeKind::Convex:
+      m = density * g.hull->volume;
+      com = g.hull->centroid;
+      Ic = density * g.hull->unit_inertia;
+      return;
+    case ShapeKind::HalfSpace:
+      m = 0;
+      break;
   }
-  return "unknown geometry";
+  Ic = Mat33(moments[0], 0, 0, 0, moments[1], 0, 0, 0, moments[2]);
+}
+
+bool isFile(const std::string& path) {
+  struct stat info {};
+  return ::stat(path.c_str(), &info) == 0 && S_ISREG(info.st_mode);
 }
 
 // Adds a rigid part of mass m, centre of mass com_B and central inertia
@@ -100,8 +146,12 @@ void addMass(BodyModel& body, double m, const Vec3& com_B, const Mat33& Ic_B) {
 struct Builder {
   const urdf::ModelInterface& urdf;
   const std::string& source;
+  const std::string& base_dir;
   double density;
   std::map<std::string, int> joint_file_order;
+  // (link name, collision ordinal) of each <capsule>, which urdfdom saw as
+  // a cylinder of the same radius and length.
+  std::set<std::pair<std::string, int>> capsules;
   ArticulationModel model;
 
   int getFileOrder(const std::string& joint_name) const {
@@ -110,10 +160,10 @@ struct Builder {
                                            : found->second;
   }
 
-  // The link's own mass properties, from <inertial> or else from its
-  // collision volume at the default density.
+  // The link's own mass properties, from <inertial> or else from the
+  // volume of its collision shapes (overlaps counted twice).
   void addLinkMass(const urdf::Link& link, const Transform& X_BL,
-                   BodyModel& body) {
+                   const std::vector<CollisionShape>& shapes, BodyModel& body) {
     if (link.inertial) {
       const urdf::Inertial& in = *link.inertial;
       if (!std::isfinite(in.mass) || in.mass < 0)
@@ -136,72 +186,85 @@ struct Builder {
       addMass(body, in.mass, X_BI.p(), R * Ic_I * ~R);
       return;
     }
-    for (const urdf::CollisionSharedPtr& collision : link.collision_array) {
-      if (!collision || !collision->geometry) continue;
-      const Transform X_BS = X_BL * toTransform(collision->origin);
-      const Mat33 R = X_BS.R().asMat33();
-      const urdf::Geometry& g = *collision->geometry;
+    for (const CollisionShape& shape : shapes) {
       double m = 0;
-      Vec3 moments(0);  // central, in the shape frame
-      if (g.type == urdf::Geometry::SPHERE) {
-        const double r = static_cast<const urdf::Sphere&>(g).radius;
-        m = density * 4.0 / 3.0 * kPi * r * r * r;
-        moments = Vec3(0.4 * m * r * r);
-      } else if (g.type == urdf::Geometry::BOX) {
-        const urdf::Vector3& d = static_cast<const urdf::Box&>(g).dim;
-        m = density * d.x * d.y * d.z;
-        moments = m / 12 * Vec3(d.y * d.y + d.z * d.z, d.x * d.x + d.z * d.z,
-                                d.x * d.x + d.y * d.y);
-      } else if (g.type == urdf::Geometry::CYLINDER) {
-        const auto& c = static_cast<const urdf::Cylinder&>(g);
-        const double r = c.radius, l = c.length;
-        m = density * kPi * r * r * l;
-        const double side = m * (3 * r * r + l * l) / 12;
-        moments = Vec3(side, side, 0.5 * m * r * r);
-      }
-      // A mesh's volume needs the mesh loader (not there yet): no mass.
-      const Mat33 Ic_S(moments[0], 0, 0, 0, moments[1], 0, 0, 0, moments[2]);
-      addMass(body, m, X_BS.p(), R * Ic_S * ~R);
+      Vec3 com_S(0);
+      Mat33 Ic_S(0, 0, 0, 0, 0, 0, 0, 0, 0);
+      calcShapeMass(shape.geometry, density, m, com_S, Ic_S);
+      const Mat33 R = shape.X_BS.R().asMat33();
+      addMass(body, m, shape.X_BS * com_S, R * Ic_S * ~R);
     }
   }
 
-  void addLinkShapes(const urdf::Link& link, int link_index,
-                     const Transform& X_BL, BodyModel& body) {
-    int ordinal = 0;
+  // The convex hull of a <mesh>, or null (with a note in `unsimulated`)
+  // if the mesh is flat.
+  std::shared_ptr<const ConvexHull> loadMeshHull(const urdf::Link& link, const urdf::Mesh& mesh,
+                                                 const std::string& what) {
+    const Vec3 scale(mesh.scale.x, mesh.scale.y, mesh.scale.z);
+    if (!scale.isFinite() || scale[0] == 0 || scale[1] == 0 || scale[2] == 0)
+      fail(source, "link '" + link.name + "': mesh '" + mesh.filename + "' has scale " +
+                       std::to_string(scale[0]) + " " + std::to_string(scale[1]) + " " +
+                       std::to_string(scale[2]) + "; every factor must be finite and non-zero");
+    const std::string path = findMeshFile(mesh.filename, base_dir);
+    if (path.empty())
+      fail(source, "link '" + link.name + "': collision mesh '" + mesh.filename +
+                       "' not found (relative paths start at '" + base_dir + "')");
+    try {
+      return loadConvexHull(path, scale);
+    } catch (const FlatHullError& e) {
+      model.unsimulated.push_back(what + " ('" + path + "': " + e.what() + ")");
+      return nullptr;
+    } catch (const std::exception& e) {
+      fail(source, "link '" + link.name + "': collision mesh '" + path + "': " + e.what());
+    }
+  }
+
+  std::vector<CollisionShape> makeLinkShapes(const urdf::Link& link, int link_index,
+                                             const Transform& X_BL) {
+    std::vector<CollisionShape> shapes;
+    int ordinal = -1;
     for (const urdf::CollisionSharedPtr& collision : link.collision_array) {
       ++ordinal;
       if (!collision || !collision->geometry) continue;
       const urdf::Geometry& g = *collision->geometry;
+      const std::string what =
+          "link '" + link.name + "': collision '" +
+          (collision->name.empty() ? "#" + std::to_string(ordinal + 1) : collision->name) + "'";
       CollisionShape shape;
       shape.link = link_index;
       shape.X_BS = X_BL * toTransform(collision->origin);
       if (g.type == urdf::Geometry::SPHERE) {
         const double r = static_cast<const urdf::Sphere&>(g).radius;
         if (!(r > 0) || !std::isfinite(r))
-          fail(source, "link '" + link.name + "' has a sphere of radius " +
-                           std::to_string(r));
-        shape.kind = CollisionShape::Kind::Sphere;
-        shape.size = Vec3(r, 0, 0);
+          fail(source, what + " is a sphere of radius " + std::to_string(r));
+        shape.geometry = ShapeGeometry::makeSphere(r);
       } else if (g.type == urdf::Geometry::BOX) {
         const urdf::Vector3& d = static_cast<const urdf::Box&>(g).dim;
-        if (!(d.x > 0 && d.y > 0 && d.z > 0) ||
-            !std::isfinite(d.x + d.y + d.z))
-          fail(source, "link '" + link.name + "' has a box of size " +
-                           std::to_string(d.x) + " " + std::to_string(d.y) +
-                           " " + std::to_string(d.z));
-        shape.kind = CollisionShape::Kind::Box;
-        shape.size = Vec3(d.x / 2, d.y / 2, d.z / 2);
+        if (!(d.x > 0 && d.y > 0 && d.z > 0) || !std::isfinite(d.x + d.y + d.z))
+          fail(source, what + " is a box of size " + std::to_string(d.x) + " " +
+                           std::to_string(d.y) + " " + std::to_string(d.z));
+        shape.geometry = ShapeGeometry::makeBox(Vec3(d.x / 2, d.y / 2, d.z / 2));
+      } else if (g.type == urdf::Geometry::CYLINDER) {
+        const auto& c = static_cast<const urdf::Cylinder&>(g);
+        const bool capsule = capsules.count({link.name, ordinal}) > 0;
+        if (!(c.radius > 0) || !std::isfinite(c.radius) || !std::isfinite(c.length) ||
+            (capsule ? !(c.length >= 0) : !(c.length > 0)))
+          fail(source, what + " is a " + (capsule ? "capsule" : "cylinder") + " of radius " +
+                           std::to_string(c.radius) + " and length " + std::to_string(c.length));
+        shape.geometry = capsule ? ShapeGeometry::makeCapsule(c.radius, c.length / 2)
+                                 : ShapeGeometry::makeCylinder(c.radius, c.length / 2);
+      } else if (g.type == urdf::Geometry::MESH) {
+        std::shared_ptr<const ConvexHull> hull =
+            loadMeshHull(link, static_cast<const urdf::Mesh&>(g), what);
+        if (!hull) continue;
+        shape.geometry = ShapeGeometry::makeConvex(std::move(hull));
       } else {
-        std::string what = "link '" + link.name + "': " +
-                           describeGeometry(g.type) + " '" +
-                           (collision->name.empty()
-                                ? "#" + std::to_string(ordinal)
-                                : collision->name) + "'";
-        model.unsimulated.push_back(std::move(what));
+        model.unsimulated.push_back(what + " (unknown geometry type)");
         continue;
       }
-      body.shapes.push_back(shape);
+      shapes.push_back(std::move(shape));
     }
+    return shapes;
   }
 
   // Adds `link` (reached with the link frame at X_BL in body `body_index`)
@@ -209,8 +272,10 @@ struct Builder {
   void addLink(const urdf::Link& link, int body_index, const Transform& X_BL) {
     const int link_index = static_cast<int>(model.links.size());
     model.links.push_back({link.name, body_index, X_BL});
-    addLinkMass(link, X_BL, model.bodies[body_index]);
-    addLinkShapes(link, link_index, X_BL, model.bodies[body_index]);
+    std::vector<CollisionShape> shapes = makeLinkShapes(link, link_index, X_BL);
+    BodyModel& body = model.bodies[body_index];
+    addLinkMass(link, X_BL, shapes, body);
+    for (CollisionShape& shape : shapes) body.shapes.push_back(std::move(shape));
 
     // Children in the order their joints appear in the file (urdfdom keeps
     // them sorted by name), so joint indices follow the author's order.
@@ -298,10 +363,74 @@ struct Builder {
   }
 };
 
+// urdfdom rejects <capsule> (and then drops every collision of the link):
+// turn each into a <cylinder> with the same attributes and remember which
+// collisions they were. Returns true if anything changed.
+bool rewriteCapsules(TiXmlDocument& doc, std::set<std::pair<std::string, int>>& capsules) {
+  bool changed = false;
+  TiXmlElement* robot = doc.FirstChildElement("robot");
+  if (robot == nullptr) return false;
+  for (TiXmlElement* link = robot->FirstChildElement("link"); link != nullptr;
+       link = link->NextSiblingElement("link")) {
+    const char* name = link->Attribute("name");
+    for (const char* kind : {"collision", "visual"}) {
+      int ordinal = 0;
+      for (TiXmlElement* element = link->FirstChildElement(kind); element != nullptr;
+           element = element->NextSiblingElement(kind), ++ordinal) {
+        TiXmlElement* geometry = element->FirstChildElement("geometry");
+        TiXmlElement* capsule = geometry ? geometry->FirstChildElement("capsule") : nullptr;
+        if (capsule == nullptr) continue;
+        capsule->SetValue("cylinder");
+        changed = true;
+        if (name != nullptr && std::string(kind) == "collision") capsules.emplace(name, ordinal);
+      }
+    }
+  }
+  return changed;
+}
+
 }  // namespace
+
+std::string findMeshFile(const std::string& filename, const std::string& base_dir) {
+  const std::string dir = base_dir.empty() ? "." : base_dir;
+  std::vector<std::string> candidates;
+  const std::string file_scheme = "file://", package_scheme = "package://";
+  if (filename.compare(0, file_scheme.size(), file_scheme) == 0) {
+    candidates.push_back(filename.substr(file_scheme.size()));
+  } else if (filename.compare(0, package_scheme.size(), package_scheme) == 0) {
+    const std::string rest = filename.substr(package_scheme.size());
+    const std::size_t slash = rest.find('/');
+    const std::string package = rest.substr(0, slash);
+    const std::string inside = slash == std::string::npos ? "" : rest.substr(slash + 1);
+    if (const char* paths = std::getenv("ROS_PACKAGE_PATH")) {
+      std::stringstream list(paths);
+      std::string entry;
+      while (std::getline(list, entry, ':'))
+        if (!entry.empty()) candidates.push_back(entry + "/" + package + "/" + inside);
+    }
+    // An ancestor of the URDF's directory named after the package.
+    std::string ancestor = dir;
+    while (!ancestor.empty()) {
+      const std::size_t cut = ancestor.find_last_of('/');
+      const std::string last = cut == std::string::npos ? ancestor : ancestor.substr(cut + 1);
+      if (last == package) candidates.push_back(ancestor + "/" + inside);
+      if (cut == std::string::npos || cut == 0) break;
+      ancestor.resize(cut);
+    }
+    candidates.push_back(dir + "/" + inside);
+  } else if (!filename.empty() && filename[0] == '/') {
+    candidates.push_back(filename);
+  } else {
+    candidates.push_back(dir + "/" + filename);
+  }
+  for (const std::string& candidate : candidates)
+    if (isFile(candidate)) return candidate;
+  return "";
+}
 
 ArticulationModel buildArticulationModel(const std::string& urdf_xml,
                                          const std::string& source,
+                                         const std::string& base_dir,
                                          double default_density) {
   // TinyXML first: it says where malformed XML breaks, and it gives the
   // joints' file order, which urdfdom does not keep.
@@ -322,12 +451,19 @@ ArticulationModel buildArticulationModel(const std::string& urdf_xml,
         joint_file_order.emplace(name, static_cast<int>(joint_file_order.size()));
     }
   }
+  std::set<std::pair<std::string, int>> capsules;
+  std::string urdf_text;
+  if (rewriteCapsules(doc, capsules)) {
+    TiXmlPrinter printer;
+    doc.Accept(&printer);
+    urdf_text = printer.CStr();
+  }
 
   urdf::ModelInterfaceSharedPtr urdf;
   std::string errors;
   {
     UrdfErrorCapture capture;
-    urdf = urdf::parseURDF(urdf_xml);
+    urdf = urdf::parseURDF(urdf_text.empty() ? urdf_xml : urdf_text);
     errors = capture.getErrors();
   }
   if (!urdf)
@@ -335,7 +471,8 @@ ArticulationModel buildArticulationModel(const std::string& urdf_xml,
   const urdf::LinkConstSharedPtr root = urdf->getRoot();
   if (!root) fail(source, "the model has no root link");
 
-  Builder builder{*urdf, source, default_density, std::move(joint_file_order), {}};
+  Builder builder{*urdf, source, base_dir, default_density, std::move(joint_file_order),
+                  std::move(capsules), {}};
   builder.model.source = source;
   builder.model.bodies.emplace_back();  // the root body
   builder.model.bodies[0].link = 0;

@@ -4,6 +4,8 @@
 // MultibodySystem, so that a rejected URDF leaves the scene unchanged. Links
 // joined by fixed joints are merged into one body: their mass properties are
 // summed and their collision shapes re-expressed in that body's frame.
+// Links without <inertial> get mass from their collision volume (a mesh from
+// its convex hull) at the default density.
 #pragma once
 
 #include <string>
@@ -11,14 +13,13 @@
 
 #include "Simbody.h"
 #include "manibench/scene.hpp"
+#include "scene/contact/contact_geometry.hpp"
 
 namespace manibench {
 namespace scene_detail {
 
 struct CollisionShape {
-  enum class Kind { Sphere, Box };
-  Kind kind = Kind::Sphere;
-  SimTK::Vec3 size{0};     // radius in [0] (sphere) or half extents (box)
+  ShapeGeometry geometry;  // capsules and cylinders along z of the shape frame
   SimTK::Transform X_BS;   // shape frame in the body frame
   int link = -1;           // articulation-local link index
 };
@@ -52,17 +53,28 @@ struct ArticulationModel {
   std::vector<LinkModel> links;     // depth first from the root
   std::vector<BodyModel> bodies;    // parents before children
   std::vector<JointDescription> joints;
-  // Collision geometry that exists in the URDF but is not simulated yet
-  // ("link 'x': cylinder 'name'"), reported once when the URDF is added.
+  // Collision geometry that exists in the URDF but is not simulated (a
+  // flat mesh: "link 'x': mesh 'name' (why)"), reported once when the URDF
+  // is added.
   std::vector<std::string> unsimulated;
 };
 
 // Parses `urdf_xml` and builds the description. `source` names the origin
-// in error messages. Throws SceneError on malformed XML, URDF errors,
-// unsupported joint types or invalid inertias.
+// in error messages; relative mesh paths start at `base_dir`. Collision
+// meshes become their convex hulls. `<capsule radius length>` (which
+// urdfdom does not know) is accepted as a z-axis capsule of that cylinder
+// length plus two hemispheres. Throws SceneError on malformed XML, URDF
+// errors, unreadable meshes, unsupported joint types or invalid inertias.
 ArticulationModel buildArticulationModel(const std::string& urdf_xml,
                                          const std::string& source,
+                                         const std::string& base_dir,
                                          double default_density);
+
+// Where a URDF mesh filename points: an absolute path, file://,
+// package://NAME/rest (looked up in ROS_PACKAGE_PATH, then in an ancestor
+// of `base_dir` named NAME, then as base_dir/rest), or a path relative to
+// `base_dir`. Returns the first existing candidate, or "" if none exists.
+std::string findMeshFile(const std::string& filename, const std::string& base_dir);
 
 }  // namespace scene_detail
 }  // namespace manibench

@@ -1,0 +1,301 @@
+#include "scene/contact/contact_force.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <utility>
+
+namespace manibench {
+namespace scene_detail {
+namespace {
+
+using SimTK::SpatialVec;
+using SimTK::Transform;
+using SimTK::Vec3;
+
+// Simbody's quintic step: 0 at x <= 0, 1 at x >= 1, smooth in between.
+double step5(double x) {
+  if (x <= 0) return 0;
+  if (x >= 1) return 1;
+  const double x3 = x * x * x;
+  return x3 * (10 + x * (6 * x - 15));
+}
+
+std::uint64_t pairKey(int a, int b) {
+  return static_cast<std::uint64_t>(a) << 32 | static_cast<std::uint32_t>(b);
+}
+
+}  // namespace
+
+std::ostream& operator<<(std::ostream& out, const FrictionAnchorSet& set) {
+  return out << "FrictionAnchorSet(" << set.anchors.size() << " anchors)";
+}
+
+ContactForce::ContactForce(const SimTK::SimbodyMatterSubsystem& matter,
+                           const SimTK::GeneralForceSubsystem& forces,
+                           std::vector<ContactShape> shapes, std::vector<char> self_collision,
+                           const FrictionLaw& law)
+    : matter_(matter),
+      forces_(forces),
+      shapes_(std::move(shapes)),
+      self_collision_(std::move(self_collision)),
+      law_(law) {
+  for (std::size_t i = 0; i < shapes_.size(); ++i) {
+    const ContactShape& shape = shapes_[i];
+    assert(shape.articulation < static_cast<int>(self_collision_.size()));
+    assert(shape.inverse_mass >= 0);
+    parent_.push_back(shape.body == SimTK::GroundIndex ? SimTK::MobilizedBodyIndex()
+                                                       : matter_.getMobilizedBody(shape.body)
+                                                             .getParentMobilizedBody()
+                                                             .getMobilizedBodyIndex());
+    (shape.geometry.kind == ShapeKind::HalfSpace ? half_spaces_ : finite_)
+        .push_back(static_cast<int>(i));
+  }
+  X_GS_.resize(shapes_.size());
+  lo_.resize(shapes_.size());
+  hi_.resize(shapes_.size());
+  order_ = finite_;
+}
+
+ContactForce::~ContactForce() = default;
+
+void ContactForce::realizeTopology(SimTK::State& state) const {
+  anchors_index_ = forces_.allocateAutoUpdateDiscreteVariable(
+      state, SimTK::Stage::Dynamics, new SimTK::Value<FrictionAnchorSet>(), SimTK::Stage::Velocity);
+}
+
+ContactForce::PairMaterial ContactForce::combine(const ContactMaterial& a,
+                                                 const ContactMaterial& b) {
+  PairMaterial m;
+  const double k_sum = a.stiffness + b.stiffness;
+  m.k = a.stiffness * b.stiffness / k_sum;
+  m.c = (a.dissipation * b.stiffness + b.dissipation * a.stiffness) / k_sum;
+  m.mu_static = std::sqrt(a.static_friction * b.static_friction);
+  m.mu_dynamic = std::sqrt(a.dynamic_friction * b.dynamic_friction);
+  m.mu_viscous = std::sqrt(a.viscous_friction * b.viscous_friction);
+  return m;
+}
+
+bool ContactForce::isPairAllowed(int i, int j) const {
+  const ContactShape& a = shapes_[i];
+  const ContactShape& b = shapes_[j];
+  if (a.body == b.body) return false;  // also: everything fixed to Ground
+  if (a.articulation >= 0 && a.articulation == b.articulation) {
+    if (!self_collision_[a.articulation]) return false;
+    // Links joined by a joint always overlap at the joint.
+    if ((parent_[i].isValid() && parent_[i] == b.body) ||
+        (parent_[j].isValid() && parent_[j] == a.body))
+      return false;
+  }
+  return true;
+}
+
+// Half spaces against every finite shape whose box reaches below them;
+// finite shapes among themselves by sweep and prune along the axis where
+// they spread most. The result is sorted, so contact order (and with it
+// every floating-point sum) depends only on the state.
+void ContactForce::findPairs() const {
+  pairs_.clear();
+  for (int h : half_spaces_) {
+    const Vec3 n = X_GS_[h].z();
+    const double plane = SimTK::dot(X_GS_[h].p(), n);
+    for (int i : finite_) {
+      if (!isPairAllowed(h, i)) continue;
+      // Lowest corner of i's box along n.
+      double low = 0;
+      for (int k = 0; k < 3; ++k) low += n[k] * (n[k] >= 0 ? lo_[i][k] : hi_[i][k]);
+      if (low < plane) pairs_.emplace_back(std::min(h, i), std::max(h, i));
+    }
+  }
+  if (finite_.size() > 1) {
+    Vec3 mean(0), mean_sq(0);
+    for (int i : finite_) {
+      const Vec3 c = (lo_[i] + hi_[i]) / 2;
+      mean += c;
+      mean_sq += c.elementwiseMultiply(c);
+    }
+    const double count = static_cast<double>(finite_.size());
+    const Vec3 variance = mean_sq / count - (mean / count).elementwiseMultiply(mean / count);
+    int axis = variance[0] >= variance[1] ? 0 : 1;
+    if (variance[2] > variance[axis]) axis = 2;
+    // Insertion sort: the order of the previous evaluation is nearly right.
+    auto before = [&](int a, int b) {
+      return lo_[a][axis] < lo_[b][axis] || (lo_[a][axis] == lo_[b][axis] && a < b);
+    };
+    for (std::size_t n = 1; n < order_.size(); ++n) {
+      const int v = order_[n];
+      std::size_t m = n;
+      for (; m > 0 && before(v, order_[m - 1]); --m) order_[m] = order_[m - 1];
+      order_[m] = v;
+    }
+    const int other1 = (axis + 1) % 3, other2 = (axis + 2) % 3;
+    for (std::size_t p = 0; p < order_.size(); ++p) {
+      const int i = order_[p];
+      for (std::size_t q = p + 1; q < order_.size(); ++q) {
+        const int j = order_[q];
+        if (lo_[j][axis] > hi_[i][axis]) break;
+        if (lo_[j][other1] > hi_[i][other1] || lo_[i][other1] > hi_[j][other1] ||
+            lo_[j][other2] > hi_[i][other2] || lo_[i][other2] > hi_[j][other2])
+          continue;
+        if (isPairAllowed(i, j)) pairs_.emplace_back(std::min(i, j), std::max(i, j));
+      }
+    }
+  }
+  std::sort(pairs_.begin(), pairs_.end());
+}
+
+double ContactForce::evaluate(const SimTK::State& state, Mode mode,
+                              SimTK::Vector_<SpatialVec>* body_forces,
+                              std::vector<Report>* reports) const {
+  const bool dynamic = mode != Mode::Energy;  // needs velocities
+  for (std::size_t i = 0; i < shapes_.size(); ++i) {
+    const ContactShape& shape = shapes_[i];
+    X_GS_[i] = shape.body == SimTK::GroundIndex
+                   ? shape.X_BS
+                   : matter_.getMobilizedBody(shape.body).getBodyTransform(state) * shape.X_BS;
+    shape.geometry.calcBoundingBox(X_GS_[i], lo_[i], hi_[i]);
+  }
+  findPairs();
+
+  const std::vector<FrictionAnchor>& previous =
+      forces_.getDiscreteVariable(state, anchors_index_).getValue<FrictionAnchorSet>().anchors;
+  std::vector<FrictionAnchor>* next = nullptr;
+  if (mode == Mode::Apply) {
+    next = &forces_.updDiscreteVarUpdateValue(state, anchors_index_)
+                .updValue<FrictionAnchorSet>()
+                .anchors;
+    next->clear();
+  }
+  std::size_t cursor = 0;  // into `previous`, which is sorted like pairs_
+  double energy = 0;
+
+  for (const auto& [ia, ib] : pairs_) {
+    narrow_.calcContacts(shapes_[ia].geometry, X_GS_[ia], shapes_[ib].geometry, X_GS_[ib],
+                         manifold_);
+    if (manifold_.empty()) continue;
+    const ContactShape& a = shapes_[ia];
+    const ContactShape& b = shapes_[ib];
+    PairMaterial material = combine(a.material, b.material);
+    double friction_stiffness = law_.stiffness, friction_damping = law_.damping;
+    const double inverse_mass = a.inverse_mass + b.inverse_mass;
+    if (law_.max_frequency > 0 && inverse_mass > 0) {
+      const double share =
+          1 / (inverse_mass * std::max<double>(4, static_cast<double>(manifold_.size())));
+      const double w = law_.max_frequency;
+      material.k = std::min(material.k, share * w * w);
+      friction_stiffness = std::min(friction_stiffness, share * w * w);
+      friction_damping = std::min(friction_damping, share * w);
+    }
+    const SimTK::MobilizedBody& body_a = matter_.getMobilizedBody(a.body);
+    const SimTK::MobilizedBody& body_b = matter_.getMobilizedBody(b.body);
+    const Transform& X_GA = body_a.getBodyTransform(state);
+    const Transform& X_GB = body_b.getBodyTransform(state);
+    const SpatialVec zero(Vec3(0), Vec3(0));
+    const SpatialVec& V_A = dynamic ? body_a.getBodyVelocity(state) : zero;
+    const SpatialVec& V_B = dynamic ? body_b.getBodyVelocity(state) : zero;
+
+    const std::uint64_t key = pairKey(ia, ib);
+    while (cursor < previous.size() && previous[cursor].pair < key) ++cursor;
+    std::size_t end = cursor;
+    while (end < previous.size() && previous[end].pair == key) ++end;
+    const std::size_t first_new = next != nullptr ? next->size() : 0;
+
+    for (const ContactPoint& c : manifold_) {
+      const Vec3 n(c.normal);
+      const Vec3 on_b = ~X_GB * c.point;
+      const FrictionAnchor* anchor = nullptr;
+      for (std::size_t k = cursor; k < end; ++k)
+        if (previous[k].feature == c.feature &&
+            (previous[k].on_b - on_b).normSqr() < law_.match_distance * law_.match_distance) {
+          anchor = &previous[k];
+          break;
+        }
+      // Tangential stretch of the anchor spring.
+      Vec3 stretch(0);
+      if (anchor != nullptr) {
+        stretch = X_GB * anchor->on_b - X_GA * anchor->on_a;
+        stretch -= SimTK::dot(stretch, n) * n;
+      }
+      const double k = c.weight * material.k;
+      const double kt = c.weight * friction_stiffness;
+      if (mode == Mode::Energy) {
+        energy += 0.5 * k * c.depth * c.depth + 0.5 * kt * stretch.normSqr();
+        continue;
+      }
+
+      const Vec3 v_a = V_A[1] + SimTK::cross(V_A[0], c.point - X_GA.p());
+      const Vec3 v_b = V_B[1] + SimTK::cross(V_B[0], c.point - X_GB.p());
+      const Vec3 v = v_b - v_a;
+      const double approach = -SimTK::dot(v, n);  // d(depth)/dt
+      const double fn = k * c.depth * (1 + 1.5 * material.c * approach);
+      if (fn <= 0) continue;  // separating fast: no force, anchor released
+
+      const double ct = c.weight * friction_damping;
+      const Vec3 slip = v - SimTK::dot(v, n) * n;
+      const double slip_speed = slip.norm();
+      Vec3 ft = -kt * stretch - ct * slip;
+      const double mu = material.mu_static -
+                        (material.mu_static - material.mu_dynamic) *
+                            step5(slip_speed / (3 * law_.transition_speed)) +
+                        material.mu_viscous * slip_speed;
+      const double limit = mu * fn;
+      const double ft_norm = ft.norm();
+      Vec3 new_stretch = stretch;
+      if (ft_norm > limit) {
+        // Sliding: cap the force, and move the anchor so that the spring
+        // alone would give the capped force.
+        ft *= limit / ft_norm;
+        new_stretch = -(ft + ct * slip) / kt;
+        const double stretch_norm = new_stretch.norm(), max_stretch = limit / kt;
+        if (stretch_norm > max_stretch) new_stretch *= max_stretch / stretch_norm;
+      }
+      const Vec3 f = fn * n + ft;  // on B
+      if (body_forces != nullptr) {
+        if (b.body != SimTK::GroundIndex)
+          (*body_forces)[b.body] += SpatialVec(SimTK::cross(c.point - X_GB.p(), f), f);
+        if (a.body != SimTK::GroundIndex)
+          (*body_forces)[a.body] -= SpatialVec(SimTK::cross(c.point - X_GA.p(), f), f);
+      }
+      if (next != nullptr) {
+        FrictionAnchor saved;
+        saved.pair = key;
+        saved.feature = c.feature;
+        saved.on_b = on_b;
+        saved.on_a = ~X_GA * (c.point - new_stretch);
+        next->push_back(saved);
+      }
+      if (reports != nullptr) {
+        Report r;
+        r.shape_a = ia;
+        r.shape_b = ib;
+        r.point = c.point;
+        r.force_on_b = f;
+        reports->push_back(r);
+      }
+    }
+    if (next != nullptr)
+      std::sort(
+          next->begin() + static_cast<std::ptrdiff_t>(first_new), next->end(),
+          [](const FrictionAnchor& x, const FrictionAnchor& y) { return x.feature < y.feature; });
+    cursor = end;
+  }
+  if (mode == Mode::Apply) forces_.markDiscreteVarUpdateValueRealized(state, anchors_index_);
+  return energy;
+}
+
+void ContactForce::calcForce(const SimTK::State& state, SimTK::Vector_<SpatialVec>& body_forces,
+                             SimTK::Vector_<Vec3>&, SimTK::Vector&) const {
+  evaluate(state, Mode::Apply, &body_forces, nullptr);
+}
+
+SimTK::Real ContactForce::calcPotentialEnergy(const SimTK::State& state) const {
+  return evaluate(state, Mode::Energy, nullptr, nullptr);
+}
+
+void ContactForce::calcReports(const SimTK::State& state, std::vector<Report>& reports) const {
+  reports.clear();
+  evaluate(state, Mode::Report, nullptr, &reports);
+}
+
+}  // namespace scene_detail
+}  // namespace manibench

@@ -1,0 +1,139 @@
+// Every contact of a scene in one Force::Custom: broad phase (half spaces
+// against bounding boxes, sweep and prune among the rest), narrow phase
+// (contact_geometry.hpp) and the force law, applied straight to the bodies.
+// Scratch buffers persist between evaluations, so the loop does not
+// allocate once warm (except inside FCL's GJK/EPA).
+//
+// Force law per contact point, with the pair's combined material:
+//  - normal: Hunt-Crossley, fn = k d (1 + 1.5 c ddot), never pulling;
+//  - friction: "anchored stiction". Each point holds a tangential
+//    spring-damper (kt, ct) to an anchor, a pair of material points on the
+//    two bodies saved when the point was last evaluated. While
+//    |f_t| <= mu_s fn the spring holds the bodies (no creep, unlike
+//    regularized Coulomb friction); beyond it the force is capped at
+//    mu(v) fn and the anchor is dragged along. Anchors live in an
+//    auto-update discrete variable, so they are part of the SimTK::State
+//    (saved and restored with it, identical across runs).
+// Materials combine per pair: stiffness in series (k1 k2 / (k1 + k2)),
+// dissipation weighted by compliance ((c1 k2 + c2 k1) / (k1 + k2)), static,
+// dynamic and viscous friction by geometric mean (sqrt(mu1 mu2): either
+// surface being frictionless makes the pair frictionless, and equal
+// materials keep their value).
+#pragma once
+
+#include <cstdint>
+#include <ostream>
+#include <vector>
+
+#include "Simbody.h"
+#include "manibench/scene.hpp"
+#include "scene/contact/contact_geometry.hpp"
+
+namespace manibench {
+namespace scene_detail {
+
+struct ContactShape {
+  ShapeGeometry geometry;
+  SimTK::MobilizedBodyIndex body;  // GroundIndex for fixed shapes
+  SimTK::Transform X_BS;           // shape frame in the body frame
+  int link = -1;                   // scene link id; -1 for the ground plane
+  int articulation = -1;           // -1 for the ground plane
+  ContactMaterial material;
+  // 1 / mass of a free-floating body, for FrictionLaw::max_frequency; 0 for
+  // fixed and jointed bodies (drives and joints, not contact, set their pace).
+  double inverse_mass = 0;
+};
+
+struct FrictionLaw {
+  double stiffness = 1e5;  // kt per contact point, N/m
+  double damping = 20;     // ct per contact point, N s/m
+  // Slip speed over which static friction falls to dynamic friction.
+  double transition_speed = 1e-3;  // m/s
+  // An anchor is kept only if its point on B is within this of the new
+  // contact point (guards against a feature id meaning something else).
+  double match_distance = 5e-3;  // m
+  // Highest contact frequency of a free body (0: no limit). A light body on
+  // stiff contact springs oscillates faster than a step can follow: at
+  // h = 5e-4 semi-explicit Euler blows a 35 g cube away, and CPodes (whose
+  // absolute tolerance is 0.1 * accuracy, 1 mm by default) bounces an 8 g
+  // one. So each pair's stiffnesses are capped at m_eff w^2 and its friction
+  // damping at m_eff w, shared by the manifold's points (at least 4), with
+  // m_eff from the free bodies' masses. Bodies above m = 4 k / w^2 (0.1 kg
+  // at the defaults) keep their material; lighter ones rest g / w^2 deep
+  // (2.5 um at 2000 rad/s) and are softer when squeezed.
+  double max_frequency = 0;  // rad/s
+};
+
+// One friction anchor (see above), in the two bodies' frames.
+struct FrictionAnchor {
+  std::uint64_t pair = 0;  // shape_a << 32 | shape_b
+  std::int32_t feature = 0;
+  SimTK::Vec3 on_a{0}, on_b{0};
+};
+// Sorted by (pair, feature).
+struct FrictionAnchorSet {
+  std::vector<FrictionAnchor> anchors;
+};
+std::ostream& operator<<(std::ostream& out, const FrictionAnchorSet& set);
+
+class ContactForce : public SimTK::Force::Custom::Implementation {
+ public:
+  // `self_collision[a]`: links of articulation a may touch each other
+  // (never those joined by a joint).
+  ContactForce(const SimTK::SimbodyMatterSubsystem& matter,
+               const SimTK::GeneralForceSubsystem& forces, std::vector<ContactShape> shapes,
+               std::vector<char> self_collision, const FrictionLaw& law);
+  ~ContactForce() override;
+
+  int getNumShapes() const { return static_cast<int>(shapes_.size()); }
+  const ContactShape& getShape(int i) const { return shapes_[i]; }
+
+  // One contact point's force, for queries (Ground frame).
+  struct Report {
+    int shape_a = -1, shape_b = -1;
+    SimTK::Vec3 point{0};
+    SimTK::Vec3 force_on_b{0};  // the force on shape_a is its negative
+  };
+  // The contacts of a state realized to Velocity, as calcForce sees them.
+  void calcReports(const SimTK::State& state, std::vector<Report>& reports) const;
+
+  void calcForce(const SimTK::State& state, SimTK::Vector_<SimTK::SpatialVec>& body_forces,
+                 SimTK::Vector_<SimTK::Vec3>& particle_forces,
+                 SimTK::Vector& mobility_forces) const override;
+  SimTK::Real calcPotentialEnergy(const SimTK::State& state) const override;
+  void realizeTopology(SimTK::State& state) const override;
+
+ private:
+  struct PairMaterial {
+    double k, c, mu_static, mu_dynamic, mu_viscous;
+  };
+  enum class Mode { Apply, Report, Energy };
+  // Broad phase, narrow phase and force law; what happens to the result
+  // depends on the mode (forces and anchors, reports, or energy).
+  double evaluate(const SimTK::State& state, Mode mode,
+                  SimTK::Vector_<SimTK::SpatialVec>* body_forces,
+                  std::vector<Report>* reports) const;
+  void findPairs() const;
+  bool isPairAllowed(int i, int j) const;
+  static PairMaterial combine(const ContactMaterial& a, const ContactMaterial& b);
+
+  const SimTK::SimbodyMatterSubsystem& matter_;
+  const SimTK::GeneralForceSubsystem& forces_;
+  std::vector<ContactShape> shapes_;
+  std::vector<char> self_collision_;
+  FrictionLaw law_;
+  std::vector<SimTK::MobilizedBodyIndex> parent_;  // per shape: its body's parent
+  std::vector<int> half_spaces_, finite_;          // shape indices by kind
+  mutable SimTK::DiscreteVariableIndex anchors_index_;
+
+  // Scratch, reused across evaluations (no allocation once warm).
+  mutable NarrowPhase narrow_;
+  mutable std::vector<SimTK::Transform> X_GS_;
+  mutable std::vector<SimTK::Vec3> lo_, hi_;
+  mutable std::vector<int> order_;  // finite shapes by lower bound, kept between calls
+  mutable std::vector<std::pair<int, int>> pairs_;
+  mutable std::vector<ContactPoint> manifold_;
+};
+
+}  // namespace scene_detail
+}  // namespace manibench

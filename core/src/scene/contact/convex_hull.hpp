@@ -1,0 +1,77 @@
+// Convex hulls of collision meshes: contact treats every mesh as its convex
+// hull (like MuJoCo), which keeps narrow phase cheap and manifolds stable.
+//
+// The hull is computed with Qhull (libqhull_r, Debian's reentrant C library)
+// rather than FCL: FCL's Convex only stores a hull, it cannot compute one.
+// Qhull merges coplanar facets, so a face is a real planar polygon (a box
+// mesh gives 6 quads, not 12 triangles), which the manifold builder clips
+// face against face.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "Simbody.h"
+
+namespace fcl {
+template <typename S>
+class CollisionGeometry;
+}  // namespace fcl
+
+namespace manibench {
+namespace scene_detail {
+
+struct ConvexHull {
+  struct Face {
+    SimTK::UnitVec3 normal;     // outward
+    double offset = 0;          // normal . x = offset on the face plane
+    std::vector<int> vertices;  // counterclockwise seen from outside
+  };
+  std::vector<SimTK::Vec3> vertices;
+  std::vector<Face> faces;
+  std::vector<std::vector<int>> vertex_faces;      // faces around a vertex
+  std::vector<std::vector<int>> vertex_neighbors;  // vertices sharing an edge
+
+  // Solid of unit density: volume (= mass), centroid and the inertia about
+  // the centroid, in the hull frame.
+  double volume = 0;
+  SimTK::Vec3 centroid{0};
+  SimTK::Mat33 unit_inertia{0, 0, 0, 0, 0, 0, 0, 0, 0};
+
+  // Axis-aligned box around the vertices and the radius of the sphere about
+  // the frame origin that holds them all (for the broad phase).
+  SimTK::Vec3 box_center{0}, box_half{0};
+  double bounding_radius = 0;
+
+  // The same hull for FCL's GJK/EPA.
+  std::shared_ptr<const fcl::CollisionGeometry<double>> fcl_geometry;
+
+  // The vertex farthest along `d` (hull frame); ties go to the lowest index.
+  int findSupportVertex(const SimTK::Vec3& d) const;
+};
+
+// Thrown for input that has no 3-d hull (fewer than 4 points, all on a
+// plane or a line); the caller decides whether that is an error.
+class FlatHullError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Hull of `points`. Throws FlatHullError for degenerate input and
+// std::runtime_error if Qhull fails otherwise.
+std::shared_ptr<const ConvexHull> calcConvexHull(const std::vector<SimTK::Vec3>& points);
+
+// Loads every vertex of a mesh file (anything assimp reads: OBJ, STL, DAE,
+// ...) with node transforms applied, each coordinate multiplied by `scale`.
+// Collada files keep their authored axes (the <up_axis> is ignored, as ROS
+// tools do) and their <unit>. Throws std::runtime_error with assimp's reason.
+std::vector<SimTK::Vec3> loadMeshVertices(const std::string& path, const SimTK::Vec3& scale);
+
+// loadMeshVertices + calcConvexHull, cached for the process by path, scale,
+// file size and modification time (episodes rebuild scenes from the same
+// files).
+std::shared_ptr<const ConvexHull> loadConvexHull(const std::string& path, const SimTK::Vec3& scale);
+
+}  // namespace scene_detail
+}  // namespace manibench

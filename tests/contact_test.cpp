@@ -1,0 +1,677 @@
+// Contact against real Simbody: every supported shape pair carries a 1 kg
+// body at rest, friction holds and slides on a slope as Coulomb says,
+// filtering, stacks, meshes (hulls, mass from volume), materials, and
+// bit-identical replays of a contact-rich scene.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
+#include <manibench/scene.hpp>
+#include <string>
+#include <vector>
+
+#include "contact_scenes.hpp"
+
+namespace manibench {
+namespace {
+
+using namespace contact_scenes;
+
+// --- the contact-pair matrix ---------------------------------------------------------
+
+// A 1 kg body that can rest on a flat top: its collision XML and the height
+// of its origin above the top it rests on.
+struct Rester {
+  std::string name;
+  std::string collision;
+  double rest_height;
+};
+
+std::vector<Rester> getResters() {
+  const Eigen::Vector3d along_x(0, kPi / 2, 0);  // turns a z-axis shape to lie along x
+  return {
+      {"sphere", collision(sphere(0.05)), 0.05},
+      {"box", collision(box(0.1, 0.1, 0.1)), 0.05},
+      {"capsule_lying", collision(capsule(0.025, 0.1), Eigen::Vector3d::Zero(), along_x), 0.025},
+      {"cylinder_upright", collision(cylinder(0.04, 0.1)), 0.05},
+      {"cylinder_lying", collision(cylinder(0.04, 0.1), Eigen::Vector3d::Zero(), along_x), 0.04},
+      {"mesh_prism", collision(mesh(writePrismObj("hexagon", 6, 0.05, 0.08))), 0.04},
+      {"mesh_frustum", collision(mesh(writeFrustumStl("frustum", 0.1, 0.06, 0.08))), 0.04},
+  };
+}
+
+// What a body rests on; its top is at z = 0 (x, y near 0).
+struct Support {
+  std::string name;
+  std::string collision;             // "" for the ground plane
+  std::vector<std::string> resters;  // which resters fit on it
+};
+
+std::vector<Support> getSupports() {
+  const Eigen::Vector3d along_x(0, kPi / 2, 0);
+  const std::vector<std::string> all = {
+      "sphere",         "box",        "capsule_lying", "cylinder_upright",
+      "cylinder_lying", "mesh_prism", "mesh_frustum"};
+  return {
+      {"floor", "", all},
+      {"table", collision(box(0.4, 0.4, 0.1), Eigen::Vector3d(0, 0, -0.05)), all},
+      {"fixed_cylinder",
+       collision(cylinder(0.08, 0.1), Eigen::Vector3d(0, 0, -0.05)),
+       {"sphere", "box", "capsule_lying", "cylinder_upright", "cylinder_lying", "mesh_prism"}},
+      {"fixed_mesh",
+       collision(mesh(writePrismObj("big_hexagon", 6, 0.15, 0.1)), Eigen::Vector3d(0, 0, -0.05)),
+       all},
+      // Two parallel rails along x; what rests on them spans both.
+      {"capsule_rails",
+       collision(capsule(0.02, 0.3), Eigen::Vector3d(0, 0.03, -0.02), along_x) +
+           collision(capsule(0.02, 0.3), Eigen::Vector3d(0, -0.03, -0.02), along_x),
+       {"box", "mesh_prism"}},
+  };
+}
+
+struct RestResult {
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();  // on the body from the support
+  double drift = 0;                                 // origin movement between t = 0.5 s and t = 1 s
+  double turn = 0;                                  // rotation over the same time, rad
+  double height = 0;                                // origin height at t = 1 s
+};
+
+RestResult simulateRest(const Support& support, const Rester& rester,
+                        const std::string& integrator) {
+  PhysicsSettings settings;
+  settings.integrator = integrator;
+  Scene scene(settings);
+  int support_link = -1;
+  int support_art = -1;
+  if (support.collision.empty())
+    scene.addGround(0);
+  else
+    support_art =
+        scene.addUrdfString(singleLink("support", support.collision), "", "support", Pose(), true);
+  // Resting on its own contact springs from 0.5 mm above.
+  const int body = scene.addUrdfString(singleLink("body", inertial() + rester.collision), "",
+                                       "body", at(0.002, -0.001, rester.rest_height + 5e-4), false);
+  scene.finalize();
+  if (support_art >= 0) support_link = scene.findLink(support_art, "support");
+  const int link = scene.findLink(body, "body");
+  Pose half_way;
+  for (int k = 0; k < 100; ++k) {
+    scene.advance(0.01);
+    if (k == 49) half_way = scene.getRootPose(body);
+  }
+  RestResult r;
+  const Pose end = scene.getRootPose(body);
+  r.force = scene.getContactForce(link, support_link);
+  r.drift = (end.position - half_way.position).norm();
+  r.turn = end.orientation.angularDistance(half_way.orientation);
+  r.height = end.position.z();
+  return r;
+}
+
+class ContactMatrixTest : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ContactMatrixTest, EveryPairCarriesARestingBody) {
+  const std::string integrator = GetParam();
+  int pairs = 0;
+  for (const Support& support : getSupports()) {
+    for (const Rester& rester : getResters()) {
+      if (std::find(support.resters.begin(), support.resters.end(), rester.name) ==
+          support.resters.end())
+        continue;
+      ++pairs;
+      SCOPED_TRACE(rester.name + " on " + support.name + " (" + integrator + ")");
+      const RestResult r = simulateRest(support, rester, integrator);
+      std::printf(
+          "%-17s on %-15s Fz %.4f N  |Fxy| %.1e N  drift %.1e m  turn %.1e rad  sink %+.2e m\n",
+          rester.name.c_str(), support.name.c_str(), r.force.z(), r.force.head<2>().norm(), r.drift,
+          r.turn, r.height - rester.rest_height);
+      EXPECT_NEAR(r.force.z(), kG, 0.02 * kG);
+      EXPECT_LT(r.force.head<2>().norm(), 0.02 * kG);
+      EXPECT_LT(r.drift, 1e-4);
+      EXPECT_LT(r.turn, 1e-3);
+      // Penetration of the contact springs, well under a millimetre.
+      EXPECT_NEAR(r.height, rester.rest_height, 1e-3);
+    }
+  }
+  EXPECT_EQ(pairs, 29);
+}
+
+INSTANTIATE_TEST_SUITE_P(Integrators, ContactMatrixTest,
+                         ::testing::Values("cpodes", "semi_explicit_euler"));
+
+// --- friction ----------------------------------------------------------------------
+
+// A 1 kg, 10 cm box on a 20 degree slope (a fixed 3 m board), both with
+// friction mu (static = dynamic). Returns the box's velocity along the
+// slope (downhill positive) at 0.5 s and 1.0 s after release.
+struct SlopeRun {
+  double v_early = 0, v_late = 0, t_early = 0, t_late = 0;
+  double creep = 0;  // mean downhill speed between the two
+};
+
+SlopeRun runSlope(double mu, const std::string& integrator) {
+  const double theta = 20 * kPi / 180;
+  PhysicsSettings settings;
+  settings.integrator = integrator;
+  Scene scene(settings);
+  ContactMaterial material;
+  material.static_friction = material.dynamic_friction = mu;
+  // The board's top face passes through the origin, rising towards +y.
+  const Eigen::Vector3d rpy(theta, 0, 0);
+  const int board = scene.addUrdfString(
+      singleLink("board", collision(box(0.5, 3, 0.1), Eigen::Vector3d(0, 0, -0.05))), "", "board",
+      at(0, 0, 0, rpy), true);
+  const Eigen::Matrix3d R = at(0, 0, 0, rpy).orientation.toRotationMatrix();
+  const Eigen::Vector3d normal = R.col(2), downhill = R * Eigen::Vector3d(0, -1, 0);
+  // High up the board, 25 um into it (about its resting penetration).
+  const Eigen::Vector3d start = R * Eigen::Vector3d(0, 1.0, 0.05 - 2.5e-5);
+  const int body =
+      scene.addUrdfString(singleLink("box", inertial() + collision(box(0.1, 0.1, 0.1))), "", "box",
+                          at(start.x(), start.y(), start.z(), rpy), false);
+  scene.setContactMaterial(board, "", material);
+  scene.setContactMaterial(body, "box", material);
+  scene.finalize();
+  const int link = scene.findLink(body, "box");
+  SlopeRun run;
+  Eigen::Vector3d x_early = Eigen::Vector3d::Zero();
+  for (int k = 1; k <= 100; ++k) {
+    scene.advance(0.01);
+    if (k == 50) {
+      run.t_early = scene.getTime();
+      run.v_early = scene.getLinkTwist(link).linear.dot(downhill);
+      x_early = scene.getRootPose(body).position;
+    }
+  }
+  run.t_late = scene.getTime();
+  run.v_late = scene.getLinkTwist(link).linear.dot(downhill);
+  run.creep =
+      (scene.getRootPose(body).position - x_early).dot(downhill) / (run.t_late - run.t_early);
+  // It stays on the board's surface either way.
+  EXPECT_NEAR((scene.getRootPose(body).position).dot(normal), 0.05, 1e-3);
+  return run;
+}
+
+class FrictionTest : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(FrictionTest, BoxHoldsOnA20DegreeSlopeAtMu08) {
+  const SlopeRun run = runSlope(0.8, GetParam());
+  std::printf("mu 0.8 (%s): creep %.3e m/s, v(1 s) %.3e m/s\n", GetParam().c_str(), run.creep,
+              run.v_late);
+  EXPECT_LT(std::abs(run.creep), 1e-3);
+  EXPECT_LT(std::abs(run.v_late), 1e-3);
+}
+
+TEST_P(FrictionTest, BoxSlidesAtMu02WithTheCoulombAcceleration) {
+  const double theta = 20 * kPi / 180;
+  const double expected = kG * (std::sin(theta) - 0.2 * std::cos(theta));  // 1.5115 m/s^2
+  const SlopeRun run = runSlope(0.2, GetParam());
+  const double a = (run.v_late - run.v_early) / (run.t_late - run.t_early);
+  std::printf("mu 0.2 (%s): a %.4f m/s^2, analytic %.4f (%+.2f%%)\n", GetParam().c_str(), a,
+              expected, 100 * (a - expected) / expected);
+  EXPECT_NEAR(a, expected, 0.05 * expected);
+}
+
+INSTANTIATE_TEST_SUITE_P(Integrators, FrictionTest,
+                         ::testing::Values("cpodes", "semi_explicit_euler"));
+
+TEST_P(FrictionTest, ASlidingBallStartsRollingAtFiveSeventhsOfItsSpeed) {
+  // Solid ball, no spin, 1 m/s: friction slows it to 5/7 m/s, then it rolls
+  // (v = w r) without slipping.
+  const double r = 0.05;
+  PhysicsSettings settings;
+  settings.integrator = GetParam();
+  Scene scene(settings);
+  scene.addGround(0);
+  const int ball =
+      scene.addUrdfString(singleLink("ball", inertial(1, 0.4 * r * r) + collision(sphere(r))), "",
+                          "ball", at(0, 0, r - 1e-4), false);
+  scene.finalize();
+  Twist twist;
+  twist.linear = Eigen::Vector3d(1, 0, 0);
+  scene.setRootTwist(ball, twist);
+  for (int k = 0; k < 100; ++k) scene.advance(0.01);
+  const Twist end = scene.getLinkTwist(scene.findLink(ball, "ball"));
+  std::printf("rolling ball (%s): v %.4f m/s (5/7 = %.4f), w r %.4f\n", GetParam().c_str(),
+              end.linear.x(), 5.0 / 7.0, end.angular.y() * r);
+  EXPECT_NEAR(end.linear.x(), 5.0 / 7.0, 0.01 * 5.0 / 7.0);
+  EXPECT_NEAR(end.angular.y() * r, end.linear.x(), 0.01 * 5.0 / 7.0);
+  EXPECT_THROW(scene.setRootTwist(7, twist), SceneError);
+}
+
+TEST_P(FrictionTest, LightObjectsComeToRestToo) {
+  // 1 g to 27 g cubes: faster contact oscillations than a 5e-4 s step or
+  // CPodes' 1 mm absolute tolerance follow at the material stiffness; the
+  // contact frequency limit for light free bodies keeps them down.
+  for (double size : {0.01, 0.02, 0.03}) {
+    PhysicsSettings settings;
+    settings.integrator = GetParam();
+    Scene scene(settings);
+    scene.addGround(0);
+    const int cube = scene.addUrdfString(singleLink("cube", collision(box(size, size, size))), "",
+                                         "cube", at(0, 0, size / 2 + 1e-3), false);
+    scene.finalize();
+    for (int k = 0; k < 100; ++k) scene.advance(0.01);
+    const double weight = 1000 * size * size * size * kG;
+    SCOPED_TRACE("cube of " + num(size) + " m");
+    EXPECT_NEAR(scene.getRootPose(cube).position.z(), size / 2, 1e-5);
+    EXPECT_NEAR(scene.getContactForce(scene.findLink(cube, "cube"), -1).z(), weight, 0.02 * weight);
+    EXPECT_LT(scene.getLinkTwist(scene.findLink(cube, "cube")).linear.norm(), 1e-4);
+  }
+}
+
+// --- filtering -----------------------------------------------------------------------
+
+// A fixed base with a box beside x = 0.3; link l1 turns about z at the
+// origin and carries a ball at x = 0.3; l2 turns about z at x = 0.3 on l1
+// and carries a ball there too. All three overlap at rest.
+std::string overlappingArm() {
+  const std::string ball = collision(sphere(0.06), Eigen::Vector3d(0.3, 0, 0));
+  return "<?xml version='1.0'?><robot name='arm'>"
+         "<link name='base'>" +
+         collision(box(0.1, 0.1, 0.1), Eigen::Vector3d(0.3, 0.08, 0)) +
+         "</link>"
+         "<joint name='j1' type='continuous'><parent link='base'/><child link='l1'/>"
+         "<origin xyz='0 0 0'/><axis xyz='0 0 1'/></joint>"
+         "<link name='l1'>" +
+         inertial() + ball +
+         "</link>"
+         "<joint name='j2' type='continuous'><parent link='l1'/><child link='l2'/>"
+         "<origin xyz='0.3 0 0'/><axis xyz='0 0 1'/></joint>"
+         "<link name='l2'>" +
+         inertial() + collision(sphere(0.06)) + "</link></robot>";
+}
+
+TEST(ContactTest, LinksOfAnArticulationTouchOnlyWithSelfCollisionAndNeverAcrossAJoint) {
+  for (bool self_collision : {false, true}) {
+    PhysicsSettings settings;
+    settings.gravity_z = 0;
+    Scene scene(settings);
+    const int arm = scene.addUrdfString(overlappingArm(), "", "arm", Pose(), true);
+    if (self_collision) scene.setSelfCollision(arm, true);
+    scene.finalize();
+    const int base = scene.findLink(arm, "base"), l1 = scene.findLink(arm, "l1"),
+              l2 = scene.findLink(arm, "l2");
+    SCOPED_TRACE(self_collision ? "self collision on" : "self collision off");
+    // Joined by a joint: never.
+    EXPECT_EQ(scene.getContactForce(l1, base), Eigen::Vector3d::Zero());
+    EXPECT_EQ(scene.getContactForce(l2, l1), Eigen::Vector3d::Zero());
+    // Two joints apart: only when asked.
+    const Eigen::Vector3d push = scene.getContactForce(l2, base);
+    if (self_collision) {
+      EXPECT_GT(push.norm(), 100.0);
+      EXPECT_EQ(scene.getContactForce(base, l2), -push);
+      scene.advance(0.05);
+      EXPECT_GT(scene.getJointPositions(arm).norm(), 1e-3);
+    } else {
+      EXPECT_EQ(push, Eigen::Vector3d::Zero());
+      scene.advance(0.05);
+      EXPECT_EQ(scene.getJointPositions(arm), Eigen::VectorXd::Zero(2));
+    }
+  }
+}
+
+TEST(ContactTest, SelfCollisionIsABuildTimeSetting) {
+  Scene scene;
+  const int arm = scene.addUrdfString(overlappingArm(), "", "arm", Pose(), true);
+  EXPECT_THROW(scene.setSelfCollision(3, true), SceneError);
+  scene.finalize();
+  EXPECT_THROW(scene.setSelfCollision(arm, true), SceneError);
+}
+
+// --- stacks ----------------------------------------------------------------------------
+
+class StackTest : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(StackTest, FourBoxesStandStill) {
+  PhysicsSettings settings;
+  settings.integrator = GetParam();
+  Scene scene(settings);
+  scene.addGround(0);
+  std::vector<int> boxes;
+  for (int i = 0; i < 4; ++i)
+    boxes.push_back(scene.addUrdfString(
+        singleLink("box", inertial() + collision(box(0.1, 0.1, 0.1))), "",
+        "box" + std::to_string(i), at(0.003 * (i % 2), -0.002 * (i % 3), 0.05 + 0.1 * i), false));
+  scene.finalize();
+  std::vector<int> links;
+  for (int b : boxes) links.push_back(scene.findLink(b, "box"));
+  Eigen::Vector3d top_at_1s = Eigen::Vector3d::Zero();
+  for (int k = 1; k <= 300; ++k) {
+    scene.advance(0.01);
+    if (k == 100) top_at_1s = scene.getRootPose(boxes.back()).position;
+  }
+  const Eigen::Vector3d top = scene.getRootPose(boxes.back()).position;
+  std::printf("stack of 4 (%s): top drift 1..3 s %.2e m, top z %.5f\n", GetParam().c_str(),
+              (top - top_at_1s).norm(), top.z());
+  EXPECT_LT((top - top_at_1s).norm(), 1e-4);
+  EXPECT_NEAR(top.z(), 0.35, 1e-3);
+  // Each box carries the ones above it; in sum every box's contacts hold
+  // its own weight.
+  for (int i = 1; i < 4; ++i)
+    EXPECT_NEAR(scene.getContactForce(links[i], links[i - 1]).z(), (4 - i) * kG,
+                0.02 * (4 - i) * kG);
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(scene.getContactForce(links[i], -1).z(), kG, 0.02 * kG);
+}
+
+INSTANTIATE_TEST_SUITE_P(Integrators, StackTest,
+                         ::testing::Values("cpodes", "semi_explicit_euler"));
+
+// --- determinism ---------------------------------------------------------------------------
+
+// The many-body integrator here; CPodes in contact_scenario_test.cpp (the
+// pile takes it ~45 s).
+TEST(DeterminismTest, AContactRichPileIsBitIdenticalInTwoScenes) {
+  expectPileIsBitIdentical("semi_explicit_euler", 1000);
+}
+
+TEST(DeterminismTest, RestoringAStateReplaysThePileBitIdentically) {
+  expectPileReplays("semi_explicit_euler");
+}
+
+// --- meshes, capsules, mass from geometry ---------------------------------------------------
+
+// Drops a link without <inertial> (mass from its collision volume at the
+// default density, 1000 kg/m^3) on the floor; returns the resting contact
+// force and the link origin's height.
+std::pair<double, double> restOnFloor(const std::string& collisions, double z0,
+                                      const std::string& base_dir = "") {
+  Scene scene;
+  scene.addGround(0);
+  const int body =
+      scene.addUrdfString(singleLink("body", collisions), base_dir, "body", at(0, 0, z0), false);
+  scene.finalize();
+  for (int k = 0; k < 100; ++k) scene.advance(0.01);
+  return {scene.getContactForce(scene.findLink(body, "body"), -1).z(),
+          scene.getRootPose(body).position.z()};
+}
+
+TEST(ContactTest, MeshLinksGetMassFromTheirHullVolume) {
+  // Hexagonal prism: volume (3 sqrt(3) / 2) r^2 h.
+  const double r = 0.05, h = 0.08;
+  const double volume = 3 * std::sqrt(3.0) / 2 * r * r * h;
+  const auto [force, z] = restOnFloor(collision(mesh(writePrismObj("mass_prism", 6, r, h))), h / 2);
+  EXPECT_NEAR(force, 1000 * volume * kG, 1e-3 * 1000 * volume * kG);
+  EXPECT_NEAR(z, h / 2, 1e-3);
+  // Scaled by 2 in every axis: 8 times the mass.
+  const auto [force2, z2] =
+      restOnFloor(collision(mesh(writePrismObj("mass_prism", 6, r, h), 2)), h);
+  EXPECT_NEAR(force2, 8000 * volume * kG, 1e-3 * 8000 * volume * kG);
+  EXPECT_NEAR(z2, h, 1e-3);
+}
+
+TEST(ContactTest, ConcaveMeshesCollideAsTheirConvexHull) {
+  // A U-shaped channel 0.2 wide with a 0.1 wide, 0.1 deep notch on top.
+  const std::string path = getMeshDir() + "/channel.obj";
+  {
+    std::ofstream out(path);
+    // Profile in x-z (counterclockwise), extruded along y from -0.1 to 0.1.
+    const double profile[8][2] = {{-0.1, 0},   {0.1, 0},     {0.1, 0.2},   {0.05, 0.2},
+                                  {0.05, 0.1}, {-0.05, 0.1}, {-0.05, 0.2}, {-0.1, 0.2}};
+    for (double y : {-0.1, 0.1})
+      for (const auto& p : profile) out << "v " << p[0] << " " << y << " " << p[1] << "\n";
+    for (int k = 0; k < 8; ++k) {
+      const int a = k + 1, b = (k + 1) % 8 + 1;
+      out << "f " << a << " " << b << " " << b + 8 << "\nf " << a << " " << b + 8 << " " << a + 8
+          << "\n";
+    }
+  }
+  Scene scene;
+  const int channel = scene.addUrdfString(singleLink("channel", collision(mesh(path))), "",
+                                          "channel", Pose(), true);
+  // A ball above the notch rests on the hull's top (z = 0.2), not in the notch.
+  const int ball = scene.addUrdfString(singleLink("ball", inertial() + collision(sphere(0.03))), "",
+                                       "ball", at(0, 0, 0.235), false);
+  scene.finalize();
+  for (int k = 0; k < 100; ++k) scene.advance(0.01);
+  EXPECT_NEAR(scene.getRootPose(ball).position.z(), 0.23, 1e-3);
+  EXPECT_NEAR(
+      scene.getContactForce(scene.findLink(ball, "ball"), scene.findLink(channel, "channel")).z(),
+      kG, 0.02 * kG);
+}
+
+TEST(ContactTest, StlAndColladaMeshesLoadWithTheirUnitsAndAxes) {
+  // STL: the frustum, volume h/3 (A1 + A2 + sqrt(A1 A2)).
+  const double b = 0.1, t = 0.06, h = 0.08;
+  const double volume = h / 3 * (b * b + t * t + b * t);
+  const auto [force, z] =
+      restOnFloor(collision(mesh(writeFrustumStl("mass_frustum", b, t, h))), h / 2);
+  EXPECT_NEAR(force, 1000 * volume * kG, 1e-3 * 1000 * volume * kG);
+  EXPECT_NEAR(z, h / 2, 1e-3);
+
+  // Collada in centimetres, Z up: a 10 x 20 x 4 cm box, which must lie
+  // 4 cm high (the authored axes, as ROS tools load it) and weigh 0.8 kg.
+  const std::string dae = getMeshDir() + "/box.dae";
+  {
+    std::ofstream out(dae);
+    out << "<?xml version='1.0' encoding='utf-8'?>\n"
+           "<COLLADA xmlns='http://www.collada.org/2005/11/COLLADASchema' version='1.4.1'>\n"
+           "<asset><unit name='centimeter' meter='0.01'/><up_axis>Z_UP</up_axis></asset>\n"
+           "<library_geometries><geometry id='box-mesh' name='box'><mesh>\n"
+           "<source id='box-positions'><float_array id='box-positions-array' count='24'>";
+    for (int i = 0; i < 8; ++i)
+      out << (i & 1 ? 5 : -5) << " " << (i & 2 ? 10 : -10) << " " << (i & 4 ? 2 : -2) << " ";
+    out << "</float_array><technique_common><accessor source='#box-positions-array' count='8' "
+           "stride='3'>"
+           "<param name='X' type='float'/><param name='Y' type='float'/><param name='Z' "
+           "type='float'/>"
+           "</accessor></technique_common></source>\n"
+           "<vertices id='box-vertices'><input semantic='POSITION' "
+           "source='#box-positions'/></vertices>\n"
+           "<triangles count='12'><input semantic='VERTEX' source='#box-vertices' offset='0'/><p>"
+           "0 2 3 0 3 1 4 5 7 4 7 6 0 1 5 0 5 4 2 6 7 2 7 3 0 4 6 0 6 2 1 3 7 1 7 5"
+           "</p></triangles>\n</mesh></geometry></library_geometries>\n"
+           "<library_visual_scenes><visual_scene id='Scene' name='Scene'><node id='box' name='box' "
+           "type='NODE'>"
+           "<instance_geometry url='#box-mesh'/></node></visual_scene></library_visual_scenes>\n"
+           "<scene><instance_visual_scene url='#Scene'/></scene></COLLADA>\n";
+  }
+  const auto [dae_force, dae_z] = restOnFloor(collision(mesh(dae)), 0.02);
+  EXPECT_NEAR(dae_force, 0.8 * kG, 1e-3 * 0.8 * kG);
+  EXPECT_NEAR(dae_z, 0.02, 1e-3);
+}
+
+TEST(ContactTest, MeshPathsResolveRelativeAndPackageUrls) {
+  const std::string root = makeTempDir();
+  ASSERT_EQ(system(("mkdir -p " + root + "/my_robot/meshes " + root + "/my_robot/urdf").c_str()),
+            0);
+  const std::string mesh_file = root + "/my_robot/meshes/part.obj";
+  std::rename(writePrismObj("part", 6, 0.05, 0.08).c_str(), mesh_file.c_str());
+  const std::string urdf_dir = root + "/my_robot/urdf";
+  for (const std::string& name :
+       {std::string("package://my_robot/meshes/part.obj"), std::string("../meshes/part.obj"),
+        "file://" + mesh_file, mesh_file}) {
+    SCOPED_TRACE(name);
+    const auto [force, z] = restOnFloor(inertial() + collision(mesh(name)), 0.04, urdf_dir);
+    EXPECT_NEAR(force, kG, 0.02 * kG);
+    EXPECT_NEAR(z, 0.04, 1e-3);
+  }
+}
+
+void expectSceneError(const std::function<void()>& call, const std::vector<std::string>& needles) {
+  try {
+    call();
+    ADD_FAILURE() << "no SceneError";
+  } catch (const SceneError& e) {
+    for (const std::string& needle : needles)
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+  }
+}
+
+TEST(ContactTest, BadMeshesAreErrorsNamingLinkAndFile) {
+  Scene scene;
+  expectSceneError(
+      [&] {
+        scene.addUrdfString(singleLink("part", collision(mesh("nowhere/missing.obj"))), "/tmp", "a",
+                            Pose(), false);
+      },
+      {"link 'part'", "nowhere/missing.obj", "not found"});
+  const std::string garbage = getMeshDir() + "/garbage.stl";
+  std::ofstream(garbage) << "this is not a mesh\n";
+  expectSceneError(
+      [&] {
+        scene.addUrdfString(singleLink("part", collision(mesh(garbage))), "", "b", Pose(), false);
+      },
+      {"link 'part'", "garbage.stl"});
+  expectSceneError(
+      [&] {
+        scene.addUrdfString(
+            singleLink("part", collision(mesh(writePrismObj("p0", 6, 0.05, 0.08), 0))), "", "c",
+            Pose(), false);
+      },
+      {"link 'part'", "scale"});
+  EXPECT_EQ(scene.getArticulationCount(), 0);
+}
+
+TEST(ContactTest, FlatMeshesAreSkippedWithANote) {
+  const std::string path = getMeshDir() + "/flat.obj";
+  std::ofstream(path) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
+  Scene scene;
+  scene.addGround(0);
+  ::testing::internal::CaptureStderr();
+  const int a = scene.addUrdfString(singleLink("sheet", inertial() + collision(mesh(path))), "",
+                                    "sheet", at(0, 0, 0.1), false);
+  const std::string note = ::testing::internal::GetCapturedStderr();
+  EXPECT_NE(note.find("link 'sheet'"), std::string::npos) << note;
+  EXPECT_NE(note.find("flat.obj"), std::string::npos) << note;
+  scene.finalize();
+  // Without collision geometry it falls through the floor.
+  for (int k = 0; k < 20; ++k) scene.advance(0.01);
+  EXPECT_LT(scene.getRootPose(a).position.z(), 0);
+}
+
+TEST(ContactTest, CapsulesAreParsedAlongsideOtherShapes) {
+  // urdfdom alone drops every collision of a link with a <capsule>.
+  const double r = 0.03, length = 0.1;
+  const double volume = kPi * r * r * length + 4.0 / 3.0 * kPi * r * r * r;
+  const Eigen::Vector3d along_x(0, kPi / 2, 0);
+  const auto [force, z] =
+      restOnFloor(collision(capsule(r, length), Eigen::Vector3d::Zero(), along_x), r);
+  EXPECT_NEAR(force, 1000 * volume * kG, 1e-3 * 1000 * volume * kG);
+  EXPECT_NEAR(z, r, 1e-3);
+  // With a sphere hanging below it, the link rests on the sphere.
+  const auto [force2, z2] =
+      restOnFloor(collision(capsule(r, length), Eigen::Vector3d::Zero(), along_x) +
+                      collision(sphere(0.05), Eigen::Vector3d(0, 0, -0.1)),
+                  0.15);
+  EXPECT_NEAR(z2, 0.15, 1e-3);
+  EXPECT_GT(force2, force);
+}
+
+// --- materials -----------------------------------------------------------------------------
+
+// A 1 kg ball resting on the floor: its penetration is m g / k for the
+// pair's stiffness k (one contact point).
+double calcBallPenetration(const PhysicsSettings& settings, const ContactMaterial* ball,
+                           const ContactMaterial* ground) {
+  Scene scene(settings);
+  scene.addGround(0);
+  const int b = scene.addUrdfString(singleLink("ball", inertial() + collision(sphere(0.05))), "",
+                                    "ball", at(0, 0, 0.05), false);
+  if (ball != nullptr) scene.setContactMaterial(b, "ball", *ball);
+  if (ground != nullptr) scene.setGroundMaterial(*ground);
+  scene.finalize();
+  for (int k = 0; k < 100; ++k) scene.advance(0.01);
+  return 0.05 - scene.getRootPose(b).position.z();
+}
+
+TEST(ContactTest, StiffnessCombinesInSeries) {
+  PhysicsSettings settings;
+  ContactMaterial soft, hard;
+  soft.stiffness = 1e5;
+  hard.stiffness = 3e5;
+  // Defaults: 2e5 and 2e5 in series.
+  EXPECT_NEAR(calcBallPenetration(settings, nullptr, nullptr), kG / 1e5, 1e-3 * kG / 1e5);
+  // 1e5 and 3e5 in series: 7.5e4.
+  EXPECT_NEAR(calcBallPenetration(settings, &soft, &hard), kG / 7.5e4, 1e-3 * kG / 7.5e4);
+  settings.default_material.stiffness = 4e5;
+  EXPECT_NEAR(calcBallPenetration(settings, nullptr, nullptr), kG / 2e5, 1e-3 * kG / 2e5);
+}
+
+TEST(ContactTest, FrictionCombinesByGeometricMean) {
+  // Box mu 0.2 on a board of mu 0.8: sqrt(0.16) = 0.4 > tan 20 deg holds;
+  // box mu 0.1: sqrt(0.08) = 0.283 slides with g (sin - 0.283 cos).
+  const double theta = 20 * kPi / 180;
+  for (double box_mu : {0.2, 0.1}) {
+    Scene scene;
+    const Eigen::Vector3d rpy(theta, 0, 0);
+    const Eigen::Matrix3d R = at(0, 0, 0, rpy).orientation.toRotationMatrix();
+    const int board = scene.addUrdfString(
+        singleLink("board", collision(box(0.5, 3, 0.1), Eigen::Vector3d(0, 0, -0.05))), "", "board",
+        at(0, 0, 0, rpy), true);
+    const Eigen::Vector3d start = R * Eigen::Vector3d(0, 1.0, 0.05 - 2.5e-5);
+    const int body =
+        scene.addUrdfString(singleLink("box", inertial() + collision(box(0.1, 0.1, 0.1))), "",
+                            "box", at(start.x(), start.y(), start.z(), rpy), false);
+    ContactMaterial board_material, box_material;
+    board_material.static_friction = board_material.dynamic_friction = 0.8;
+    box_material.static_friction = box_material.dynamic_friction = box_mu;
+    scene.setContactMaterial(board, "board", board_material);
+    scene.setContactMaterial(body, "", box_material);
+    scene.finalize();
+    const Eigen::Vector3d downhill = R * Eigen::Vector3d(0, -1, 0);
+    const int link = scene.findLink(body, "box");
+    for (int k = 0; k < 50; ++k) scene.advance(0.01);
+    const double v1 = scene.getLinkTwist(link).linear.dot(downhill);
+    for (int k = 0; k < 50; ++k) scene.advance(0.01);
+    const double v2 = scene.getLinkTwist(link).linear.dot(downhill);
+    const double mu = std::sqrt(0.8 * box_mu);
+    const double expected = std::max(0.0, kG * (std::sin(theta) - mu * std::cos(theta)));
+    EXPECT_NEAR((v2 - v1) / 0.5, expected, 0.03 * expected + 1e-3) << "box mu " << box_mu;
+    if (expected == 0) {
+      EXPECT_LT(std::abs(v2), 1e-3);
+    }
+  }
+}
+
+TEST(ContactTest, BadMaterialsAndSettingsAreSceneErrors) {
+  Scene scene;
+  const int b =
+      scene.addUrdfString(singleLink("ball", collision(sphere(0.05))), "", "ball", Pose(), false);
+  ContactMaterial bad;
+  bad.static_friction = 0.1;
+  bad.dynamic_friction = 0.5;
+  expectSceneError([&] { scene.setContactMaterial(b, "ball", bad); },
+                   {"articulation 'ball'", "link 'ball'", "static_friction"});
+  expectSceneError([&] { scene.setContactMaterial(b, "nope", ContactMaterial()); },
+                   {"has no link 'nope'"});
+  expectSceneError([&] { scene.setContactMaterial(7, "", ContactMaterial()); },
+                   {"no articulation 7"});
+  bad = ContactMaterial();
+  bad.stiffness = 0;
+  expectSceneError([&] { scene.setGroundMaterial(bad); }, {"stiffness"});
+  scene.finalize();
+  expectSceneError([&] { scene.setContactMaterial(b, "", ContactMaterial()); },
+                   {"already finalized"});
+
+  PhysicsSettings settings;
+  settings.integrator = "euler";
+  expectSceneError([&] { Scene s(settings); }, {"'euler'", "semi_explicit_euler"});
+  settings = PhysicsSettings();
+  settings.fixed_step = 0;
+  expectSceneError([&] { Scene s(settings); }, {"fixed_step"});
+  settings = PhysicsSettings();
+  settings.default_material.dissipation = -1;
+  expectSceneError([&] { Scene s(settings); }, {"default_material", "dissipation"});
+}
+
+TEST(ContactTest, SemiExplicitEulerLandsOnEveryControlTick) {
+  PhysicsSettings settings;
+  settings.integrator = "semi_explicit_euler";
+  settings.fixed_step = 3e-4;  // does not divide 10 ms
+  Scene scene(settings);
+  scene.addGround(0);
+  const int ball = scene.addUrdfString(singleLink("ball", inertial() + collision(sphere(0.05))), "",
+                                       "ball", at(0, 0, 0.3), false);
+  scene.finalize();
+  for (int k = 1; k <= 50; ++k) {
+    scene.advance(0.01);
+    ASSERT_NEAR(scene.getTime(), 0.01 * k, 1e-12);
+  }
+  EXPECT_NEAR(scene.getRootPose(ball).position.z(), 0.05, 1e-3);
+}
+
+}  // namespace
+}  // namespace manibench
