@@ -231,3 +231,19 @@ TEST(Cli, PluginErrorsAboutConfigKeysNameWhereTheyWereSet) {
 
 }  // namespace
 }  // namespace manibench
+
+namespace manibench {
+namespace {
+
+TEST(CliBench, ReportsStepsPerSecond) {
+  const auto r = testing::runCli({"bench", "Reach-v0", "--steps", "60", "--policy", "reach_expert"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("60 env steps in"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("env steps/s"), std::string::npos) << r.out;
+  const auto bad = testing::runCli({"bench", "Reach-v0", "--obs", "pointcloud"});
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("not available yet"), std::string::npos) << bad.err;
+}
+
+}  // namespace
+}  // namespace manibench

@@ -6,6 +6,7 @@
 #include <manibench/plugin_registry.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <iomanip>
@@ -39,6 +40,7 @@ Commands:
   info TASK                 observation and action layout, success conditions,
                             masks and objects of a task
   run TASK --policy NAME    run one episode and print steps, return, success
+  bench TASK                environment steps per second of a task
   config [TASK]             print the merged YAML configuration
   demo                      list the plugins, then run the example task with its
                             scripted expert
@@ -93,6 +95,21 @@ Options:
   --set KEY=VALUE         one key; VALUE is YAML: 0.001, cpodes, [0, 0, -9.81],
                           {reach_tolerance: 0.05}; empty means null; repeatable
   --explain               name each value's origin (file:line, --set, task, ...)
+)";
+
+const char* kBenchUsage = R"(usage: manibench bench TASK [options]
+
+Measures environment steps per second: episodes of TASK on the split's
+objects (in turn, seeds 0, 1, ...) until --steps environment steps have run.
+Each env step is frame_skip control steps of physics plus the task's reward,
+success and observation; resets are timed separately.
+
+Options:
+  --policy NAME|PATH.so   policy acting (default random)
+  --obs MODE              observation mode (default state; only state so far)
+  --steps N               environment steps to time (default 2000)
+  --split train|test      objects to cycle through (default train)
+  --config FILE, --set KEY=VALUE   configuration layers, as for run
 )";
 
 const char* kDemoUsage = R"(usage: manibench demo
@@ -366,6 +383,67 @@ int commandConfig(int argc, char** argv) {
   return 0;
 }
 
+int commandBench(int argc, char** argv) {
+  const Arguments args = parseArguments(argc, argv, 2,
+                                        {"policy", "obs", "steps", "split", "config", "set"}, {},
+                                        kBenchUsage);
+  if (args.help) {
+    std::cout << kBenchUsage;
+    return 0;
+  }
+  if (args.positional.size() != 1) throw UsageError("bench needs exactly one TASK", kBenchUsage);
+  const std::string obs = valueOr(args, "obs", "state");
+  if (obs != "state")
+    throw UsageError("--obs " + obs + " is not available yet (only state)", kBenchUsage);
+  const std::string split = valueOr(args, "split", "train");
+  if (split != "train" && split != "test")
+    throw UsageError("--split must be train or test", kBenchUsage);
+  const uint64_t target_steps = parseSeed(valueOr(args, "steps", "2000"));
+  if (target_steps == 0) throw UsageError("--steps must be positive", kBenchUsage);
+
+  mb::PluginRegistry registry;
+  loadPlugins(registry);
+  const std::string policy_name = resolvePolicy(registry, valueOr(args, "policy", "random"));
+  registry.getEntry(mb::PluginKind::Policy, policy_name);
+  const std::unique_ptr<mb::Environment> env =
+      makeEnvironment(registry, args.positional[0], getConfigSources(args), true);
+  const std::vector<std::string> objects = env->listObjects(split);
+  if (objects.empty()) throw std::runtime_error("the " + split + " split has no objects");
+  mb::PolicyInstance policy(registry, policy_name, "", env->calcPolicyLayout(obs));
+
+  using Clock = std::chrono::steady_clock;
+  std::chrono::duration<double> step_time{0}, reset_time{0};
+  uint64_t steps = 0, episodes = 0, successes = 0;
+  Eigen::VectorXd action;
+  while (steps < target_steps) {
+    const std::string& object = objects[episodes % objects.size()];
+    const auto reset_start = Clock::now();
+    env->reset(object, episodes);
+    policy.reset(episodes);
+    reset_time += Clock::now() - reset_start;
+    bool done = false;
+    while (!done && steps < target_steps) {
+      const auto start = Clock::now();
+      policy.act(env->getObservation(), env->getElapsedSteps(), action);
+      const mb::StepResult result = env->step(action);
+      step_time += Clock::now() - start;
+      ++steps;
+      done = result.done;
+      if (done && result.success) ++successes;
+    }
+    ++episodes;
+  }
+  std::cout << "task " << args.positional[0] << ", obs " << obs << ", policy " << policy_name
+            << ", controller " << env->getControllerDescription().name << "\n"
+            << steps << " env steps in " << episodes << " episodes (" << successes
+            << " successful), " << std::fixed << std::setprecision(1)
+            << steps / step_time.count() << " env steps/s (policy + physics + task), "
+            << std::setprecision(2) << 1e3 * reset_time.count() / double(episodes)
+            << " ms per reset\n";
+  std::cout.unsetf(std::ios::fixed);
+  return 0;
+}
+
 int commandDemo(int argc, char** argv) {
   const Arguments args = parseArguments(argc, argv, 2, {}, {}, kDemoUsage);
   if (args.help) {
@@ -396,6 +474,7 @@ int main(int argc, char** argv) {
     if (command == "run") return commandRun(argc, argv);
     if (command == "config") return commandConfig(argc, argv);
     if (command == "demo") return commandDemo(argc, argv);
+    if (command == "bench") return commandBench(argc, argv);
     throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'",
                      kMainUsage);
   } catch (const UsageError& e) {
