@@ -3,9 +3,11 @@
 BUILD_DIR ?= build
 CMAKE_FLAGS ?=
 CTEST_FLAGS ?=
+# e.g. BENCH_FLAGS='--scene boxes --seconds 5'
+BENCH_FLAGS ?=
 JOBS ?= $(shell nproc)
 
-.PHONY: all deps configure build test demo clean
+.PHONY: all deps configure build test demo bench clean
 
 all: build
 
@@ -25,6 +27,11 @@ test: build
 
 demo: build
 	$(BUILD_DIR)/bin/manibench demo
+
+# Simbody vs MuJoCo env steps per second (docs/performance.md).
+bench: configure
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target manibench_physics_bench
+	$(BUILD_DIR)/bin/manibench_physics_bench $(BENCH_FLAGS)
 
 clean:
 	rm -rf $(BUILD_DIR)

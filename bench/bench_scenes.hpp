@@ -1,0 +1,44 @@
+// The benchmark scenes: each a bench::Model, the integrators that suit it,
+// a scripted controller and a sanity check that both engines must pass (a
+// benchmark of a broken scene measures nothing).
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "bench_engines.hpp"
+#include "bench_model.hpp"
+
+namespace manibench::bench {
+
+struct BenchScene {
+  std::string name;         // what --scene matches
+  std::string description;  // one line for the table's legend
+  Model model;
+  // manibench's PhysicsSettings::integrator for this scene (the Simbody
+  // notes: CPodes for articulated scenes and few bodies, a fixed-step
+  // explicit integrator for many free bodies).
+  std::string integrator = "cpodes";
+  // MuJoCo's integrator: "implicit" where stiff velocity-dependent drives
+  // need it at a 2 ms step, otherwise MuJoCo's default "Euler".
+  std::string mujoco_integrator = "Euler";
+  // Contact this scene cannot do without (probed in manibench at start-up).
+  bool needs_box_box = false;
+  // Scripted episodes of this many control ticks, each starting from the
+  // initial state; 0: one endless episode (resting scenes).
+  int episode_ticks = 0;
+  // Simulated seconds before the first check and the first timing.
+  double settle_time = 0.5;
+  // Drive targets for the control tick starting at episode time t (one per
+  // Model::drives entry); empty for scenes without drives.
+  std::function<void(double t, std::vector<DriveTarget>& targets)> policy;
+  // "" if the engine's state is physically sane. Resting scenes are checked
+  // after settling and after every measurement window, episodic scenes at
+  // the end of every episode.
+  std::function<std::string(const Engine& engine)> check;
+};
+
+std::vector<BenchScene> makeScenes();
+
+}  // namespace manibench::bench
