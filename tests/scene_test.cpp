@@ -778,11 +778,12 @@ TEST(SceneTest, BadUrdfIsASceneErrorNamingTheSource) {
                    "<string> of articulation 'robot'");
   expectSceneError(
       [&] {
-        scene.addUrdfString(robot("r", link("a") + joint("flat", "planar", "a", "b", "0 0 0", "0 0 1") +
+        scene.addUrdfString(robot("r", link("a") + joint("flat", "planar", "a", "b", "0 0 0", "0 0 1",
+                                                         "<mimic joint='other'/>") +
                                            link("b", inertial(1, "0 0 0", 1, 1, 1))),
                             "", "robot", Pose(), true);
       },
-      "joint 'flat' is planar");
+      "joint 'flat' is planar and cannot mimic another joint");
   expectSceneError(
       [&] {
         scene.addUrdfString(robot("r", link("a") + joint("free", "floating", "a", "b", "0 0 0", "") +

@@ -6,6 +6,8 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -28,7 +30,10 @@ struct Twist {
 enum class JointType { Revolute = 1, Continuous = 2, Prismatic = 3 };
 
 // A movable one-dof joint. Fixed joints are merged into the parent body; a
-// floating root is reached through the root pose, not the joint vector.
+// floating root is reached through the root pose, not the joint vector. A
+// URDF planar joint NAME becomes three joints in a row: NAME_x and NAME_y
+// (prismatic along two orthonormal in-plane directions; x and y for a z
+// axis) and NAME_yaw (continuous about the axis).
 struct JointDescription {
   std::string name;
   JointType type = JointType::Revolute;
@@ -39,6 +44,46 @@ struct JointDescription {
   double effort_limit = 0;    // 0: unlimited
   double damping = 0;         // from URDF <dynamics>, overridable per episode
   double friction = 0;        // Coulomb, from URDF <dynamics>
+  // URDF <mimic>: a constraint holds q = multiplier * q[mimic] + offset,
+  // `mimic` being the leader's index in the same joint vector (-1: none).
+  // The follower stays in the joint vector; drive the leader, not it.
+  int mimic = -1;
+  double mimic_multiplier = 1;
+  double mimic_offset = 0;
+};
+
+// One sub-mesh of a visual mesh file, ready for the renderer: triangles in
+// the mesh frame with the URDF scale applied, unit normals per vertex.
+struct VisualMesh {
+  std::vector<Eigen::Vector3f> positions, normals;
+  std::vector<std::uint32_t> indices;  // three per triangle, counterclockwise
+  Eigen::Vector4f color = Eigen::Vector4f::Ones();  // the sub-mesh material's diffuse rgba
+  std::string texture;  // diffuse texture path (relative ones resolved), or ""
+};
+
+// A URDF <visual>. Primitives are centred on the shape frame; cylinders and
+// capsules run along its z axis.
+struct VisualShape {
+  enum class Kind { Box, Sphere, Cylinder, Capsule, Mesh };
+  int link = -1;     // global link id (as findLink); merged links keep theirs
+  std::string name;  // the <visual name>, or ""
+  Kind kind = Kind::Box;
+  // Box: full extents; Sphere: (radius, 0, 0); Cylinder and Capsule:
+  // (radius, length, 0), the capsule's length without its end caps.
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();
+  Pose pose_in_link;  // the <visual><origin>
+  // The URDF <material> color (inline, or a robot-level material named by
+  // the visual); has_material is false where the visual names none, and
+  // then a mesh's own sub-mesh colors apply and color is white.
+  Eigen::Vector4f color = Eigen::Vector4f::Ones();
+  bool has_material = false;
+  std::string material_name;
+  std::string texture;  // the URDF material's <texture filename>, as written
+  // Mesh kind: the resolved file, its scale, and its sub-meshes (shared by
+  // every visual of the scene that uses the same file and scale).
+  std::string mesh_file;
+  Eigen::Vector3d mesh_scale = Eigen::Vector3d::Ones();
+  std::shared_ptr<const std::vector<VisualMesh>> meshes;
 };
 
 // Same meaning as mb_drive_command in sdk/include/manibench/abi.h:
@@ -160,6 +205,14 @@ class Scene {
   const std::string& getLinkName(int link) const;
   const std::vector<JointDescription>& getJoints(int articulation) const;
   int findJoint(int articulation, const std::string& joint_name) const;  // -1
+  // Every <visual> of every articulation, in the order added (each URDF's
+  // links depth first from its root, visuals in file order). Grows with
+  // each add; unchanged by finalize and stepping. Link poses come from
+  // getLinkPose.
+  const std::vector<VisualShape>& getVisualShapes() const;
+  // Triangles of all visual meshes (mesh visuals only; the renderer
+  // tessellates primitives itself).
+  std::size_t calcVisualTriangleCount() const;
 
   // --- state: after finalize() -------------------------------------------
   double getTime() const;

@@ -44,6 +44,7 @@ namespace {
 
 // A body a joint moves needs mass; links with neither <inertial> nor
 // collision geometry (pure frames) get this much.
+constexpr double kConstraintTolerance = 1e-8;  // mimic joints, rad or m
 constexpr double kTinyMass = 1e-3;     // kg
 constexpr double kTinyInertia = 1e-6;  // kg m^2, about the body origin
 // Joint limit stops: Hunt-Crossley-like f = -k x (1 + d qdot). 1e5 keeps a
@@ -132,6 +133,11 @@ IntegratorPtr makeIntegrator(const SimTK::MultibodySystem& system,
         new SimTK::SemiExplicitEulerIntegrator(system, settings.fixed_step),
         [](SimTK::Integrator* p) { delete static_cast<SimTK::SemiExplicitEulerIntegrator*>(p); });
   }
+  // Mimic couplings (the only constraints) are held to 1e-8 rather than
+  // the accuracy: CPodes at 1e-4 let them drift by 5e-6 rad. Scenes
+  // without constraints keep Simbody's default, bit for bit.
+  if (system.getMatterSubsystem().getNumConstraints() > 0)
+    integrator->setConstraintTolerance(kConstraintTolerance);
   integrator->setInternalStepLimit(steps_per_call);
   // Land exactly on each control tick so that commands switch there.
   integrator->setAllowInterpolation(false);
@@ -178,6 +184,7 @@ struct Scene::Impl {
     int first_link = 0;   // global id of model.links[0]
     int first_joint = 0;  // global slot of model.joints[0]
     std::vector<SimTK::MobilizedBodyIndex> body_mobods;  // after finalize
+    std::vector<int> joint_body;  // joint index -> model body, after finalize
   };
   // Where a link's frame sits, after finalize.
   struct LinkFrame {
@@ -201,6 +208,8 @@ struct Scene::Impl {
   std::vector<Articulation> articulations;
   std::vector<std::pair<int, int>> links;  // global id -> (articulation, local)
   int joint_count = 0;
+  scene_detail::VisualMeshCache visual_meshes;
+  std::vector<VisualShape> visual_shapes;  // link ids global
 
   // Simbody. Declaration order is construction order.
   SimTK::MultibodySystem system;
@@ -309,6 +318,9 @@ struct Scene::Impl {
   bool findDivergence(const SimTK::State& s, SimTK::MobilizedBodyIndex& mobod,
                       std::string& what) const;
   [[noreturn]] void throwDiverged(const std::string& cause);
+  // Puts mimic joints where their leaders say (before the integrator
+  // projects, so that it does not split the difference).
+  void applyMimics(const Articulation& art, SimTK::State& s) const;
 };
 
 int Scene::Impl::addArticulation(const std::string& xml,
@@ -328,7 +340,7 @@ int Scene::Impl::addArticulation(const std::string& xml,
   Articulation art;
   art.name = name;
   art.model = scene_detail::buildArticulationModel(xml, source, base_dir,
-                                                   settings.default_density);
+                                                   settings.default_density, visual_meshes);
   art.link_materials.assign(art.model.links.size(), settings.default_material);
   art.base_dir = base_dir;
   art.X_root = toTransform(root);
@@ -348,6 +360,10 @@ int Scene::Impl::addArticulation(const std::string& xml,
   for (int l = 0; l < static_cast<int>(art.model.links.size()); ++l)
     links.emplace_back(a, l);
   joint_count += static_cast<int>(art.model.joints.size());
+  for (VisualShape visual : art.model.visuals) {
+    visual.link += art.first_link;
+    visual_shapes.push_back(std::move(visual));
+  }
   articulations.push_back(std::move(art));
   return a;
 }
@@ -368,6 +384,9 @@ void Scene::Impl::buildArticulation(Articulation& art, std::vector<ContactShape>
     shapes.push_back(std::move(contact));
   };
   art.body_mobods.resize(model.bodies.size());
+  art.joint_body.assign(model.joints.size(), -1);
+  for (std::size_t b = 0; b < model.bodies.size(); ++b)
+    if (model.bodies[b].joint >= 0) art.joint_body[model.bodies[b].joint] = static_cast<int>(b);
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
     const scene_detail::BodyModel& body = model.bodies[b];
     // A fixed root is merged into Ground at the root pose; its frame then
@@ -384,6 +403,7 @@ void Scene::Impl::buildArticulation(Articulation& art, std::vector<ContactShape>
             ? SimTK::MassProperties(body.mass, body.first_moment / body.mass, body.inertia)
             : SimTK::MassProperties(kTinyMass, SimTK::Vec3(0), SimTK::Inertia(kTinyInertia));
     SimTK::Body::Rigid rigid(mass);
+    SimTK::Body::Massless massless;
 
     SimTK::MobilizedBody mobod;
     if (b == 0) {
@@ -401,8 +421,10 @@ void Scene::Impl::buildArticulation(Articulation& art, std::vector<ContactShape>
       // then coincides with the URDF joint frame.
       if (joint.type == JointType::Prismatic) {
         const SimTK::Rotation R(body.axis, SimTK::XAxis);
-        mobod = SimTK::MobilizedBody::Slider(parent, X_PJ * SimTK::Transform(R),
-                                             rigid, SimTK::Transform(R));
+        mobod = SimTK::MobilizedBody::Slider(
+            parent, X_PJ * SimTK::Transform(R),
+            body.massless ? static_cast<const SimTK::Body&>(massless) : rigid,
+            SimTK::Transform(R));
       } else {
         const SimTK::Rotation R(body.axis, SimTK::ZAxis);
         mobod = SimTK::MobilizedBody::Pin(parent, X_PJ * SimTK::Transform(R),
@@ -417,6 +439,41 @@ void Scene::Impl::buildArticulation(Articulation& art, std::vector<ContactShape>
     const double inverse_mass = b == 0 ? 1 / mass.getMass() : 0;  // free roots only
     for (const CollisionShape& shape : body.shapes)
       addShape(shape, mobod.getMobilizedBodyIndex(), shape.X_BS, inverse_mass);
+  }
+  // Mimic joints: a holonomic coupling m q_leader - q_follower + o = 0.
+  // Simbody enforces it with a Lagrange multiplier at the acceleration
+  // level; the integrators (CPodes, RK-Merson, semi-explicit Euler) project
+  // q and u back onto it after each step, so it does not drift.
+  for (const JointDescription& joint : model.joints) {
+    if (joint.mimic < 0) continue;
+    SimTK::Vector coefficients(3);
+    coefficients[0] = joint.mimic_multiplier;
+    coefficients[1] = -1;
+    coefficients[2] = joint.mimic_offset;
+    SimTK::Array_<SimTK::MobilizedBodyIndex> bodies{
+        art.body_mobods[art.joint_body[joint.mimic]], art.body_mobods[art.joint_body[joint.index]]};
+    SimTK::Array_<SimTK::MobilizerQIndex> coordinates{SimTK::MobilizerQIndex(0),
+                                                     SimTK::MobilizerQIndex(0)};
+    SimTK::Constraint::CoordinateCoupler(matter, new SimTK::Function::Linear(coefficients),
+                                         bodies, coordinates);
+  }
+}
+
+void Scene::Impl::applyMimics(const Articulation& art, SimTK::State& s) const {
+  // Passes enough for chains of mimics in any order.
+  for (std::size_t pass = 0; pass < art.model.joints.size(); ++pass) {
+    bool any = false;
+    for (const JointDescription& joint : art.model.joints) {
+      if (joint.mimic < 0) continue;
+      any = true;
+      const SimTK::MobilizedBody& leader =
+          matter.getMobilizedBody(joint_mobods[art.first_joint + joint.mimic]);
+      const SimTK::MobilizedBody& follower =
+          matter.getMobilizedBody(joint_mobods[art.first_joint + joint.index]);
+      follower.setOneQ(s, 0, joint.mimic_multiplier * leader.getOneQ(s, 0) + joint.mimic_offset);
+      follower.setOneU(s, 0, joint.mimic_multiplier * leader.getOneU(s, 0));
+    }
+    if (!any) return;
   }
 }
 
@@ -502,6 +559,7 @@ void Scene::Impl::finalize() {
           .setOneQ(state, 0, std::min(std::max(0.0, joint.lower), joint.upper));
     if (!art.fixed_base)
       matter.getMobilizedBody(art.body_mobods[0]).setQToFitTransform(state, art.X_root);
+    applyMimics(art, state);
   }
   system.realize(state, SimTK::Stage::Position);
 
@@ -760,6 +818,18 @@ const std::vector<JointDescription>& Scene::getJoints(int articulation) const {
   return impl_->getArticulation(articulation, "getJoints").model.joints;
 }
 
+const std::vector<VisualShape>& Scene::getVisualShapes() const {
+  return impl_->visual_shapes;
+}
+
+std::size_t Scene::calcVisualTriangleCount() const {
+  std::size_t triangles = 0;
+  for (const VisualShape& visual : impl_->visual_shapes)
+    if (visual.meshes)
+      for (const VisualMesh& mesh : *visual.meshes) triangles += mesh.indices.size() / 3;
+  return triangles;
+}
+
 int Scene::findJoint(int articulation, const std::string& joint_name) const {
   for (const JointDescription& joint : getJoints(articulation))
     if (joint.name == joint_name) return joint.index;
@@ -846,6 +916,7 @@ void Scene::setJointPositions(int articulation, const Eigen::VectorXd& q) {
   SimTK::State& s = impl_->updStateAndRestart();
   for (Eigen::Index j = 0; j < q.size(); ++j)
     impl_->matter.getMobilizedBody(impl_->joint_mobods[art.first_joint + j]).setOneQ(s, 0, q[j]);
+  impl_->applyMimics(art, s);
 }
 
 void Scene::setJointVelocities(int articulation, const Eigen::VectorXd& qdot) {
@@ -855,6 +926,7 @@ void Scene::setJointVelocities(int articulation, const Eigen::VectorXd& qdot) {
   SimTK::State& s = impl_->updStateAndRestart();
   for (Eigen::Index j = 0; j < qdot.size(); ++j)
     impl_->matter.getMobilizedBody(impl_->joint_mobods[art.first_joint + j]).setOneU(s, 0, qdot[j]);
+  impl_->applyMimics(art, s);
 }
 
 void Scene::setRootPose(int articulation, const Pose& pose) {

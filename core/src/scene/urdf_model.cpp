@@ -152,7 +152,10 @@ struct Builder {
   // (link name, collision ordinal) of each <capsule>, which urdfdom saw as
   // a cylinder of the same radius and length.
   std::set<std::pair<std::string, int>> capsules;
+  std::set<std::pair<std::string, int>> visual_capsules;  // same, for <visual>
+  VisualMeshCache& visual_meshes;
   ArticulationModel model;
+  std::vector<std::pair<int, std::string>> mimics;  // (follower, leader name)
 
   int getFileOrder(const std::string& joint_name) const {
     const auto found = joint_file_order.find(joint_name);
@@ -267,12 +270,111 @@ struct Builder {
     return shapes;
   }
 
+  std::shared_ptr<const std::vector<VisualMesh>> loadVisualMesh(const urdf::Mesh& mesh,
+                                                                const std::string& what,
+                                                                std::string& path) {
+    const Vec3 scale(mesh.scale.x, mesh.scale.y, mesh.scale.z);
+    if (!scale.isFinite() || scale[0] == 0 || scale[1] == 0 || scale[2] == 0)
+      fail(source, what + ": mesh '" + mesh.filename + "' has scale " +
+                       std::to_string(scale[0]) + " " + std::to_string(scale[1]) + " " +
+                       std::to_string(scale[2]) + "; every factor must be finite and non-zero");
+    path = findMeshFile(mesh.filename, base_dir);
+    if (path.empty())
+      fail(source, what + ": visual mesh '" + mesh.filename +
+                       "' not found (relative paths start at '" + base_dir + "')");
+    const auto key = std::make_tuple(path, scale[0], scale[1], scale[2]);
+    const auto found = visual_meshes.find(key);
+    if (found != visual_meshes.end()) return found->second;
+    try {
+      auto meshes = std::make_shared<const std::vector<VisualMesh>>(loadVisualMeshes(path, scale));
+      return visual_meshes.emplace(key, std::move(meshes)).first->second;
+    } catch (const std::exception& e) {
+      fail(source, what + ": visual mesh '" + path + "': " + e.what());
+    }
+  }
+
+  // The visual's URDF material: its own, or a robot-level one it names.
+  // urdfdom leaves a name-only reference with a default (black) color, so
+  // the robot-level definition wins whenever one exists.
+  void setVisualMaterial(const urdf::Visual& visual, VisualShape& shape) {
+    urdf::MaterialSharedPtr material = visual.material;
+    const std::string name = !visual.material_name.empty() ? visual.material_name
+                             : material                   ? material->name
+                                                          : std::string();
+    if (!name.empty())
+      if (urdf::MaterialSharedPtr named = urdf.getMaterial(name)) material = named;
+    if (!material) return;
+    shape.has_material = true;
+    shape.material_name = material->name;
+    shape.texture = material->texture_filename;
+    const urdf::Color& c = material->color;
+    shape.color = Eigen::Vector4f(c.r, c.g, c.b, c.a);
+    // A texture-only material has urdfdom's default color (0, 0, 0, 1): the
+    // texture is meant to show unmodulated.
+    if (!shape.texture.empty() && c.r == 0 && c.g == 0 && c.b == 0)
+      shape.color = Eigen::Vector4f::Ones();
+  }
+
+  void addLinkVisuals(const urdf::Link& link, int link_index) {
+    int ordinal = -1;
+    for (const urdf::VisualSharedPtr& visual : link.visual_array) {
+      ++ordinal;
+      if (!visual || !visual->geometry) continue;
+      const urdf::Geometry& g = *visual->geometry;
+      const std::string what =
+          "link '" + link.name + "': visual '" +
+          (visual->name.empty() ? "#" + std::to_string(ordinal + 1) : visual->name) + "'";
+      VisualShape shape;
+      shape.link = link_index;
+      shape.name = visual->name;
+      const urdf::Pose& origin = visual->origin;
+      double qx, qy, qz, qw;
+      origin.rotation.getQuaternion(qx, qy, qz, qw);
+      shape.pose_in_link.position = Eigen::Vector3d(origin.position.x, origin.position.y,
+                                                    origin.position.z);
+      shape.pose_in_link.orientation = Eigen::Quaterniond(qw, qx, qy, qz).normalized();
+      if (g.type == urdf::Geometry::SPHERE) {
+        const double r = static_cast<const urdf::Sphere&>(g).radius;
+        if (!(r > 0) || !std::isfinite(r))
+          fail(source, what + " is a sphere of radius " + std::to_string(r));
+        shape.kind = VisualShape::Kind::Sphere;
+        shape.size = Eigen::Vector3d(r, 0, 0);
+      } else if (g.type == urdf::Geometry::BOX) {
+        const urdf::Vector3& d = static_cast<const urdf::Box&>(g).dim;
+        if (!(d.x > 0 && d.y > 0 && d.z > 0) || !std::isfinite(d.x + d.y + d.z))
+          fail(source, what + " is a box of size " + std::to_string(d.x) + " " +
+                           std::to_string(d.y) + " " + std::to_string(d.z));
+        shape.kind = VisualShape::Kind::Box;
+        shape.size = Eigen::Vector3d(d.x, d.y, d.z);
+      } else if (g.type == urdf::Geometry::CYLINDER) {
+        const auto& c = static_cast<const urdf::Cylinder&>(g);
+        const bool capsule = visual_capsules.count({link.name, ordinal}) > 0;
+        if (!(c.radius > 0) || !std::isfinite(c.radius) || !std::isfinite(c.length) ||
+            (capsule ? !(c.length >= 0) : !(c.length > 0)))
+          fail(source, what + " is a " + (capsule ? "capsule" : "cylinder") + " of radius " +
+                           std::to_string(c.radius) + " and length " + std::to_string(c.length));
+        shape.kind = capsule ? VisualShape::Kind::Capsule : VisualShape::Kind::Cylinder;
+        shape.size = Eigen::Vector3d(c.radius, c.length, 0);
+      } else if (g.type == urdf::Geometry::MESH) {
+        const auto& mesh = static_cast<const urdf::Mesh&>(g);
+        shape.kind = VisualShape::Kind::Mesh;
+        shape.mesh_scale = Eigen::Vector3d(mesh.scale.x, mesh.scale.y, mesh.scale.z);
+        shape.meshes = loadVisualMesh(mesh, what, shape.mesh_file);
+      } else {
+        continue;  // nothing a renderer could draw
+      }
+      setVisualMaterial(*visual, shape);
+      model.visuals.push_back(std::move(shape));
+    }
+  }
+
   // Adds `link` (reached with the link frame at X_BL in body `body_index`)
   // and, depth first, everything below it.
   void addLink(const urdf::Link& link, int body_index, const Transform& X_BL) {
     const int link_index = static_cast<int>(model.links.size());
     model.links.push_back({link.name, body_index, X_BL});
     std::vector<CollisionShape> shapes = makeLinkShapes(link, link_index, X_BL);
+    addLinkVisuals(link, link_index);
     BodyModel& body = model.bodies[body_index];
     addLinkMass(link, X_BL, shapes, body);
     for (CollisionShape& shape : shapes) body.shapes.push_back(std::move(shape));
@@ -286,6 +388,70 @@ struct Builder {
                        return getFileOrder(a->name) < getFileOrder(b->name);
                      });
     for (const urdf::JointSharedPtr& joint : children) addJoint(*joint, body_index, X_BL);
+  }
+
+  // A planar joint as three one-dof joints on a chain of massless bodies:
+  // <name>_x and <name>_y slide along in-plane directions u and v (u x v =
+  // axis; x and y for a z axis), <name>_yaw turns about the axis. At zero
+  // the child frame is the joint frame. Position limits are not applied
+  // (URDF gives one pair for three coordinates); effort and velocity
+  // limits, damping and friction apply to each.
+  void addPlanarJoint(const urdf::Joint& joint, const urdf::Link& child,
+                      const JointDescription& planar, int parent_body, const Transform& X_PJ,
+                      const Vec3& axis) {
+    const SimTK::UnitVec3 n(axis);
+    Vec3 u = Vec3(1, 0, 0) - n[0] * Vec3(n);
+    if (u.norm() < 1e-6) u = Vec3(0, 1, 0) - n[1] * Vec3(n);
+    const SimTK::UnitVec3 u_hat(u);
+    const SimTK::UnitVec3 v_hat(SimTK::cross(Vec3(n), Vec3(u_hat)));
+    const struct {
+      const char* suffix;
+      JointType type;
+      SimTK::UnitVec3 axis;
+    } parts[] = {{"_x", JointType::Prismatic, u_hat},
+                 {"_y", JointType::Prismatic, v_hat},
+                 {"_yaw", JointType::Continuous, n}};
+    int parent = parent_body;
+    Transform X = X_PJ;
+    for (const auto& part : parts) {
+      JointDescription description = planar;
+      description.name = joint.name + part.suffix;
+      description.type = part.type;
+      description.index = static_cast<int>(model.joints.size());
+      description.lower = -std::numeric_limits<double>::infinity();
+      description.upper = std::numeric_limits<double>::infinity();
+      BodyModel body;
+      body.parent = parent;
+      body.joint = description.index;
+      body.link = static_cast<int>(model.links.size());  // the child, added below
+      body.X_PJ = X;
+      body.axis = part.axis;
+      body.massless = part.type != JointType::Continuous;
+      model.joints.push_back(description);
+      model.bodies.push_back(body);
+      parent = static_cast<int>(model.bodies.size()) - 1;
+      X = Transform();
+    }
+    addLink(child, parent, Transform());
+  }
+
+  // Points each mimic joint at its leader (which may come later in the
+  // file) once every joint exists.
+  void resolveMimics() {
+    for (const auto& [follower, leader_name] : mimics) {
+      JointDescription& joint = model.joints[follower];
+      int leader = -1;
+      for (const JointDescription& other : model.joints)
+        if (other.name == leader_name) leader = other.index;
+      if (leader < 0) {
+        const urdf::JointConstSharedPtr urdf_leader = urdf.getJoint(leader_name);
+        fail(source, "joint '" + joint.name + "' mimics joint '" + leader_name + "', " +
+                         (urdf_leader ? "which is not a movable one-dof joint"
+                                      : "which does not exist"));
+      }
+      if (leader == follower) fail(source, "joint '" + joint.name + "' mimics itself");
+      joint.mimic = leader;
+    }
   }
 
   void addJoint(const urdf::Joint& joint, int parent_body,
@@ -311,10 +477,7 @@ struct Builder {
         fail(source, "joint '" + joint.name +
                          "' is floating; only the root may float (fixed_base = "
                          "false), not a link inside the tree");
-      case urdf::Joint::PLANAR:
-        fail(source, "joint '" + joint.name +
-                         "' is planar, which is not supported (revolute, "
-                         "continuous, prismatic and fixed are)");
+      case urdf::Joint::PLANAR: description.type = JointType::Prismatic; break;
       default:
         fail(source, "joint '" + joint.name + "' has an unsupported type");
     }
@@ -345,11 +508,21 @@ struct Builder {
       description.damping = joint.dynamics->damping;
       description.friction = joint.dynamics->friction;
     }
-    if (joint.mimic)
-      std::fprintf(stderr,
-                   "manibench: URDF %s: mimic of joint '%s' is ignored (not "
-                   "supported yet); it moves independently\n",
-                   source.c_str(), joint.name.c_str());
+    if (joint.mimic) {
+      const urdf::JointMimic& mimic = *joint.mimic;
+      if (joint.type == urdf::Joint::PLANAR)
+        fail(source, "joint '" + joint.name + "' is planar and cannot mimic another joint");
+      if (!std::isfinite(mimic.multiplier) || !std::isfinite(mimic.offset))
+        fail(source, "joint '" + joint.name + "' has a non-finite mimic multiplier or offset");
+      description.mimic_multiplier = mimic.multiplier;
+      description.mimic_offset = mimic.offset;
+      mimics.emplace_back(description.index, mimic.joint_name);  // resolved at the end
+    }
+
+    if (joint.type == urdf::Joint::PLANAR) {
+      addPlanarJoint(joint, *child, description, parent_body, X_PJ, axis);
+      return;
+    }
 
     BodyModel body;
     body.parent = parent_body;
@@ -366,7 +539,8 @@ struct Builder {
 // urdfdom rejects <capsule> (and then drops every collision of the link):
 // turn each into a <cylinder> with the same attributes and remember which
 // collisions they were. Returns true if anything changed.
-bool rewriteCapsules(TiXmlDocument& doc, std::set<std::pair<std::string, int>>& capsules) {
+bool rewriteCapsules(TiXmlDocument& doc, std::set<std::pair<std::string, int>>& capsules,
+                     std::set<std::pair<std::string, int>>& visual_capsules) {
   bool changed = false;
   TiXmlElement* robot = doc.FirstChildElement("robot");
   if (robot == nullptr) return false;
@@ -382,7 +556,8 @@ bool rewriteCapsules(TiXmlDocument& doc, std::set<std::pair<std::string, int>>& 
         if (capsule == nullptr) continue;
         capsule->SetValue("cylinder");
         changed = true;
-        if (name != nullptr && std::string(kind) == "collision") capsules.emplace(name, ordinal);
+        if (name != nullptr)
+          (std::string(kind) == "collision" ? capsules : visual_capsules).emplace(name, ordinal);
       }
     }
   }
@@ -431,7 +606,8 @@ std::string findMeshFile(const std::string& filename, const std::string& base_di
 ArticulationModel buildArticulationModel(const std::string& urdf_xml,
                                          const std::string& source,
                                          const std::string& base_dir,
-                                         double default_density) {
+                                         double default_density,
+                                         VisualMeshCache& visual_meshes) {
   // TinyXML first: it says where malformed XML breaks, and it gives the
   // joints' file order, which urdfdom does not keep.
   TiXmlDocument doc;
@@ -451,9 +627,9 @@ ArticulationModel buildArticulationModel(const std::string& urdf_xml,
         joint_file_order.emplace(name, static_cast<int>(joint_file_order.size()));
     }
   }
-  std::set<std::pair<std::string, int>> capsules;
+  std::set<std::pair<std::string, int>> capsules, visual_capsules;
   std::string urdf_text;
-  if (rewriteCapsules(doc, capsules)) {
+  if (rewriteCapsules(doc, capsules, visual_capsules)) {
     TiXmlPrinter printer;
     doc.Accept(&printer);
     urdf_text = printer.CStr();
@@ -471,12 +647,21 @@ ArticulationModel buildArticulationModel(const std::string& urdf_xml,
   const urdf::LinkConstSharedPtr root = urdf->getRoot();
   if (!root) fail(source, "the model has no root link");
 
-  Builder builder{*urdf, source, base_dir, default_density, std::move(joint_file_order),
-                  std::move(capsules), {}};
+  Builder builder{*urdf,
+                  source,
+                  base_dir,
+                  default_density,
+                  std::move(joint_file_order),
+                  std::move(capsules),
+                  std::move(visual_capsules),
+                  visual_meshes,
+                  {},
+                  {}};
   builder.model.source = source;
   builder.model.bodies.emplace_back();  // the root body
   builder.model.bodies[0].link = 0;
   builder.addLink(*root, 0, Transform());
+  builder.resolveMimics();
   return std::move(builder.model);
 }
 

@@ -5,10 +5,15 @@
 // joined by fixed joints are merged into one body: their mass properties are
 // summed and their collision shapes re-expressed in that body's frame.
 // Links without <inertial> get mass from their collision volume (a mesh from
-// its convex hull) at the default density.
+// its convex hull) at the default density. A planar joint becomes a chain of
+// three one-dof joints through two massless bodies; mimic joints name their
+// leader's index. Visuals are kept per link (not merged) for the renderer.
 #pragma once
 
+#include <map>
+#include <memory>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "Simbody.h"
@@ -40,6 +45,9 @@ struct BodyModel {
   // axis in that frame, unit length.
   SimTK::Transform X_PJ;
   SimTK::UnitVec3 axis{1, 0, 0};
+  // An intermediate body of a planar joint's chain: no mass of its own
+  // (Simbody's Body::Massless; the child body carries the mass).
+  bool massless = false;
   // Mass properties about the body origin, in the body frame. Zero mass
   // means "no inertial and no geometry to derive one from".
   double mass = 0;
@@ -53,22 +61,32 @@ struct ArticulationModel {
   std::vector<LinkModel> links;     // depth first from the root
   std::vector<BodyModel> bodies;    // parents before children
   std::vector<JointDescription> joints;
+  // Every <visual>, with `link` the articulation-local link index.
+  std::vector<VisualShape> visuals;
   // Collision geometry that exists in the URDF but is not simulated (a
   // flat mesh: "link 'x': mesh 'name' (why)"), reported once when the URDF
   // is added.
   std::vector<std::string> unsimulated;
 };
 
+// Visual meshes loaded for one scene, by resolved path and scale: each
+// file is read once however many visuals use it.
+using VisualMeshCache = std::map<std::tuple<std::string, double, double, double>,
+                                 std::shared_ptr<const std::vector<VisualMesh>>>;
+
 // Parses `urdf_xml` and builds the description. `source` names the origin
 // in error messages; relative mesh paths start at `base_dir`. Collision
 // meshes become their convex hulls. `<capsule radius length>` (which
 // urdfdom does not know) is accepted as a z-axis capsule of that cylinder
 // length plus two hemispheres. Throws SceneError on malformed XML, URDF
-// errors, unreadable meshes, unsupported joint types or invalid inertias.
+// errors, unreadable meshes, floating joints inside the tree, mimics of
+// unknown joints or invalid inertias.
+// Visual meshes are loaded through (and added to) `visual_meshes`.
 ArticulationModel buildArticulationModel(const std::string& urdf_xml,
                                          const std::string& source,
                                          const std::string& base_dir,
-                                         double default_density);
+                                         double default_density,
+                                         VisualMeshCache& visual_meshes);
 
 // Where a URDF mesh filename points: an absolute path, file://,
 // package://NAME/rest (looked up in ROS_PACKAGE_PATH, then in an ancestor

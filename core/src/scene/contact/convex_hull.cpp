@@ -171,12 +171,24 @@ std::shared_ptr<const ConvexHull> calcConvexHull(const std::vector<SimTK::Vec3>&
   return hull;
 }
 
+namespace {
+
+// One reading convention for collision and visual meshes: node transforms
+// baked in, Collada in its authored axes (as ROS tools load it).
+const aiScene* readMeshFile(Assimp::Importer& importer, const std::string& path,
+                            unsigned extra_flags) {
+  importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
+  const aiScene* scene =
+      importer.ReadFile(path, aiProcess_PreTransformVertices | extra_flags);
+  if (scene == nullptr) throw std::runtime_error(importer.GetErrorString());
+  return scene;
+}
+
+}  // namespace
+
 std::vector<SimTK::Vec3> loadMeshVertices(const std::string& path, const SimTK::Vec3& scale) {
   Assimp::Importer importer;
-  // ROS tools load Collada meshes in their authored axes; so do we.
-  importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
-  const aiScene* scene = importer.ReadFile(path, aiProcess_PreTransformVertices);
-  if (scene == nullptr) throw std::runtime_error(importer.GetErrorString());
+  const aiScene* scene = readMeshFile(importer, path, 0);
   std::vector<SimTK::Vec3> points;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     const aiMesh* mesh = scene->mMeshes[m];
@@ -187,6 +199,74 @@ std::vector<SimTK::Vec3> loadMeshVertices(const std::string& path, const SimTK::
   }
   if (points.empty()) throw std::runtime_error("the file has no mesh vertices");
   return points;
+}
+
+std::vector<VisualMesh> loadVisualMeshes(const std::string& path, const SimTK::Vec3& scale) {
+  Assimp::Importer importer;
+  // Points and lines are dropped (a renderer draws surfaces); normals are
+  // generated only where the file has none.
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
+                              aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  const aiScene* scene =
+      readMeshFile(importer, path,
+                   aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_GenSmoothNormals |
+                       aiProcess_JoinIdenticalVertices);
+  // Normals transform with the inverse scale; a mirroring scale (odd number
+  // of negative factors) also flips the winding so faces stay outward.
+  const Eigen::Vector3f s(static_cast<float>(scale[0]), static_cast<float>(scale[1]),
+                          static_cast<float>(scale[2]));
+  const Eigen::Vector3f inverse = s.cwiseInverse();
+  const bool mirrored = s[0] * s[1] * s[2] < 0;
+  std::string dir;
+  const std::size_t slash = path.find_last_of('/');
+  if (slash != std::string::npos) dir = path.substr(0, slash + 1);
+
+  std::vector<VisualMesh> meshes;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh* mesh = scene->mMeshes[m];
+    VisualMesh out;
+    out.positions.reserve(mesh->mNumVertices);
+    out.normals.reserve(mesh->mNumVertices);
+    for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
+      const aiVector3D& p = mesh->mVertices[v];
+      out.positions.push_back(Eigen::Vector3f(p.x, p.y, p.z).cwiseProduct(s));
+      Eigen::Vector3f n = Eigen::Vector3f::Zero();
+      if (mesh->HasNormals()) {
+        const aiVector3D& a = mesh->mNormals[v];
+        n = Eigen::Vector3f(a.x, a.y, a.z).cwiseProduct(inverse);
+        const float norm = n.norm();
+        n = norm > 0 && std::isfinite(norm) ? Eigen::Vector3f(n / norm) : Eigen::Vector3f::Zero();
+      }
+      out.normals.push_back(n);
+    }
+    for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+      const aiFace& face = mesh->mFaces[f];
+      if (face.mNumIndices != 3) continue;
+      out.indices.push_back(face.mIndices[0]);
+      out.indices.push_back(face.mIndices[mirrored ? 2 : 1]);
+      out.indices.push_back(face.mIndices[mirrored ? 1 : 2]);
+    }
+    if (out.indices.empty()) continue;
+    if (mesh->mMaterialIndex < scene->mNumMaterials) {
+      const aiMaterial* material = scene->mMaterials[mesh->mMaterialIndex];
+      aiColor4D diffuse(1, 1, 1, 1);
+      if (material->Get(AI_MATKEY_COLOR_DIFFUSE, diffuse) == AI_SUCCESS)
+        out.color = Eigen::Vector4f(diffuse.r, diffuse.g, diffuse.b, 1);
+      float opacity = 1;
+      if (material->Get(AI_MATKEY_OPACITY, opacity) == AI_SUCCESS) out.color[3] = opacity;
+      aiString texture;
+      if (material->GetTexture(aiTextureType_DIFFUSE, 0, &texture) == AI_SUCCESS &&
+          texture.length > 0) {
+        out.texture = texture.C_Str();
+        // Embedded textures ("*0") and absolute paths stay as they are;
+        // others are relative to the mesh file.
+        if (out.texture[0] != '*' && out.texture[0] != '/') out.texture = dir + out.texture;
+      }
+    }
+    meshes.push_back(std::move(out));
+  }
+  if (meshes.empty()) throw std::runtime_error("the file has no triangles");
+  return meshes;
 }
 
 std::shared_ptr<const ConvexHull> loadConvexHull(const std::string& path,

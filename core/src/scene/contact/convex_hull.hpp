@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "Simbody.h"
+#include "manibench/scene.hpp"
 
 namespace fcl {
 template <typename S>
@@ -67,6 +68,13 @@ std::shared_ptr<const ConvexHull> calcConvexHull(const std::vector<SimTK::Vec3>&
 // Collada files keep their authored axes (the <up_axis> is ignored, as ROS
 // tools do) and their <unit>. Throws std::runtime_error with assimp's reason.
 std::vector<SimTK::Vec3> loadMeshVertices(const std::string& path, const SimTK::Vec3& scale);
+
+// Triangle lists of a mesh file for the renderer, one per sub-mesh, read
+// with the same conventions as loadMeshVertices: positions scaled, normals
+// (generated where the file has none) unit length, color and texture from
+// the sub-mesh's material. Throws std::runtime_error with assimp's reason
+// or if the file has no triangles.
+std::vector<VisualMesh> loadVisualMeshes(const std::string& path, const SimTK::Vec3& scale);
 
 // loadMeshVertices + calcConvexHull, cached for the process by path, scale,
 // file size and modification time (episodes rebuild scenes from the same
