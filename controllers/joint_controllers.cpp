@@ -14,13 +14,17 @@
 //   max_velocity: 3.14    rad/s or m/s for action 1; default: the joint's
 //                         URDF velocity limit, else 3.14
 //   kp: 10, ki: 0, kd: 0  (joint_position only)
-#include <manibench/sdk.hpp>
+#include "velocity_stage.hpp"
 
 #include <algorithm>
 #include <cmath>
 
 namespace {
 
+using manibench::controllers::kPi;
+using manibench::controllers::readLowPassAlpha;
+using manibench::controllers::requirePositive;
+using manibench::controllers::setDampingDrive;
 using manibench::sdk::Config;
 using manibench::sdk::ControllerContext;
 using manibench::sdk::ControllerSpec;
@@ -29,61 +33,31 @@ using manibench::sdk::Error;
 using manibench::sdk::Segment;
 using manibench::sdk::SceneView;
 
-constexpr double kPi = 3.14159265358979323846;
-
-// Smoothing factor of an exponential moving average whose -3 dB point is
-// `cutoff_hz` when sampled at `sample_hz` (first-order IIR design).
-double calcLowPassAlpha(double cutoff_hz, double sample_hz) {
-  const double y = 1.0 - std::cos(2.0 * kPi * cutoff_hz / sample_hz);
-  return -y + std::sqrt(y * y + 2.0 * y);
-}
-
-double requirePositive(const Config& config, const std::string& key, double fallback) {
-  const double value = config.get<double>(key, fallback);
-  if (!(value > 0) || !std::isfinite(value))
-    throw Error("controller configuration: '" + key + "' must be a positive number, got " +
-                    std::to_string(value),
-                MB_INVALID_ARGUMENT);
-  return value;
-}
-
-// The velocity stage shared by both controllers: scale, filter, drive.
-class VelocityStage {
+// The velocity stage of both joint controllers: per-joint scale, low-pass
+// filter, one damping drive per context joint.
+class JointVelocityStage {
  public:
-  VelocityStage(const Config& config, const ControllerContext& context)
+  JointVelocityStage(const Config& config, const ControllerContext& context)
       : damping_(requirePositive(config, "damping", 100.0)),
-        alpha_(calcLowPassAlpha(requirePositive(config, "cutoff_hz", 40.0),
-                                context.control_frequency)),
-        filtered_(Eigen::VectorXd::Zero(Eigen::Index(context.joints.size()))) {
-    if (config.has("cutoff_hz") && config.get<double>("cutoff_hz", 0) >= context.control_frequency / 2)
-      throw Error("controller configuration: cutoff_hz must be below half the control frequency (" +
-                      std::to_string(context.control_frequency / 2) + " Hz)",
-                  MB_INVALID_ARGUMENT);
+        filter_(context.joints.size(), readLowPassAlpha(config, context.control_frequency)) {
     for (const auto& joint : context.joints) {
       const double fallback = joint.velocity_limit > 0 ? joint.velocity_limit : 3.14;
       max_velocity_.push_back(requirePositive(config, "max_velocity", fallback));
     }
   }
   double getMaxVelocity(std::size_t joint) const { return max_velocity_[joint]; }
-  void reset() { filtered_.setZero(); }
+  void reset() { filter_.reset(); }
   // `velocity` in joint units; writes one damping drive per joint.
   void apply(const Eigen::VectorXd& velocity, std::vector<DriveCommand>& drives) {
-    filtered_ = alpha_ * velocity + (1.0 - alpha_) * filtered_;
-    for (std::size_t j = 0; j < drives.size(); ++j) {
-      DriveCommand& d = drives[j];
-      d.position_target = 0;
-      d.stiffness = 0;
-      d.velocity_target = filtered_[Eigen::Index(j)];
-      d.damping = damping_;
-      d.force = 0;
-    }
+    const Eigen::VectorXd& filtered = filter_.filter(velocity);
+    for (std::size_t j = 0; j < drives.size(); ++j)
+      setDampingDrive(drives[j], filtered[Eigen::Index(j)], damping_);
   }
 
  private:
   double damping_;
-  double alpha_;
+  manibench::controllers::VelocityStage filter_;
   std::vector<double> max_velocity_;
-  Eigen::VectorXd filtered_;
 };
 
 std::vector<Segment> perJointSegments(const ControllerContext& context, const std::string& what) {
@@ -112,7 +86,7 @@ class JointVelocityController : public manibench::sdk::Controller {
 
  private:
   ControllerContext context_;
-  VelocityStage stage_;
+  JointVelocityStage stage_;
 };
 
 class JointPositionController : public manibench::sdk::Controller {
@@ -162,7 +136,7 @@ class JointPositionController : public manibench::sdk::Controller {
 
  private:
   ControllerContext context_;
-  VelocityStage stage_;
+  JointVelocityStage stage_;
   double kp_, ki_, kd_, dt_;
   std::vector<double> lower_, upper_;
   Eigen::VectorXd integral_, previous_error_;

@@ -314,11 +314,12 @@ TEST(PluginRegistry, LoadDirectoriesRecordsOneFailurePerBrokenFixture) {
   for (const auto& library : registry.getLibraries()) loaded.push_back(library.name);
   std::sort(loaded.begin(), loaded.end());
   EXPECT_EQ(loaded, (std::vector<std::string>{"fixture_duplicate_a", "fixture_newer_minor",
-                                              "fixture_throwing_create"}));
+                                              "fixture_robot_testbed", "fixture_throwing_create"}));
   EXPECT_EQ(registry.getNames(PluginKind::Policy),
             (std::vector<std::string>{"duplicate_policy", "newer_minor_policy",
                                       "throwing_policy"}));
-  EXPECT_EQ(registry.getNames(PluginKind::Task), std::vector<std::string>{"Throwing-v0"});
+  EXPECT_EQ(registry.getNames(PluginKind::Task),
+            (std::vector<std::string>{"RobotTestbed-v0", "Throwing-v0"}));
   EXPECT_EQ(registry.getNames(PluginKind::Controller),
             std::vector<std::string>{"throwing_controller"});
   expectZeroPolicyWorks(registry.getPolicy("newer_minor_policy"));
