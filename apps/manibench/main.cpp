@@ -45,7 +45,7 @@ Commands:
   demo                      list the plugins, then run the example task with its
                             scripted expert
 
-Run `manibench <command> --help` for a command's options. info, run and
+Run `manibench <command> --help` for a command's options. info, run, bench and
 config take --config FILE and --set KEY=VALUE (docs/configuration.md).
 Plugins are searched in $MANIBENCH_PLUGIN_PATH, ~/.local/lib/manibench/plugins,
 the install prefix and the build tree, in that order.
