@@ -208,7 +208,7 @@ void PrintTo(const BrokenFixture& f, std::ostream* os) { *os << f.fixture; }
 
 std::vector<BrokenFixture> brokenFixtures() {
   return {
-      {"fixture_wrong_abi_major", {"ABI 99.0", "ABI 1.0"}, {}},
+      {"fixture_wrong_abi_major", {"ABI 99.0", "ABI " + std::to_string(MB_ABI_MAJOR) + "." + std::to_string(MB_ABI_MINOR)}, {}},
       {"fixture_small_manifest", {"manifest", "struct_size"}, {8, sizeof(mb_manifest)}},
       {"fixture_small_descriptor",
        {"struct_size", "task", "SmallDescriptor-v0"},

@@ -36,7 +36,7 @@ extern "C" {
 #endif
 
 #define MB_ABI_MAJOR 1
-#define MB_ABI_MINOR 0
+#define MB_ABI_MINOR 1
 #define MB_ENTRY_POINT_NAME "manibench_plugin_entry"
 
 /* True when `field` of struct type `type` lies within `size` bytes. */
@@ -178,6 +178,26 @@ typedef struct mb_scene_api {
   mb_status (*set_joint_dynamics)(mb_scene* scene, mb_id articulation,
                                   uint32_t joint_index, double damping,
                                   double friction, mb_error* err);
+
+  /* ---- ABI 1.1 ------------------------------------------------------- */
+
+  /* Geometric Jacobian of a point fixed on `link` (`point_in_link`, in the
+   * link frame) with respect to the joint velocities of `articulation`:
+   * 6 rows (angular velocity x, y, z of the link, then linear velocity
+   * x, y, z of the point; world frame) by `count` columns, row-major, `count`
+   * being the articulation's joint count. Columns of joints that do not
+   * move the link are zero. Valid whenever the state is. */
+  mb_status (*calc_link_jacobian)(mb_scene* scene, mb_id articulation,
+                                  mb_id link, const double point_in_link[3],
+                                  double* out, uint32_t count, mb_error* err);
+  /* Segmentation masks (mb_task_info.masks): the visuals of `link` whose
+   * <visual name> contains `visual_name_part` (every visual of the link when
+   * NULL or "") belong to mask `mask_index`. With link < 0, every visual of
+   * `articulation` belongs to it. A visual may belong to several masks.
+   * Only while the task builds its scene. */
+  mb_status (*add_to_mask)(mb_scene* scene, uint32_t mask_index,
+                           mb_id articulation, mb_id link,
+                           const char* visual_name_part, mb_error* err);
 } mb_scene_api;
 
 /* ---- descriptors ------------------------------------------------------ */
@@ -330,6 +350,27 @@ typedef struct mb_observation {
   const double* state;
   uint32_t state_dim;
   uint32_t step; /* environment step within the episode, from 0 */
+
+  /* ---- ABI 1.1: visual modes (zero / NULL in the modes that lack them).
+   * mask_count equals mb_task_info.mask_count. */
+  uint32_t mask_count;
+  /* "pointcloud": world-frame points after the subsampling of supplement
+   * D.1, row-major: xyz and rgb (in [0, 1]) point_count x 3, masks
+   * point_count x mask_count (0 or 1). */
+  uint32_t point_count;
+  const float* points_xyz;
+  const float* points_rgb;
+  const uint8_t* points_mask;
+  /* "rgbd": every camera's image, cameras stacked along the channel axis as
+   * ManiSkill does, row-major height x width x channels: rgb (3 per camera,
+   * in [0, 1]), depth (1 per camera, metres along the optical axis; 0 where
+   * nothing was hit), masks (mask_count per camera, 0 or 1). */
+  uint32_t camera_count;
+  uint32_t image_height;
+  uint32_t image_width;
+  const float* image_rgb;
+  const float* image_depth;
+  const uint8_t* image_masks;
 } mb_observation;
 
 typedef struct mb_policy_descriptor {

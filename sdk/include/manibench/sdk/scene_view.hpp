@@ -173,6 +173,32 @@ class SceneView {
          articulation, joint, damping, friction);
   }
 
+  // --- ABI 1.1 --------------------------------------------------------------
+  // 6 x n geometric Jacobian (angular rows, then linear rows of the point;
+  // world frame) of a point on `link` with respect to the n joint velocities
+  // of `articulation`.
+  Eigen::MatrixXd calcLinkJacobian(
+      mb_id articulation, mb_id link,
+      const Eigen::Vector3d& point_in_link = Eigen::Vector3d::Zero()) const {
+    const uint32_t n = getJointCount(articulation);
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> j(6, n);
+    call("calc_link_jacobian", required(&mb_scene_api::calc_link_jacobian),
+         articulation, link, point_in_link.data(), j.data(), n);
+    return j;
+  }
+  // While building: visuals of `link` whose name contains `visual_name_part`
+  // (all of them when empty) join mask `mask_index` of the task's masks.
+  void addLinkToMask(uint32_t mask_index, mb_id articulation, mb_id link,
+                     const std::string& visual_name_part = "") {
+    call("add_to_mask", required(&mb_scene_api::add_to_mask), mask_index,
+         articulation, link, visual_name_part.c_str());
+  }
+  // While building: every visual of `articulation` joins mask `mask_index`.
+  void addArticulationToMask(uint32_t mask_index, mb_id articulation) {
+    call("add_to_mask", required(&mb_scene_api::add_to_mask), mask_index,
+         articulation, mb_id(-1), static_cast<const char*>(nullptr));
+  }
+
  private:
   // A function the plugin needs but the host's (older) API table lacks.
   template <class Fn>
