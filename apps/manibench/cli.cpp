@@ -1,0 +1,140 @@
+#include "cli.hpp"
+
+#include <algorithm>
+#include <iomanip>
+#include <iostream>
+#include <random>
+#include <sstream>
+
+namespace manibench::cli {
+
+namespace {
+const std::vector<std::string> kRepeatable = {"config", "set"};
+}  // namespace
+
+Arguments parseArguments(int argc, char** argv, int first, const std::vector<std::string>& valued,
+                         const std::vector<std::string>& flags, const char* usage) {
+  Arguments args;
+  for (int i = first; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word == "--help" || word == "-h") {
+      args.help = true;
+    } else if (word.rfind("--", 0) == 0) {
+      std::string key = word.substr(2);
+      std::string value;
+      const std::size_t eq = key.find('=');
+      if (eq != std::string::npos) {
+        value = key.substr(eq + 1);
+        key = key.substr(0, eq);
+      }
+      const bool is_valued = std::find(valued.begin(), valued.end(), key) != valued.end();
+      const bool is_flag = std::find(flags.begin(), flags.end(), key) != flags.end();
+      if (!is_valued && !is_flag) throw UsageError("unknown option '" + word + "'", usage);
+      if (is_valued && eq == std::string::npos) {
+        if (i + 1 >= argc) throw UsageError("option '--" + key + "' needs a value", usage);
+        value = argv[++i];
+      }
+      if (is_flag && eq != std::string::npos)
+        throw UsageError("option '--" + key + "' takes no value", usage);
+      if (std::find(kRepeatable.begin(), kRepeatable.end(), key) != kRepeatable.end())
+        args.repeated[key].push_back(value);
+      else
+        args.options[key] = value;
+    } else {
+      args.positional.push_back(word);
+    }
+  }
+  return args;
+}
+
+uint64_t parseSeed(const std::string& text, const char* usage, const std::string& option) {
+  try {
+    std::size_t used = 0;
+    const unsigned long long value = std::stoull(text, &used);
+    if (used != text.size() || text.find('-') != std::string::npos) throw std::invalid_argument(text);
+    return value;
+  } catch (const std::exception&) {
+    throw UsageError(option + " needs a non-negative integer, got '" + text + "'", usage);
+  }
+}
+
+std::string valueOr(const Arguments& args, const std::string& key, const std::string& fallback) {
+  const auto it = args.options.find(key);
+  return it == args.options.end() ? fallback : it->second;
+}
+
+void loadPlugins(mb::PluginRegistry& registry) { registry.loadSearchPath(); }
+
+// The user's configuration layers from --config, --set and --controller
+// (which acts as the last --set control.controller=NAME).
+mb::ConfigSources getConfigSources(const Arguments& args) {
+  mb::ConfigSources sources;
+  const auto files = args.repeated.find("config");
+  if (files != args.repeated.end()) sources.files = files->second;
+  const auto sets = args.repeated.find("set");
+  if (sets != args.repeated.end()) sources.overrides = sets->second;
+  const auto controller = args.options.find("controller");
+  if (controller != args.options.end())
+    sources.overrides.push_back("control.controller=" + controller->second);
+  return sources;
+}
+
+// An environment as configured. A plugin that rejects its configuration
+// reports lines of the text it was handed; the note added here says in
+// which file (or --set) the keys it names were written.
+std::unique_ptr<mb::Environment> makeEnvironment(const mb::PluginRegistry& registry,
+                                                 const std::string& task_name,
+                                                 const mb::ConfigSources& sources,
+                                                 bool stop_on_success) {
+  const mb::ConfigNode config = mb::loadTaskConfig(registry, task_name, sources);
+  mb::EnvironmentOptions options = mb::calcEnvironmentOptions(config);
+  options.stop_on_success = stop_on_success;
+  try {
+    return std::make_unique<mb::Environment>(registry, task_name, options);
+  } catch (const mb::PluginCallError& e) {
+    throw mb::PluginCallError(mb::annotatePluginError(config, e.what()), e.status());
+  }
+}
+
+void printSegments(const std::vector<mb::SegmentDescription>& segments) {
+  for (const auto& s : segments) {
+    std::ostringstream range;
+    range << "[" << s.offset << ", " << s.offset + s.size << ")";
+    std::cout << "  " << std::left << std::setw(12) << range.str() << std::setw(22) << s.name
+              << s.description << "\n";
+  }
+}
+
+std::string resolvePolicy(mb::PluginRegistry& registry, const std::string& policy) {
+  const bool is_path = policy.find('/') != std::string::npos ||
+                       (policy.size() > 3 && policy.compare(policy.size() - 3, 3, ".so") == 0);
+  if (!is_path) return policy;
+  const std::size_t library = registry.loadLibrary(policy);
+  std::vector<std::string> policies;
+  for (const mb::PluginEntry& e : registry.getEntries())
+    if (e.kind == mb::PluginKind::Policy && e.library == library) policies.push_back(e.name);
+  if (policies.size() != 1)
+    throw std::runtime_error("library " + policy + " registers " + std::to_string(policies.size()) +
+                             " policies; give one by name with MANIBENCH_PLUGIN_PATH instead");
+  return policies.front();
+}
+
+std::string chooseObject(const std::vector<std::string>& objects, uint64_t seed,
+                         const std::string& split) {
+  if (objects.empty()) throw std::runtime_error("the " + split + " split has no objects");
+  std::mt19937_64 rng(seed);
+  return objects[rng() % objects.size()];
+}
+
+void printEpisode(const mb::EpisodeResult& r) {
+  std::cout << "object " << r.object_id << ", seed " << r.seed << ": " << r.steps << " steps, return "
+            << std::fixed << std::setprecision(3) << r.total_reward << "\n";
+  for (std::size_t i = 0; i < r.condition_names.size(); ++i)
+    std::cout << "  " << std::left << std::setw(16) << r.condition_names[i]
+              << (r.final_flags[i] ? "yes" : "no ") << "  (" << std::setprecision(4)
+              << r.final_values[i] << ")\n";
+  std::cout.unsetf(std::ios::fixed);
+}
+
+
+}  // namespace manibench::cli
