@@ -1,0 +1,181 @@
+// Headless rasterizer for Scene visuals: one process-wide EGL display and
+// OpenGL 3.3+ core context (a GPU through EGL_EXT_platform_device when there
+// is one, else Mesa's llvmpipe), and per scene static vertex buffers drawn
+// with the link poses of the current step. Each camera gets color, metric
+// depth and per-pixel visual/link segmentation; calcCameraPoints turns depth
+// into points. Sources: core/src/render/ (part of manibench_core, which links
+// libEGL and libOpenGL privately). Neither EGL nor GL headers leak from here.
+//
+// Threads and processes: every GL call of the process goes through the one
+// context, serialized by a mutex (any thread may render, one at a time). EGL
+// does not survive fork(): a worker process must create its renderers after
+// the fork; using a context inherited from the parent throws RenderError.
+#pragma once
+
+#include <manibench/scene.hpp>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace manibench {
+
+// EGL could not start, software rendering was refused, the context was
+// inherited across fork(), or a GL object could not be created.
+class RenderError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct RenderOptions {
+  // false: throw RenderError rather than fall back to a software rasterizer
+  // (llvmpipe/softpipe), for users who expect their GPU to be used.
+  bool allow_software = true;
+  // Print the chosen EGL device and GL_RENDERER to stderr when the context
+  // is created (once per process).
+  bool verbose = false;
+  // Index into eglQueryDevicesEXT to use; -1: hardware devices first, then
+  // software ones, then Mesa's surfaceless platform.
+  int device = -1;
+};
+
+// What RenderContext::get chose.
+struct RenderDeviceInfo {
+  std::string platform;     // "EGL_EXT_platform_device" or "EGL_MESA_platform_surfaceless"
+  int device_index = -1;    // index among eglQueryDevicesEXT, -1 on surfaceless
+  std::string device;       // e.g. "software (EGL_MESA_device_software)", "/dev/dri/renderD128"
+  std::string gl_vendor, gl_renderer, gl_version;
+  bool software = false;    // llvmpipe/softpipe/swrast
+};
+
+class RenderContext {
+ public:
+  // The process-wide context, created on the first call with `options`
+  // (later calls reuse it; they throw if they refuse software and it is
+  // software). Throws RenderError naming what was tried and how to fix it.
+  static RenderContext& get(const RenderOptions& options = {});
+  // Whether this process (not a parent before fork) has created it.
+  static bool exists();
+
+  const RenderDeviceInfo& getInfo() const;
+  // One line: platform, device, GL_RENDERER, GL_VERSION.
+  std::string describe() const;
+
+  RenderContext(const RenderContext&) = delete;
+  RenderContext& operator=(const RenderContext&) = delete;
+  ~RenderContext();  // never runs: the display lives until the process ends
+
+  struct Impl;
+  Impl& impl() { return *impl_; }  // for core/src/render only
+
+ private:
+  explicit RenderContext(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+// Camera model (SAPIEN convention): the camera looks along its +x axis with
+// +z up (+y left). Square pixels; the horizontal fov follows from the aspect.
+struct CameraSpec {
+  std::string name;  // keys the camera's framebuffer inside a SceneRenderer
+  int width = 400, height = 160;
+  double fovy = 1.0471975511965976;  // vertical field of view, rad
+  double near = 0.1, far = 10.0;     // clipping distances, m
+};
+
+struct DirectionalLight {
+  Eigen::Vector3f direction{0, 0, -1};  // direction the light travels, world
+  Eigen::Vector3f color{1, 1, 1};       // linear RGB intensity
+  bool shadow = false;                  // accepted, not rendered (no shadows yet)
+};
+
+struct PointLight {
+  Eigen::Vector3f position{0, 0, 0};  // world, m
+  Eigen::Vector3f color{1, 1, 1};     // linear RGB intensity at 1 m (falls off with 1/r^2)
+};
+
+// color = base * (ambient + sum of Lambert terms) + 0.1 * Blinn-Phong
+// specular (exponent 32) per light. No shadows or textures yet. The defaults
+// are ManiSkill's: ambient 0.3, two directional lights. Each distinct pair
+// of light counts compiles one shader program (changing counts per frame is
+// possible but costs a compile the first time).
+struct LightingSpec {
+  static constexpr int kMaxLights = 8;  // per kind
+  Eigen::Vector3f ambient{0.3f, 0.3f, 0.3f};
+  std::vector<DirectionalLight> directional{
+      {Eigen::Vector3f(1, 1, -1), Eigen::Vector3f(1, 1, 1), true},
+      {Eigen::Vector3f(0, 0, -1), Eigen::Vector3f(1, 1, 1), false}};
+  std::vector<PointLight> point;
+  Eigen::Vector4f background{0, 0, 0, 1};  // color where nothing is hit
+};
+
+// One camera's images; row 0 is the TOP row, pixel (row, col) at index
+// row * width + col.
+struct CameraImages {
+  std::string camera;
+  int width = 0, height = 0;
+  std::vector<std::uint8_t> rgba;  // 4 per pixel, 8-bit, lit color clamped to [0, 1]
+  std::vector<float> depth;        // m along the optical axis; 0: nothing hit
+  std::vector<std::int32_t> visual;  // index into Scene::getVisualShapes(); -1: background
+  std::vector<std::int32_t> link;    // that visual's link id; -1: background
+  // Camera pose in the world, SAPIEN frame (x forward, y left, z up).
+  Eigen::Isometry3d camera_to_world = Eigen::Isometry3d::Identity();
+  // OpenCV intrinsics: u = fx X/Z + cx with X right, Y down, Z forward;
+  // pixel (row, col) has its centre at u = col + 0.5, v = row + 0.5.
+  Eigen::Matrix3d intrinsic = Eigen::Matrix3d::Identity();
+  double near = 0, far = 0;
+};
+
+// Renders one Scene (which must outlive it). The constructor uploads all
+// visual geometry once (build the scene first: render() refuses a scene that
+// gained visuals since); render() only reads link poses (the scene must be
+// finalized) and draws. Any thread may render; calls are serialized. Not
+// copyable; destruction frees the scene's GL objects (buffers, framebuffers;
+// shader programs are shared process-wide). Textures and transparency are
+// not rendered: each visual is drawn opaque in its material color.
+class SceneRenderer {
+ public:
+  explicit SceneRenderer(const Scene& scene, LightingSpec lighting = {},
+                         const RenderOptions& options = {});
+  ~SceneRenderer();
+  SceneRenderer(const SceneRenderer&) = delete;
+  SceneRenderer& operator=(const SceneRenderer&) = delete;
+
+  // Renders `camera` placed at `camera_pose_world` (SAPIEN camera frame)
+  // into `out` (resized as needed; reuse it to avoid allocations).
+  void render(const CameraSpec& camera, const Pose& camera_pose_world, CameraImages& out);
+
+  void setLighting(const LightingSpec& lighting);
+  const LightingSpec& getLighting() const;
+  // Per visual (index into Scene::getVisualShapes()): hide it from every
+  // camera (e.g. goal markers), or override its color (config materials).
+  void setVisualVisible(int visual, bool visible);
+  void setVisualColor(int visual, const Eigen::Vector4f& rgba);
+
+  // Triangles drawn per camera with every visual visible (primitives as
+  // tessellated here, plus mesh triangles).
+  std::size_t getTriangleCount() const;
+  const RenderDeviceInfo& getDeviceInfo() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// The 3D points of the pixels with depth > 0, in pixel order (row-major from
+// the top row): in the camera frame (SAPIEN: x forward, y left, z up) or, if
+// `world`, in the world frame. `pixels`, if given, receives each point's
+// pixel index (row * width + col) to pick its color or segmentation.
+Eigen::Matrix3Xf calcCameraPoints(const CameraImages& images, bool world,
+                                  std::vector<int>* pixels = nullptr);
+
+// Camera pose from a look-at: camera at `eye` with its +x toward `target`
+// and +z as close to `up` as possible.
+Pose calcLookAtPose(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
+                    const Eigen::Vector3d& up = Eigen::Vector3d::UnitZ());
+
+}  // namespace manibench

@@ -1,0 +1,560 @@
+// The headless renderer against real EGL (llvmpipe on CI) and real Scenes:
+// metric depth, point clouds, segmentation, lighting, fork safety, memory.
+#include <manibench/renderer.hpp>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+#include <thread>
+#include <unistd.h>
+
+namespace manibench {
+namespace {
+
+std::string inertial() {
+  return "<inertial><mass value='1'/><inertia ixx='0.01' iyy='0.01' izz='0.01' ixy='0' "
+         "ixz='0' iyz='0'/></inertial>";
+}
+
+// One link with one box visual of full extents (x, y, z) and color.
+std::string boxUrdf(const std::string& name, double x, double y, double z,
+                    const std::string& rgba = "0.8 0.8 0.8 1") {
+  std::ostringstream s;
+  s << "<robot name='" << name << "'><link name='" << name << "'>" << inertial()
+    << "<visual><geometry><box size='" << x << " " << y << " " << z
+    << "'/></geometry><material name='" << name << "_color'><color rgba='" << rgba
+    << "'/></material></visual></link></robot>";
+  return s.str();
+}
+
+// A base with a box on a prismatic joint along y (the moving link).
+std::string sliderUrdf() {
+  return "<robot name='slider'><link name='base'>" + inertial() +
+         "</link><link name='carriage'>" + inertial() +
+         "<visual><geometry><box size='0.1 0.1 0.1'/></geometry>"
+         "<material name='red'><color rgba='1 0 0 1'/></material></visual></link>"
+         "<joint name='slide' type='prismatic'><parent link='base'/><child link='carriage'/>"
+         "<axis xyz='0 1 0'/><limit lower='-1' upper='1' effort='10' velocity='1'/></joint>"
+         "</robot>";
+}
+
+Pose at(double x, double y, double z, double yaw = 0) {
+  Pose p;
+  p.position = Eigen::Vector3d(x, y, z);
+  p.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
+  return p;
+}
+
+int countHits(const CameraImages& images) {
+  return static_cast<int>(std::count_if(images.visual.begin(), images.visual.end(),
+                                        [](int v) { return v >= 0; }));
+}
+
+// Signed distance-like measure of p (box frame) to the surface of a box of
+// half extents h: 0 on the surface.
+double boxSurfaceDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& h) {
+  const Eigen::Vector3d q = p.cwiseAbs() - h;
+  const double outside = q.cwiseMax(0.0).norm();
+  const double inside = std::min(q.maxCoeff(), 0.0);
+  return std::abs(outside + inside);
+}
+
+// Waits for a child up to `seconds`, killing it on timeout; returns the
+// exit code, 128 + signal if signalled, or -1 on timeout.
+int waitChild(pid_t pid, double seconds) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  int status = 0;
+  while (waitpid(pid, &status, WNOHANG) == 0) {
+    if (std::chrono::steady_clock::now() > deadline) {
+      kill(pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      return -1;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  if (WIFEXITED(status)) return WEXITSTATUS(status);
+  return 128 + WTERMSIG(status);
+}
+
+long readRssKb() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
+  }
+  return -1;
+}
+
+// Runs first (declaration order) so that, when this program runs all its
+// tests in one process, no context exists yet; ctest runs each test alone.
+TEST(RendererFork, WorkerForkedBeforeEglRendersWithItsOwnContext) {
+  if (RenderContext::exists()) {
+    GTEST_SKIP() << "this process already created its EGL context; run this test alone";
+  }
+  std::fflush(nullptr);
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    alarm(60);
+    int code = 0;
+    try {
+      Scene scene;
+      scene.addUrdfString(boxUrdf("plate", 0.02, 10, 10), "", "plate", at(2, 0, 0), true);
+      scene.finalize();
+      SceneRenderer renderer(scene);
+      CameraImages images;
+      CameraSpec camera;
+      camera.name = "front";
+      renderer.render(camera, Pose(), images);
+      code = countHits(images) == camera.width * camera.height ? 0 : 2;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "child: %s\n", e.what());
+      code = 3;
+    }
+    _exit(code);
+  }
+  EXPECT_EQ(waitChild(pid, 90), 0) << "the forked worker could not render (or hung)";
+  EXPECT_FALSE(RenderContext::exists()) << "the child's context must not appear in the parent";
+}
+
+// Runs `body` in a forked child of a process without EGL state (skips when
+// this process already has it) and returns the child's exit code.
+template <typename Body>
+int runInFreshChild(Body body) {
+  std::fflush(nullptr);
+  const pid_t pid = fork();
+  if (pid < 0) return -2;
+  if (pid == 0) {
+    alarm(60);
+    int code = 99;
+    try {
+      code = body();
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "child: %s\n", e.what());
+    }
+    _exit(code);
+  }
+  return waitChild(pid, 90);
+}
+
+TEST(RendererFork, RefusingSoftwareRenderingSaysWhatWasFound) {
+  if (RenderContext::exists()) GTEST_SKIP() << "needs a process without EGL; run alone";
+  const int code = runInFreshChild([] {
+    RenderOptions options;
+    options.allow_software = false;
+    try {
+      const RenderContext& context = RenderContext::get(options);
+      return context.getInfo().software ? 1 : 0;  // a GPU machine: fine
+    } catch (const RenderError& e) {
+      const std::string message = e.what();
+      std::fprintf(stderr, "child: %s\n", e.what());
+      return message.find("software rendering refused") != std::string::npos &&
+                     message.find("EGL_MESA_device_software") != std::string::npos &&
+                     message.find("NVIDIA") != std::string::npos
+                 ? 0
+                 : 2;
+    }
+  });
+  EXPECT_EQ(code, 0);
+}
+
+TEST(RendererFork, EglFailureNamesWhatWasTriedAndTheFix) {
+  if (RenderContext::exists()) GTEST_SKIP() << "needs a process without EGL; run alone";
+  const int code = runInFreshChild([] {
+    // GLVND reads this on the process's first EGL call: no vendor at all.
+    setenv("__EGL_VENDOR_LIBRARY_FILENAMES", "/nonexistent/none.json", 1);
+    try {
+      RenderContext::get();
+      return 1;
+    } catch (const RenderError& e) {
+      const std::string message = e.what();
+      for (const char* expected : {"EGL_EXT_platform_device", "EGL_MESA_platform_surfaceless",
+                                   "/nonexistent/none.json", "50_mesa.json", "libegl-mesa0",
+                                   "libgl1-mesa-dri", "NVIDIA"}) {
+        if (message.find(expected) == std::string::npos) {
+          std::fprintf(stderr, "child: '%s' missing from: %s\n", expected, e.what());
+          return 2;
+        }
+      }
+      return 0;
+    }
+  });
+  EXPECT_EQ(code, 0);
+}
+
+TEST(RendererFork, ChildUsingTheParentsContextGetsAClearError) {
+  Scene scene;
+  scene.addUrdfString(boxUrdf("plate", 0.02, 10, 10), "", "plate", at(2, 0, 0), true);
+  scene.finalize();
+  SceneRenderer renderer(scene);
+  CameraSpec camera;
+  camera.name = "front";
+  CameraImages images;
+  renderer.render(camera, Pose(), images);
+  ASSERT_GT(countHits(images), 0);
+
+  std::fflush(nullptr);
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    alarm(30);
+    int code = 10;
+    try {
+      renderer.render(camera, Pose(), images);
+      code = 11;  // must not render
+    } catch (const RenderError& e) {
+      const std::string message = e.what();
+      code = message.find("fork") != std::string::npos &&
+                     message.find(std::to_string(getppid())) != std::string::npos
+                 ? 0
+                 : 12;
+      if (code != 0) std::fprintf(stderr, "child: unclear message: %s\n", e.what());
+    }
+    if (code == 0) {
+      try {
+        RenderContext::get();
+        code = 13;
+      } catch (const RenderError&) {
+      }
+      try {
+        SceneRenderer other(scene);
+        code = 14;
+      } catch (const RenderError&) {
+      }
+    }
+    _exit(code);  // no destructors: the renderer belongs to the parent
+  }
+  EXPECT_EQ(waitChild(pid, 60), 0) << "exit 11: rendered in the child; -1: hung";
+  // The parent is unaffected.
+  renderer.render(camera, Pose(), images);
+  EXPECT_EQ(countHits(images), camera.width * camera.height);
+}
+
+TEST(Renderer, DescribesTheDeviceAndRendererOnce) {
+  RenderContext& context = RenderContext::get();
+  EXPECT_EQ(&context, &RenderContext::get());
+  const RenderDeviceInfo& info = context.getInfo();
+  EXPECT_FALSE(info.gl_renderer.empty());
+  EXPECT_FALSE(info.platform.empty());
+  EXPECT_NE(context.describe().find(info.gl_renderer), std::string::npos);
+  std::printf("render context: %s\n", context.describe().c_str());
+  RenderOptions no_software;
+  no_software.allow_software = false;
+  if (info.software) {
+    try {
+      RenderContext::get(no_software);
+      ADD_FAILURE() << "software rendering was not refused";
+    } catch (const RenderError& e) {
+      EXPECT_NE(std::string(e.what()).find("software"), std::string::npos) << e.what();
+    }
+  } else {
+    EXPECT_NO_THROW(RenderContext::get(no_software));
+  }
+}
+
+TEST(Renderer, PlaneDepthIsMetricWithinAMillimetre) {
+  Scene scene;
+  // Plate face toward the camera at x = 1.99 (box centre 2, thickness 0.02).
+  scene.addUrdfString(boxUrdf("plate", 0.02, 10, 10), "", "plate", at(2, 0.3, 0.1), true);
+  scene.finalize();
+  SceneRenderer renderer(scene);
+  CameraSpec camera;
+  camera.name = "front";
+  camera.width = 64;
+  camera.height = 48;
+  camera.fovy = 1.2;
+  CameraImages images;
+  Pose pose;
+  pose.position = Eigen::Vector3d(0, 0.1, 0.2);
+  renderer.render(camera, pose, images);
+  ASSERT_EQ(images.depth.size(), 64u * 48u);
+  double worst = 0;
+  for (float z : images.depth) worst = std::max(worst, std::abs(z - 1.99));
+  std::printf("plane depth: worst error %.1f um\n", worst * 1e6);
+  EXPECT_LT(worst, 1e-3);
+  const Eigen::Matrix3Xf world = calcCameraPoints(images, true);
+  ASSERT_EQ(world.cols(), 64 * 48);
+  EXPECT_LT((world.row(0).array() - 1.99f).abs().maxCoeff(), 1e-3f);
+  // Unprojection spans the field of view: the top rows are above the
+  // camera, the image's left is +y (SAPIEN: y left).
+  const Eigen::Matrix3Xf local = calcCameraPoints(images, false);
+  EXPECT_GT(local(2, 0), 0.5f);               // top-left pixel: up
+  EXPECT_GT(local(1, 0), 0.5f);               // and left
+  EXPECT_LT(local(2, 64 * 48 - 1), -0.5f);    // bottom-right: down
+  EXPECT_LT(local(1, 64 * 48 - 1), -0.5f);    // and right
+  EXPECT_NEAR(std::tan(0.6) * 1.99 * (1 - 1.0 / 48), local(2, 0), 1e-3);
+
+  // Farther than `far`: nothing.
+  camera.far = 1.5;
+  renderer.render(camera, pose, images);
+  EXPECT_EQ(countHits(images), 0);
+  EXPECT_EQ(*std::max_element(images.depth.begin(), images.depth.end()), 0.0f);
+}
+
+TEST(Renderer, BoxPointCloudLiesOnItsFaces) {
+  Scene scene;
+  scene.addGround(0);  // (no visual) the ground must not appear in the image
+  const Eigen::Vector3d half(0.15, 0.1, 0.05);
+  Pose box_pose = at(0.4, -0.2, 0.3, 0.5);
+  box_pose.orientation =
+      box_pose.orientation * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX());
+  scene.addUrdfString(boxUrdf("box", 0.3, 0.2, 0.1), "", "box", box_pose, true);
+  scene.finalize();
+  SceneRenderer renderer(scene);
+  CameraSpec camera;
+  camera.name = "oblique";
+  camera.width = 160;
+  camera.height = 120;
+  camera.fovy = 0.8;
+  CameraImages images;
+  renderer.render(camera, calcLookAtPose({1.2, 0.5, 0.9}, box_pose.position), images);
+  std::vector<int> pixels;
+  const Eigen::Matrix3Xf world = calcCameraPoints(images, true, &pixels);
+  ASSERT_GT(world.cols(), 500);
+  const Eigen::Isometry3d box_to_world =
+      Eigen::Translation3d(box_pose.position) * box_pose.orientation;
+  double worst = 0;
+  for (Eigen::Index k = 0; k < world.cols(); ++k) {
+    const Eigen::Vector3d p = box_to_world.inverse() * world.col(k).cast<double>();
+    worst = std::max(worst, boxSurfaceDistance(p, half));
+    EXPECT_EQ(images.visual[static_cast<std::size_t>(pixels[static_cast<std::size_t>(k)])], 0);
+  }
+  std::printf("box point cloud: %ld points, worst distance to a face %.1f um\n",
+              static_cast<long>(world.cols()), worst * 1e6);
+  EXPECT_LT(worst, 1e-3);
+  // Three faces are visible from this corner: the points span all axes.
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = -lo;
+  for (Eigen::Index k = 0; k < world.cols(); ++k) {
+    const Eigen::Vector3d p = box_to_world.inverse() * world.col(k).cast<double>();
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  EXPECT_GT((hi - lo).minCoeff(), 0.05);
+}
+
+TEST(Renderer, SegmentationNamesTheVisualAndFollowsTheLink) {
+  Scene scene;
+  scene.addUrdfString(boxUrdf("table", 1.0, 1.0, 0.04, "0.5 0.5 0.5 1"), "", "table",
+                      at(0, 0, -0.02), true);
+  const int slider = scene.addUrdfString(sliderUrdf(), "", "slider", at(0, 0, 0.05), true);
+  scene.finalize();
+  const std::vector<VisualShape>& shapes = scene.getVisualShapes();
+  ASSERT_EQ(shapes.size(), 2u);
+  const int carriage = scene.findLink(slider, "carriage");
+  ASSERT_EQ(shapes[1].link, carriage);
+  SceneRenderer renderer(scene);
+  CameraSpec camera;
+  camera.name = "top";
+  camera.width = 120;
+  camera.height = 120;
+  camera.fovy = 1.0;
+  const Pose pose = calcLookAtPose({0.0, 0.0, 1.5}, {0, 0, 0}, Eigen::Vector3d::UnitX());
+  CameraImages images;
+  for (const double y : {0.0, 0.25}) {
+    scene.setJointPositions(slider, Eigen::VectorXd::Constant(1, y));
+    renderer.render(camera, pose, images);
+    std::vector<int> pixels;
+    const Eigen::Matrix3Xf world = calcCameraPoints(images, true, &pixels);
+    int on_box = 0, background = 0;
+    for (Eigen::Index k = 0; k < world.cols(); ++k) {
+      const std::size_t i = static_cast<std::size_t>(pixels[static_cast<std::size_t>(k)]);
+      const Eigen::Vector3f p = world.col(k);
+      // Inside the carriage's box (1 mm slack) <=> labelled carriage.
+      const bool footprint = std::abs(p.x()) < 0.051f && std::abs(p.y() - y) < 0.051f;
+      if (footprint && std::abs(p.z()) < 0.002f) continue;  // where box meets table
+      const bool inside = footprint && p.z() > 0 && p.z() < 0.101f;
+      const bool labelled = images.visual[i] == 1;
+      EXPECT_EQ(inside, labelled) << "pixel " << i << " at " << p.transpose() << ", y " << y;
+      if (labelled) {
+        ++on_box;
+        EXPECT_EQ(images.link[i], carriage);
+        EXPECT_GT(images.rgba[4 * i], 2 * images.rgba[4 * i + 1]);  // red
+      } else {
+        EXPECT_EQ(images.visual[i], 0);
+        EXPECT_EQ(images.link[i], shapes[0].link);
+      }
+    }
+    for (std::size_t i = 0; i < images.visual.size(); ++i) {
+      if (images.visual[i] < 0) {
+        ++background;
+        EXPECT_EQ(images.link[i], -1);
+        EXPECT_EQ(images.depth[i], 0.0f);
+      }
+    }
+    EXPECT_GT(on_box, 40) << "y " << y;
+    EXPECT_GT(background, 100) << "the table does not fill the view";
+    if (y > 0) {
+      // The carriage's points moved with it (its -y side shows a little).
+      double mean_y = 0;
+      for (Eigen::Index k = 0; k < world.cols(); ++k) {
+        if (images.visual[static_cast<std::size_t>(pixels[static_cast<std::size_t>(k)])] == 1) {
+          mean_y += world(1, k);
+        }
+      }
+      EXPECT_NEAR(mean_y / on_box, 0.25, 0.02);
+    }
+  }
+  // Hidden visuals vanish from every image.
+  renderer.setVisualVisible(1, false);
+  renderer.render(camera, pose, images);
+  EXPECT_EQ(std::count(images.visual.begin(), images.visual.end(), 1), 0);
+  EXPECT_THROW(renderer.setVisualVisible(2, false), RenderError);
+}
+
+TEST(Renderer, LightingIsAmbientPlusLambert) {
+  Scene scene;
+  scene.addUrdfString(boxUrdf("plate", 0.02, 10, 10, "1 1 1 1"), "", "plate", at(2, 0, 0), true);
+  scene.finalize();
+  LightingSpec ambient_only;
+  ambient_only.directional.clear();
+  SceneRenderer renderer(scene, ambient_only);
+  CameraSpec camera;
+  camera.name = "front";
+  camera.width = 16;
+  camera.height = 16;
+  CameraImages images;
+  renderer.render(camera, Pose(), images);
+  EXPECT_NEAR(images.rgba[0], 0.3 * 255, 1.5);  // white x ambient 0.3
+  EXPECT_EQ(images.rgba[3], 255);
+
+  LightingSpec lit = ambient_only;
+  lit.directional.push_back({Eigen::Vector3f(1, 0, 0), Eigen::Vector3f(0.5f, 0.5f, 0.5f)});
+  renderer.setLighting(lit);  // head on: 0.3 + 0.5 Lambert + 0.1 x 0.5 specular
+  renderer.render(camera, Pose(), images);
+  EXPECT_NEAR(images.rgba[4 * (8 * 16 + 8)], 0.85 * 255, 4);
+  lit.directional.back().direction = Eigen::Vector3f(-1, 0, 0);  // from behind: no light
+  renderer.setLighting(lit);
+  renderer.render(camera, Pose(), images);
+  EXPECT_NEAR(images.rgba[0], 0.3 * 255, 1.5);
+
+  LightingSpec point = ambient_only;
+  point.point.push_back({Eigen::Vector3f(1, 0, 0), Eigen::Vector3f(0.4f, 0.4f, 0.4f)});
+  renderer.setLighting(point);  // 0.99 m in front of the face: falls off with 1/r^2
+  renderer.render(camera, Pose(), images);
+  EXPECT_NEAR(images.rgba[4 * (8 * 16 + 8)], (0.3 + 1.1 * 0.4 / (0.99 * 0.99)) * 255, 5);
+
+  LightingSpec too_many = ambient_only;
+  too_many.point.resize(LightingSpec::kMaxLights + 1);
+  EXPECT_THROW(renderer.setLighting(too_many), RenderError);
+}
+
+TEST(Renderer, AnyThreadMayRenderOneAtATime) {
+  Scene scene;
+  scene.addUrdfString(boxUrdf("plate", 0.02, 10, 10), "", "plate", at(2, 0, 0), true);
+  scene.finalize();
+  SceneRenderer first(scene), second(scene);
+  CameraSpec camera;
+  camera.name = "front";
+  camera.width = 32;
+  camera.height = 32;
+  std::vector<int> hits(4, 0);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t) {
+    threads.emplace_back([&, t] {
+      CameraImages images;
+      SceneRenderer& renderer = t % 2 ? first : second;
+      for (int i = 0; i < 20; ++i) {
+        renderer.render(camera, Pose(), images);
+        hits[static_cast<std::size_t>(t)] += countHits(images) == 32 * 32 ? 1 : 0;
+      }
+    });
+  }
+  for (std::thread& thread : threads) thread.join();
+  EXPECT_EQ(hits, std::vector<int>(4, 20));
+}
+
+TEST(Renderer, TessellatesPrimitivesCoarselyAndCountsTriangles) {
+  Scene scene;
+  const std::string urdf =
+      "<robot name='shapes'><link name='a'>" + inertial() +
+      "<visual><geometry><box size='0.1 0.1 0.1'/></geometry></visual>"
+      "<visual><geometry><sphere radius='0.05'/></geometry></visual>"
+      "<visual><geometry><cylinder radius='0.05' length='0.2'/></geometry></visual>"
+      "<visual><geometry><capsule radius='0.05' length='0.2'/></geometry></visual>"
+      "<visual><origin xyz='0.3 0 0'/><geometry><box size='0.1 0.1 0.1'/></geometry></visual>"
+      "</link></robot>";
+  scene.addUrdfString(urdf, "", "shapes", Pose(), true);
+  scene.finalize();
+  SceneRenderer renderer(scene);
+  // box 12, sphere 16 x 8 bands - 2 x 16 pole triangles, cylinder 16 x 4,
+  // capsule 16 x 10 bands - 32; the second box shares the first's buffers.
+  EXPECT_EQ(renderer.getTriangleCount(), 12u + 224u + 64u + 256u + 12u);
+}
+
+TEST(Renderer, RejectsBadCamerasByName) {
+  Scene scene;
+  scene.addUrdfString(boxUrdf("plate", 0.02, 10, 10), "", "plate", at(2, 0, 0), true);
+  scene.finalize();
+  SceneRenderer renderer(scene);
+  CameraImages images;
+  CameraSpec camera;
+  camera.name = "hand";
+  camera.width = 0;
+  try {
+    renderer.render(camera, Pose(), images);
+    ADD_FAILURE() << "a 0-pixel camera was accepted";
+  } catch (const RenderError& e) {
+    EXPECT_NE(std::string(e.what()).find("'hand'"), std::string::npos) << e.what();
+  }
+  camera.width = 8;
+  camera.near = 2;
+  camera.far = 1;
+  EXPECT_THROW(renderer.render(camera, Pose(), images), RenderError);
+  camera.far = 10;
+  Pose bad;
+  bad.position.x() = std::nan("");
+  EXPECT_THROW(renderer.render(camera, bad, images), RenderError);
+}
+
+TEST(Renderer, RefusesASceneThatGainedVisualsAfterIt) {
+  Scene scene;
+  scene.addUrdfString(boxUrdf("plate", 0.02, 10, 10), "", "plate", at(2, 0, 0), true);
+  SceneRenderer renderer(scene);
+  scene.addUrdfString(boxUrdf("late", 0.1, 0.1, 0.1), "", "late", at(1, 0, 0), true);
+  scene.finalize();
+  CameraSpec camera;
+  camera.name = "front";
+  CameraImages images;
+  try {
+    renderer.render(camera, Pose(), images);
+    ADD_FAILURE() << "rendered a scene with an undrawn visual";
+  } catch (const RenderError& e) {
+    EXPECT_NE(std::string(e.what()).find("after the scene is built"), std::string::npos);
+  }
+}
+
+// Scenes come and go (every reset of every env): their GL objects must go
+// with them (~3 ms per cycle here).
+TEST(Renderer, SceneCyclesDoNotGrowMemory) {
+  const auto cycle = [] {
+    Scene scene;
+    scene.addUrdfString(boxUrdf("plate", 0.02, 10, 10), "", "plate", at(2, 0, 0), true);
+    scene.addUrdfString(sliderUrdf(), "", "slider", at(1, 0, 0), true);
+    scene.finalize();
+    SceneRenderer renderer(scene);
+    CameraSpec camera;
+    camera.name = "front";
+    camera.width = 128;
+    camera.height = 64;
+    CameraImages images;
+    renderer.render(camera, Pose(), images);
+    return countHits(images);
+  };
+  for (int i = 0; i < 50; ++i) ASSERT_EQ(cycle(), 128 * 64);  // warm-up
+  const long before = readRssKb();
+  for (int i = 0; i < 1000; ++i) ASSERT_EQ(cycle(), 128 * 64);
+  const long after = readRssKb();
+  std::printf("VmRSS %ld kB -> %ld kB over 1000 scene cycles\n", before, after);
+  EXPECT_LT(after, before * 1.10);
+}
+
+}  // namespace
+}  // namespace manibench
