@@ -3,9 +3,11 @@
 #include <manibench/plugin_instances.hpp>
 #include <manibench/scene.hpp>
 
+#include <cstdint>
 #include <cstring>
 #include <set>
 #include <string>
+#include <vector>
 
 struct mb_scene {
   manibench::Scene* scene = nullptr;
@@ -14,6 +16,11 @@ struct mb_scene {
   // Names handed to plugins must outlive any later add_*; a std::set's nodes
   // never move.
   std::set<std::string> interned;
+  // Segmentation masks (ABI 1.1 add_to_mask): the task's mask names and,
+  // per visual of Scene::getVisualShapes(), bit m set when the visual
+  // belongs to mask m.
+  std::vector<std::string> mask_names;
+  std::vector<std::uint64_t> visual_masks;
 };
 
 namespace manibench {
@@ -255,6 +262,66 @@ mb_status setJointDynamics(mb_scene* s, mb_id articulation, uint32_t joint, doub
     m.scene->setJointDynamics(articulation, static_cast<int>(joint), damping, friction);
   });
 }
+mb_status calcLinkJacobian(mb_scene* s, mb_id articulation, mb_id link,
+                           const double point_in_link[3], double* out, uint32_t count,
+                           mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requireCount(*m.scene, articulation, count);
+    requirePointer(point_in_link, "point in link");
+    requirePointer(out, "output Jacobian");
+    const Eigen::Matrix<double, 6, Eigen::Dynamic> j = m.scene->calcLinkJacobian(
+        articulation, link, Eigen::Map<const Eigen::Vector3d>(point_in_link));
+    // The ABI's layout is row-major.
+    Eigen::Map<Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor>>(out, 6, count) = j;
+  });
+}
+
+// "mask 'robot' (index 0)" or, past the end, the task's mask list.
+std::string describeMasks(const std::vector<std::string>& names) {
+  std::string list;
+  for (const std::string& n : names) list += (list.empty() ? "'" : ", '") + n + "'";
+  return std::to_string(names.size()) + " mask" + (names.size() == 1 ? "" : "s") +
+         (list.empty() ? "" : " (" + list + ")");
+}
+
+mb_status addToMask(mb_scene* s, uint32_t mask_index, mb_id articulation, mb_id link,
+                    const char* visual_name_part, mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requireBuilding(m, "add_to_mask");
+    if (mask_index >= m.mask_names.size())
+      throw SceneError("add_to_mask: mask index " + std::to_string(mask_index) +
+                       " out of range: the task declares " + describeMasks(m.mask_names));
+    const Scene& scene = *m.scene;
+    if (articulation < 0 || articulation >= scene.getArticulationCount())
+      throw SceneError("add_to_mask: no articulation with id " + std::to_string(articulation));
+    const std::string& articulation_name = scene.getArticulationName(articulation);
+    // Link ids are global; a link belongs to `articulation` when its name
+    // finds it there.
+    auto belongs = [&](int l) { return scene.findLink(articulation, scene.getLinkName(l)) == l; };
+    if (link >= 0 && !belongs(link))
+      throw SceneError("add_to_mask: link id " + std::to_string(link) +
+                       " is not a link of articulation '" + articulation_name + "'");
+    const std::string part = visual_name_part ? visual_name_part : "";
+    const std::vector<VisualShape>& visuals = scene.getVisualShapes();
+    m.visual_masks.resize(visuals.size(), 0);
+    std::size_t matched = 0;
+    for (std::size_t v = 0; v < visuals.size(); ++v) {
+      const VisualShape& shape = visuals[v];
+      if (shape.link < 0) continue;
+      if (link >= 0 ? shape.link != link : !belongs(shape.link)) continue;
+      if (!part.empty() && shape.name.find(part) == std::string::npos) continue;
+      m.visual_masks[v] |= std::uint64_t(1) << mask_index;
+      ++matched;
+    }
+    if (matched == 0)
+      throw SceneError(
+          "add_to_mask: mask '" + m.mask_names[mask_index] + "': " +
+          (link >= 0 ? "link '" + scene.getLinkName(link) + "' of articulation '" +
+                           articulation_name + "' has no visual" +
+                           (part.empty() ? "" : " whose name contains '" + part + "'")
+                     : "articulation '" + articulation_name + "' has no visuals"));
+  });
+}
 
 const mb_scene_api kSceneApi = [] {
   mb_scene_api api{};
@@ -280,6 +347,8 @@ const mb_scene_api kSceneApi = [] {
   api.set_joint_velocities = &setJointVelocities;
   api.set_root_pose = &setRootPose;
   api.set_joint_dynamics = &setJointDynamics;
+  api.add_to_mask = &addToMask;
+  api.calc_link_jacobian = &calcLinkJacobian;
   return api;
 }();
 
@@ -291,5 +360,18 @@ const mb_scene_api* SceneBridge::getApi() { return &kSceneApi; }
 mb_scene* SceneBridge::getHandle() { return handle_; }
 void SceneBridge::setBuilding(bool building) { handle_->building = building; }
 void SceneBridge::setStateChangesAllowed(bool allowed) { handle_->state_changes_allowed = allowed; }
+void SceneBridge::setMaskNames(const std::vector<std::string>& names) {
+  if (names.size() > kMaxMasks)
+    throw SceneError("a task may declare at most " + std::to_string(kMaxMasks) +
+                     " segmentation masks, this one declares " + std::to_string(names.size()));
+  handle_->mask_names = names;
+  handle_->visual_masks.clear();
+}
+const std::vector<std::string>& SceneBridge::getMaskNames() const { return handle_->mask_names; }
+std::vector<std::uint64_t> SceneBridge::calcVisualMasks() const {
+  std::vector<std::uint64_t> masks = handle_->visual_masks;
+  masks.resize(handle_->scene->getVisualShapes().size(), 0);
+  return masks;
+}
 
 }  // namespace manibench

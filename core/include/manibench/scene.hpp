@@ -210,6 +210,10 @@ class Scene {
   // each add; unchanged by finalize and stepping. Link poses come from
   // getLinkPose.
   const std::vector<VisualShape>& getVisualShapes() const;
+  // The addGround plane (z = height, infinite), if any; the renderer draws
+  // it as background (no visual, no link).
+  bool hasGround() const;
+  double getGroundHeight() const;  // 0 without a ground
   // Triangles of all visual meshes (mesh visuals only; the renderer
   // tessellates primitives itself).
   std::size_t calcVisualTriangleCount() const;
@@ -224,6 +228,16 @@ class Scene {
   // Contact force on link_a from link_b (from anything if link_b < 0), world.
   Eigen::Vector3d getContactForce(int link_a, int link_b) const;
   double calcKineticEnergy() const;
+  // Geometric Jacobian of the point `point_in_link` (link frame) on `link`
+  // with respect to the joint velocities of `articulation`: rows angular
+  // velocity x, y, z of the link, then linear velocity x, y, z of the point
+  // (world frame); one column per joint of the joint vector (planar x, y,
+  // yaw included). Columns of joints that do not move the link are zero, as
+  // are the floating root's motions (not in the joint vector). Each column
+  // moves its joint alone: a mimic leader's column leaves out its followers.
+  Eigen::Matrix<double, 6, Eigen::Dynamic> calcLinkJacobian(
+      int articulation, int link,
+      const Eigen::Vector3d& point_in_link = Eigen::Vector3d::Zero()) const;
 
   void setJointPositions(int articulation, const Eigen::VectorXd& q);
   void setJointVelocities(int articulation, const Eigen::VectorXd& qdot);

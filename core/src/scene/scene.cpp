@@ -822,6 +822,10 @@ const std::vector<VisualShape>& Scene::getVisualShapes() const {
   return impl_->visual_shapes;
 }
 
+bool Scene::hasGround() const { return impl_->has_ground; }
+
+double Scene::getGroundHeight() const { return impl_->has_ground ? impl_->ground_height : 0.0; }
+
 std::size_t Scene::calcVisualTriangleCount() const {
   std::size_t triangles = 0;
   for (const VisualShape& visual : impl_->visual_shapes)
@@ -907,6 +911,36 @@ Eigen::Vector3d Scene::getContactForce(int link_a, int link_b) const {
 double Scene::calcKineticEnergy() const {
   impl_->requireFinalized("calcKineticEnergy");
   return impl_->matter.calcKineticEnergy(impl_->getRealizedState(SimTK::Stage::Velocity));
+}
+
+Eigen::Matrix<double, 6, Eigen::Dynamic> Scene::calcLinkJacobian(
+    int articulation, int link, const Eigen::Vector3d& point_in_link) const {
+  impl_->requireFinalized("calcLinkJacobian");
+  const Impl::Articulation& art = impl_->getArticulation(articulation, "calcLinkJacobian");
+  impl_->checkLink(link, "calcLinkJacobian");
+  if (!point_in_link.allFinite())
+    throw SceneError("Scene::calcLinkJacobian: the point on link '" + getLinkName(link) +
+                     "' must be finite");
+  const Eigen::Index n = static_cast<Eigen::Index>(art.model.joints.size());
+  Eigen::Matrix<double, 6, Eigen::Dynamic> jacobian =
+      Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, n);
+  const Impl::LinkFrame& frame = impl_->link_frames[link];
+  if (frame.mobod == SimTK::GroundIndex || n == 0) return jacobian;  // nothing moves it
+  const SimTK::State& s = impl_->getRealizedState(SimTK::Stage::Position);
+  const SimTK::Vec3 station =
+      frame.X_BL * SimTK::Vec3(point_in_link.x(), point_in_link.y(), point_in_link.z());
+  // 6 x nu over the whole system (all articulations); every joint is a
+  // one-u Pin or Slider whose u is its joint velocity, so the articulation's
+  // columns are those mobilizers' u columns.
+  SimTK::Matrix full;
+  impl_->matter.calcFrameJacobian(s, frame.mobod, station, full);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const SimTK::MobilizedBody& mobod =
+        impl_->matter.getMobilizedBody(impl_->joint_mobods[art.first_joint + j]);
+    const int u = mobod.getFirstUIndex(s);
+    for (int r = 0; r < 6; ++r) jacobian(r, j) = full(r, u);
+  }
+  return jacobian;
 }
 
 void Scene::setJointPositions(int articulation, const Eigen::VectorXd& q) {
