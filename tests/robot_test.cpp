@@ -469,20 +469,31 @@ TEST_P(RobotTest, YamlAgreesWithTheUrdf) {
   }
   EXPECT_EQ(yaws_deg, (std::set<long>{-120, 0, 120}));
 
-  const YAML::Node actions = yaml["actions"];
-  EXPECT_EQ(actions["dim"].as<int>(), robot.dof);
-  ASSERT_EQ(static_cast<int>(actions["layout"].size()), robot.dof);
-  for (int i = 0; i < robot.dof; ++i) {
-    const YAML::Node a = actions["layout"][i];
-    EXPECT_EQ(a["index"].as<int>(), i);
-    for (const auto& joint : a["joints"].as<std::vector<std::string>>())
-      EXPECT_GE(scene.findJoint(l.robot, joint), 0) << joint;
-    EXPECT_LT(a["low"].as<double>(), a["high"].as<double>());
+  // One layout per controller; the controllers' own descriptions are
+  // compared with these in robot_controller_test.cpp.
+  const int arms = static_cast<int>(robot.sides.size());
+  const std::map<std::string, int> dims = {{"mobile_panda", 4 + 8 * arms},
+                                           {"mobile_panda_ee", 4 + 7 * arms}};
+  ASSERT_EQ(yaml["actions"].size(), dims.size());
+  for (const auto& [controller, dim] : dims) {
+    const YAML::Node actions = yaml["actions"][controller];
+    ASSERT_TRUE(actions.IsMap()) << controller;
+    EXPECT_EQ(actions["dim"].as<int>(), dim) << controller;
+    int index = 0;
+    for (const YAML::Node& a : actions["layout"]) {
+      EXPECT_EQ(a["index"].as<int>(), index) << controller;
+      index += a["size"].as<int>();
+      for (const auto& joint : a["joints"].as<std::vector<std::string>>())
+        EXPECT_GE(scene.findJoint(l.robot, joint), 0) << joint;
+      EXPECT_LT(a["low"].as<double>(), a["high"].as<double>());
+    }
+    EXPECT_EQ(index, dim) << controller;
+    const YAML::Node layout = actions["layout"];
+    EXPECT_DOUBLE_EQ(layout[0]["high"].as<double>(), 0.5);   // base m/s
+    EXPECT_DOUBLE_EQ(layout[2]["high"].as<double>(), 3.14);  // yaw rad/s
+    EXPECT_DOUBLE_EQ(layout[3]["high"].as<double>(), 0.5);   // lift m/s
   }
-  EXPECT_DOUBLE_EQ(actions["layout"][0]["high"].as<double>(), 0.5);   // base m/s
-  EXPECT_DOUBLE_EQ(actions["layout"][2]["high"].as<double>(), 3.14);  // yaw rad/s
-  EXPECT_DOUBLE_EQ(actions["layout"][3]["high"].as<double>(), 0.5);   // lift m/s
-  EXPECT_DOUBLE_EQ(actions["layout"][4]["high"].as<double>(), 3.14);  // arm rad/s
+  EXPECT_DOUBLE_EQ(yaml["actions"]["mobile_panda"]["layout"][4]["high"].as<double>(), 3.14);  // arm rad/s
 }
 
 INSTANTIATE_TEST_SUITE_P(Robots, RobotTest, ::testing::Values(kSingle, kDual),
