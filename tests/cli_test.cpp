@@ -240,9 +240,9 @@ TEST(CliBench, ReportsStepsPerSecond) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("60 env steps in"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("env steps/s"), std::string::npos) << r.out;
-  const auto bad = testing::runCli({"bench", "Reach-v0", "--obs", "pointcloud"});
+  const auto bad = testing::runCli({"bench", "Reach-v0", "--obs", "depth"});
   EXPECT_EQ(bad.exit_code, 2);
-  EXPECT_NE(bad.err.find("not available yet"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("--obs must be state, pointcloud or rgbd"), std::string::npos) << bad.err;
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 // The headless renderer against real EGL (llvmpipe on CI) and real Scenes:
 // metric depth, point clouds, segmentation, lighting, fork safety, memory.
+#include <manibench/config.hpp>
+#include <manibench/environment.hpp>
 #include <manibench/renderer.hpp>
 
 #include <gtest/gtest.h>
@@ -301,7 +303,7 @@ TEST(Renderer, PlaneDepthIsMetricWithinAMillimetre) {
 
 TEST(Renderer, BoxPointCloudLiesOnItsFaces) {
   Scene scene;
-  scene.addGround(0);  // (no visual) the ground must not appear in the image
+  scene.addGround(0);  // drawn as background: depth, but visual -1
   const Eigen::Vector3d half(0.15, 0.1, 0.05);
   Pose box_pose = at(0.4, -0.2, 0.3, 0.5);
   box_pose.orientation =
@@ -321,23 +323,135 @@ TEST(Renderer, BoxPointCloudLiesOnItsFaces) {
   ASSERT_GT(world.cols(), 500);
   const Eigen::Isometry3d box_to_world =
       Eigen::Translation3d(box_pose.position) * box_pose.orientation;
-  double worst = 0;
+  double worst = 0, worst_ground = 0;
+  int box_points = 0, ground_points = 0;
   for (Eigen::Index k = 0; k < world.cols(); ++k) {
+    const std::size_t i = static_cast<std::size_t>(pixels[static_cast<std::size_t>(k)]);
+    if (images.visual[i] < 0) {  // the ground, at z = 0
+      ++ground_points;
+      EXPECT_EQ(images.link[i], -1);
+      worst_ground = std::max(worst_ground, std::abs(static_cast<double>(world(2, k))));
+      continue;
+    }
+    ++box_points;
     const Eigen::Vector3d p = box_to_world.inverse() * world.col(k).cast<double>();
     worst = std::max(worst, boxSurfaceDistance(p, half));
-    EXPECT_EQ(images.visual[static_cast<std::size_t>(pixels[static_cast<std::size_t>(k)])], 0);
+    EXPECT_EQ(images.visual[i], 0);
   }
-  std::printf("box point cloud: %ld points, worst distance to a face %.1f um\n",
-              static_cast<long>(world.cols()), worst * 1e6);
+  std::printf("box point cloud: %d points, worst distance to a face %.1f um; "
+              "%d ground points, worst height %.1f um\n",
+              box_points, worst * 1e6, ground_points, worst_ground * 1e6);
+  EXPECT_GT(box_points, 500);
   EXPECT_LT(worst, 1e-3);
+  EXPECT_EQ(box_points + ground_points, 160 * 120) << "the ground fills the rest of the view";
+  EXPECT_LT(worst_ground, 1e-3);
   // Three faces are visible from this corner: the points span all axes.
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = -lo;
   for (Eigen::Index k = 0; k < world.cols(); ++k) {
+    if (images.visual[static_cast<std::size_t>(pixels[static_cast<std::size_t>(k)])] < 0) continue;
     const Eigen::Vector3d p = box_to_world.inverse() * world.col(k).cast<double>();
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
   EXPECT_GT((hi - lo).minCoeff(), 0.05);
+}
+
+TEST(Renderer, GroundIsBackgroundWithMetricDepth) {
+  const double height = 0.25;
+  const auto build = [&](Scene& scene, bool ground) {
+    if (ground) scene.addGround(height);
+    // A block standing on the ground, off the image centre.
+    scene.addUrdfString(boxUrdf("block", 0.1, 0.1, 0.1, "1 0 0 1"), "", "block",
+                        at(0.3, 0, height + 0.05), true);
+    scene.finalize();
+  };
+  Scene scene;
+  build(scene, true);
+  SceneRenderer renderer(scene);
+  CameraSpec camera;
+  camera.name = "down";
+  camera.width = 64;
+  camera.height = 48;
+  camera.fovy = 0.9;
+  // 1 m straight above the ground: every ground pixel is at depth 1.
+  const Pose down = calcLookAtPose({0, 0, height + 1}, {0, 0, height});
+  CameraImages images;
+  renderer.render(camera, down, images);
+  int ground = 0, block = 0;
+  double worst = 0;
+  for (std::size_t i = 0; i < images.depth.size(); ++i) {
+    if (images.visual[i] == 0) {
+      ++block;
+      EXPECT_TRUE(images.depth[i] > 0.899f && images.depth[i] < 1.0f) << "block top or side";
+      continue;
+    }
+    ++ground;
+    EXPECT_EQ(images.visual[i], -1);
+    EXPECT_EQ(images.link[i], -1);
+    worst = std::max(worst, std::abs(images.depth[i] - 1.0));
+  }
+  std::printf("ground depth: %d pixels, worst error %.1f um\n", ground, worst * 1e6);
+  EXPECT_GT(block, 20);
+  EXPECT_GT(ground, 64 * 48 / 2);
+  EXPECT_LT(worst, 1e-3);
+  // Lit in the ground color (grey: r = g = b), the block red.
+  const std::size_t corner = 0;
+  EXPECT_EQ(images.visual[corner], -1);
+  EXPECT_GT(images.rgba[4 * corner], 20);
+  EXPECT_EQ(images.rgba[4 * corner], images.rgba[4 * corner + 1]);
+  EXPECT_EQ(images.rgba[4 * corner + 1], images.rgba[4 * corner + 2]);
+
+  // Grazing view toward the horizon: the plane reaches past `far` (no
+  // edge), every point lies at the ground height, up to the far plane.
+  CameraSpec wide = camera;
+  wide.name = "wide";
+  wide.width = 160;
+  wide.height = 64;
+  wide.far = 6;
+  renderer.render(wide, calcLookAtPose({-1, 0.5, height + 0.6}, {1, 0, height + 0.3}), images);
+  std::vector<int> pixels;
+  const Eigen::Matrix3Xf world = calcCameraPoints(images, true, &pixels);
+  double worst_height = 0;
+  float deepest = 0;
+  int ground_rows_hit = 0;
+  for (Eigen::Index k = 0; k < world.cols(); ++k) {
+    const std::size_t i = static_cast<std::size_t>(pixels[static_cast<std::size_t>(k)]);
+    if (images.visual[i] >= 0) continue;
+    worst_height = std::max(worst_height, std::abs(world(2, k) - height));
+    deepest = std::max(deepest, images.depth[i]);
+  }
+  for (int row = 0; row < wide.height; ++row)
+    ground_rows_hit += images.depth[static_cast<std::size_t>(row * wide.width)] > 0;
+  std::printf("grazing ground: %ld points, worst height error %.1f um, deepest %.2f m\n",
+              static_cast<long>(world.cols()), worst_height * 1e6, deepest);
+  EXPECT_LT(worst_height, 1e-3);
+  EXPECT_GT(deepest, 5.5f) << "the ground reaches the far plane";
+  EXPECT_GT(ground_rows_hit, 5);
+  EXPECT_LT(ground_rows_hit, wide.height) << "the sky above the horizon stays empty";
+
+  // From below, the ground (a half-space's surface) is not seen.
+  renderer.render(camera, calcLookAtPose({2, 0, height - 1}, {2, 0, height}), images);
+  EXPECT_EQ(*std::max_element(images.depth.begin(), images.depth.end()), 0.0f);
+
+  // Hidden by the lighting option, or a scene without ground: nothing there.
+  LightingSpec no_ground;
+  no_ground.draw_ground = false;
+  renderer.setLighting(no_ground);
+  renderer.render(camera, down, images);
+  EXPECT_EQ(images.depth[corner], 0.0f);
+  EXPECT_EQ(countHits(images), block);
+  Scene bare;
+  build(bare, false);
+  SceneRenderer bare_renderer(bare);
+  bare_renderer.render(camera, down, images);
+  EXPECT_EQ(images.depth[corner], 0.0f);
+  EXPECT_EQ(images.visual[corner], -1);
+  EXPECT_EQ(countHits(images), block);
+  for (std::size_t i = 0; i < images.depth.size(); ++i) {
+    if (images.visual[i] < 0) {
+      ASSERT_EQ(images.depth[i], 0.0f) << "pixel " << i;
+    }
+  }
 }
 
 TEST(Renderer, SegmentationNamesTheVisualAndFollowsTheLink) {
@@ -554,6 +668,32 @@ TEST(Renderer, SceneCyclesDoNotGrowMemory) {
   const long after = readRssKb();
   std::printf("VmRSS %ld kB -> %ld kB over 1000 scene cycles\n", before, after);
   EXPECT_LT(after, before * 1.10);
+}
+
+// A camera the renderer refuses fails the episode like a diverged
+// simulation (EpisodeFailure naming task, object, seed and step), not with a
+// bare RenderError from inside reset().
+TEST(RendererEnvironment, RenderFailureIsAnEpisodeFailureNamingTheEpisode) {
+  PluginRegistry registry;
+  registry.loadDirectories({MANIBENCH_TEST_BUILD_PLUGIN_DIR});
+  registry.loadLibrary(std::string(MANIBENCH_TEST_FIXTURE_DIR) + "/libfixture_robot_testbed.so");
+  ConfigSources sources;
+  sources.overrides = {"observation.mode=rgbd"};
+  EnvironmentOptions options =
+      calcEnvironmentOptions(loadTaskConfig(registry, "RobotTestbed-v0", sources));
+  ASSERT_FALSE(options.cameras.empty());
+  options.cameras[0].spec.fovy = 3.5;  // > pi: refused at the first render
+  Environment env(registry, "RobotTestbed-v0", options);
+  try {
+    env.reset("0", 7);
+    ADD_FAILURE() << "the refused camera rendered";
+  } catch (const EpisodeFailure& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("task 'RobotTestbed-v0', object '0', seed 7, step 0"), std::string::npos)
+        << message;
+    EXPECT_NE(message.find("'" + options.cameras[0].spec.name + "'"), std::string::npos) << message;
+    EXPECT_NE(message.find("fovy"), std::string::npos) << message;
+  }
 }
 
 }  // namespace

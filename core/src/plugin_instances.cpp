@@ -222,15 +222,37 @@ void PolicyInstance::reset(uint64_t seed) {
 }
 
 void PolicyInstance::act(const Eigen::VectorXd& observation, uint32_t step,
-                         Eigen::VectorXd& action) {
-  mb_observation obs{};
-  obs.struct_size = sizeof(obs);
-  obs.state = observation.data();
-  obs.state_dim = static_cast<uint32_t>(observation.size());
-  obs.step = step;
+                         Eigen::VectorXd& action, const VisualObservation* visual) {
+  const mb_observation obs = makeObservationView(observation, step, visual);
   action.setZero(action_dim_);
   callPlugin("policy", name_, "act", descriptor_->act, handle_, &obs, action.data(),
              static_cast<uint32_t>(action.size()));
+}
+
+mb_observation makeObservationView(const Eigen::VectorXd& state, uint32_t step,
+                                   const VisualObservation* visual) {
+  mb_observation obs{};
+  obs.struct_size = sizeof(obs);
+  obs.state = state.data();
+  obs.state_dim = static_cast<uint32_t>(state.size());
+  obs.step = step;
+  if (visual != nullptr) {
+    obs.mask_count = visual->mask_count;
+    if (visual->mode == "pointcloud") {
+      obs.point_count = static_cast<uint32_t>(visual->points.size());
+      obs.points_xyz = visual->points.xyz.data();
+      obs.points_rgb = visual->points.rgb.data();
+      obs.points_mask = visual->points.masks.data();
+    } else if (visual->mode == "rgbd") {
+      obs.camera_count = visual->camera_count;
+      obs.image_height = visual->height;
+      obs.image_width = visual->width;
+      obs.image_rgb = visual->rgb.data();
+      obs.image_depth = visual->depth.data();
+      obs.image_masks = visual->masks.data();
+    }
+  }
+  return obs;
 }
 
 }  // namespace manibench

@@ -111,6 +111,11 @@ struct LightingSpec {
       {Eigen::Vector3f(0, 0, -1), Eigen::Vector3f(1, 1, 1), false}};
   std::vector<PointLight> point;
   Eigen::Vector4f background{0, 0, 0, 1};  // color where nothing is hit
+  // The scene's ground (Scene::addGround), drawn as an unbounded plane,
+  // lit like the visuals, seen from above only. Its pixels have depth but
+  // visual and link -1 (background: in no mask). Plain grey by default.
+  bool draw_ground = true;
+  Eigen::Vector4f ground_color{0.35f, 0.35f, 0.35f, 1};
 };
 
 // One camera's images; row 0 is the TOP row, pixel (row, col) at index
@@ -120,8 +125,8 @@ struct CameraImages {
   int width = 0, height = 0;
   std::vector<std::uint8_t> rgba;  // 4 per pixel, 8-bit, lit color clamped to [0, 1]
   std::vector<float> depth;        // m along the optical axis; 0: nothing hit
-  std::vector<std::int32_t> visual;  // index into Scene::getVisualShapes(); -1: background
-  std::vector<std::int32_t> link;    // that visual's link id; -1: background
+  std::vector<std::int32_t> visual;  // index into Scene::getVisualShapes(); -1: background or ground
+  std::vector<std::int32_t> link;    // that visual's link id; -1: background or ground
   // Camera pose in the world, SAPIEN frame (x forward, y left, z up).
   Eigen::Isometry3d camera_to_world = Eigen::Isometry3d::Identity();
   // OpenCV intrinsics: u = fx X/Z + cx with X right, Y down, Z forward;
@@ -157,7 +162,7 @@ class SceneRenderer {
   void setVisualColor(int visual, const Eigen::Vector4f& rgba);
 
   // Triangles drawn per camera with every visual visible (primitives as
-  // tessellated here, plus mesh triangles).
+  // tessellated here, plus mesh triangles; the ground's 2 not included).
   std::size_t getTriangleCount() const;
   const RenderDeviceInfo& getDeviceInfo() const;
 

@@ -50,6 +50,14 @@ cameras: []
 materials: {}
 layouts: {}
 task: {}
+observation:
+  mode: state
+  pointcloud:
+    per_mask: 50
+    masked_total: 800
+    total: 1200
+    ground_height: 1.0e-3
+    pad: true
 )";
 
 // Shortest text that reads back as exactly `value`.
@@ -129,6 +137,69 @@ ContactMaterial calcMaterial(const ConfigNode& node, const ContactMaterial& fall
   read("dynamic_friction", material.dynamic_friction);
   read("viscous_friction", material.viscous_friction);
   return material;
+}
+
+Eigen::Vector3d calcVector3(const ConfigNode& node) {
+  assert(node.items.size() >= 3);
+  return Eigen::Vector3d(*calcNumber(node.items[0]), *calcNumber(node.items[1]),
+                         *calcNumber(node.items[2]));
+}
+
+// Cameras and lights, for the renderer of the visual observation modes.
+void calcRenderOptions(const ConfigNode& config, EnvironmentOptions& options) {
+  LightingSpec& lighting = options.lighting;
+  lighting.ambient = calcVector3(getPath(config, "lights.ambient")).cast<float>();
+  lighting.directional.clear();
+  if (const ConfigNode* list = config.findPath("lights.directional"))
+    for (const ConfigNode& item : list->items) {
+      DirectionalLight light;
+      light.direction = calcVector3(*item.find("direction")).cast<float>();
+      light.color = calcVector3(*item.find("color")).cast<float>();
+      light.shadow = *calcBool(*item.find("shadow"));
+      lighting.directional.push_back(light);
+    }
+  lighting.point.clear();
+  if (const ConfigNode* list = config.findPath("lights.point"))
+    for (const ConfigNode& item : list->items) {
+      PointLight light;
+      light.position = calcVector3(*item.find("position")).cast<float>();
+      light.color = calcVector3(*item.find("color")).cast<float>();
+      lighting.point.push_back(light);
+    }
+  for (const char* kind : {"directional", "point"}) {
+    const ConfigNode* list = config.findPath(std::string("lights.") + kind);
+    if (list != nullptr && list->items.size() > std::size_t(LightingSpec::kMaxLights))
+      throw ConfigError(list->origin.describe() + ": lights." + kind + ": at most " +
+                        std::to_string(LightingSpec::kMaxLights) + " lights, got " +
+                        std::to_string(list->items.size()));
+  }
+
+  for (const ConfigNode& item : getPath(config, "cameras").items) {
+    CameraMount camera;
+    camera.spec.name = item.find("name")->scalar;
+    if (const ConfigNode* a = item.find("articulation"); a != nullptr && !a->isNull())
+      camera.articulation = a->scalar;
+    if (const ConfigNode* l = item.find("link"); l != nullptr && !l->isNull())
+      camera.link = l->scalar;
+    const ConfigNode& pose = *item.find("pose");
+    const ConfigNode* position = pose.find("position");
+    const ConfigNode* rpy = pose.find("rpy");
+    if (position) camera.pose.position = calcVector3(*position);
+    if (rpy) {
+      // Extrinsic x-y-z (URDF rpy): R = Rz(yaw) Ry(pitch) Rx(roll).
+      const Eigen::Vector3d a = calcVector3(*rpy);
+      camera.pose.orientation = Eigen::AngleAxisd(a.z(), Eigen::Vector3d::UnitZ()) *
+                                Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
+                                Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX());
+    }
+    camera.spec.width = int(*calcInt(*item.find("width")));
+    camera.spec.height = int(*calcInt(*item.find("height")));
+    camera.spec.fovy = *calcNumber(*item.find("fovy"));
+    camera.spec.near = *calcNumber(*item.find("near"));
+    camera.spec.far = *calcNumber(*item.find("far"));
+    camera.source = item.origin.describe() + ": cameras";
+    options.cameras.push_back(std::move(camera));
+  }
 }
 
 bool isWordCharacter(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }
@@ -280,6 +351,22 @@ EnvironmentOptions calcEnvironmentOptions(const ConfigNode& config) {
   const ConfigNode* task = config.find("task");
   if (task != nullptr && task->isMap() && !task->entries.empty())
     options.task_config = formatConfig(*task);
+  calcRenderOptions(config, options);
+
+  // -- observation ------------------------------------------------------------
+  options.observation_mode = getPath(config, "observation.mode").scalar;
+  PointCloudSampling& sampling = options.pointcloud;
+  sampling.per_mask = uint32_t(*calcInt(getPath(config, "observation.pointcloud.per_mask")));
+  sampling.masked_total = uint32_t(*calcInt(getPath(config, "observation.pointcloud.masked_total")));
+  sampling.total = uint32_t(*calcInt(getPath(config, "observation.pointcloud.total")));
+  sampling.ground_height = float(getNumber(config, "observation.pointcloud.ground_height"));
+  sampling.pad = *calcBool(getPath(config, "observation.pointcloud.pad"));
+  if (sampling.masked_total > sampling.total) {
+    const ConfigNode& node = getPath(config, "observation.pointcloud.masked_total");
+    throw ConfigError(node.origin.describe() + ": observation.pointcloud.masked_total: " +
+                      node.scalar + " exceeds observation.pointcloud.total (" +
+                      getPath(config, "observation.pointcloud.total").scalar + ")");
+  }
   return options;
 }
 

@@ -114,6 +114,28 @@ std::vector<ConfigKey> makeSchema() {
                   .in(1, 1e9)
                   .orNull());
 
+  // -- observation --------------------------------------------------------------
+  k.push_back(Key("observation", T::Map, "what policies observe"));
+  k.push_back(Key("observation.mode", T::Enum,
+                  "state: the task's vector; pointcloud and rgbd add the cameras' points or "
+                  "images (and render)")
+                  .oneOf({"state", "pointcloud", "rgbd"}));
+  k.push_back(Key("observation.pointcloud", T::Map,
+                  "subsampling of the fused point cloud (supplement D.1)"));
+  k.push_back(Key("observation.pointcloud.per_mask", T::Int,
+                  "points kept per segmentation mask first (all when fewer)")
+                  .in(0, 1e7));
+  k.push_back(Key("observation.pointcloud.masked_total", T::Int,
+                  "masked points kept in all (all when fewer); at most total")
+                  .in(0, 1e7));
+  k.push_back(Key("observation.pointcloud.total", T::Int,
+                  "points in all: background points above the ground fill up to it")
+                  .in(1, 1e7));
+  k.push_back(Key("observation.pointcloud.ground_height", T::Number,
+                  "m; background points at or below it (the ground) are dropped"));
+  k.push_back(Key("observation.pointcloud.pad", T::Bool,
+                  "pad with zero points (origin, black, no mask) up to total, as ManiSkill-Learn"));
+
   // -- physics ----------------------------------------------------------------
   k.push_back(Key("physics", T::Map, "the Simbody scene's solver, gravity and contact"));
   k.push_back(Key("physics.gravity", T::Vector3, "gravity, m/s^2, world frame (z up)"));

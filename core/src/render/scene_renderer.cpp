@@ -167,6 +167,10 @@ struct DrawItem {
   bool closed = true;  // primitives: back faces can be culled
 };
 
+// Segmentation value of the ground plane (visuals are index + 1, 0 is
+// nothing): it counts as a hit for depth but names no visual.
+constexpr std::uint32_t kGroundSegment = 0xFFFFFFFFu;
+
 struct CameraTarget {
   GLuint framebuffer = 0;
   GLuint renderbuffers[3] = {0, 0, 0};  // color, segmentation, depth
@@ -181,6 +185,7 @@ struct SceneRenderer::Impl {
   LightingSpec lighting;
   GLuint vertex_array = 0, vertex_buffer = 0, index_buffer = 0;
   std::vector<DrawItem> items;
+  DrawItem ground;  // unit square z = 0, |x|, |y| <= 1, facing +z
   std::vector<int> visual_links;    // per visual
   std::vector<char> visual_visible;  // per visual
   std::vector<Eigen::Isometry3d> visual_in_link;
@@ -213,6 +218,10 @@ void validateLighting(const LightingSpec& lighting) {
                       " directional and " + std::to_string(LightingSpec::kMaxLights) +
                       " point lights, got " + std::to_string(lighting.directional.size()) +
                       " and " + std::to_string(lighting.point.size()));
+  }
+  if (!lighting.ground_color.allFinite() || !lighting.background.allFinite() ||
+      !lighting.ambient.allFinite()) {
+    throw RenderError("lighting: ambient, background and ground colors must be finite");
   }
   for (std::size_t i = 0; i < lighting.directional.size(); ++i) {
     const Eigen::Vector3f& d = lighting.directional[i].direction;
@@ -321,6 +330,18 @@ void SceneRenderer::Impl::upload() {
     items.push_back(item);
   }
   for (const DrawItem& item : items) triangle_count += static_cast<std::size_t>(item.index_count) / 3;
+  // The ground quad, always uploaded (4 vertices): whether it is drawn is
+  // decided per render from the scene and the lighting.
+  {
+    const float quad[] = {-1, -1, 0, 0, 0, 1, 1, -1, 0, 0, 0, 1,
+                          1,  1,  0, 0, 0, 1, -1, 1, 0, 0, 0, 1};
+    const std::uint32_t quad_indices[] = {0, 1, 2, 0, 2, 3};
+    const Range range = append(quad, 4, quad_indices, 6);
+    ground.visual = -1;
+    ground.base_vertex = range.base_vertex;
+    ground.first_index = range.first_index;
+    ground.index_count = range.count;
+  }
   link_poses.resize(links.size());
 
   glGenVertexArrays(1, &vertex_array);
@@ -536,6 +557,30 @@ void SceneRenderer::render(const CameraSpec& camera, const Pose& camera_pose_wor
   glUniformMatrix4fv(program.projection, 1, GL_FALSE, projection.data());
   d.setLightUniforms(program, world_to_view);
   glBindVertexArray(d.vertex_array);
+  if (d.lighting.draw_ground && d.scene.hasGround()) {
+    // An unbounded plane: a square under the camera reaching past every
+    // point of the frustum (far times the corner ray's length), so no edge
+    // is ever seen and vertices stay within a few far of the camera.
+    const double tan_y = std::tan(camera.fovy / 2), tan_x = tan_y * aspect;
+    const double reach = f * std::sqrt(1 + tan_x * tan_x + tan_y * tan_y) * 1.01 + 1.0;
+    Eigen::Isometry3d plane = Eigen::Isometry3d::Identity();
+    plane.translation() = Eigen::Vector3d(camera_to_world.translation().x(),
+                                          camera_to_world.translation().y(),
+                                          d.scene.getGroundHeight());
+    const Eigen::Affine3d model_view =
+        world_to_view * plane * Eigen::Scaling(reach, reach, 1.0);
+    const Eigen::Matrix4f mv = model_view.matrix().cast<float>();
+    const Eigen::Matrix3f normal_matrix = model_view.linear().inverse().transpose().cast<float>();
+    glUniformMatrix4fv(program.model_view, 1, GL_FALSE, mv.data());
+    glUniformMatrix3fv(program.normal_matrix, 1, GL_FALSE, normal_matrix.data());
+    glUniform4fv(program.color, 1, d.lighting.ground_color.data());
+    glUniform1ui(program.segment, kGroundSegment);
+    glEnable(GL_CULL_FACE);  // seen from above only, as a half-space's surface
+    glDrawElementsBaseVertex(
+        GL_TRIANGLES, d.ground.index_count, GL_UNSIGNED_INT,
+        reinterpret_cast<const void*>(d.ground.first_index * sizeof(std::uint32_t)),
+        d.ground.base_vertex);
+  }
   bool culling = false;
   glDisable(GL_CULL_FACE);
   for (const DrawItem& item : d.items) {
@@ -598,13 +643,14 @@ void SceneRenderer::render(const CameraSpec& camera, const Pose& camera_pose_wor
     for (int col = 0; col < width; ++col) {
       const float depth = d.depth_rows[source + col];
       const std::uint32_t segment = d.segment_rows[source + col];
-      const bool hit = segment != 0 && segment <= visual_count && depth < 1.0f;
+      const bool is_visual = segment != 0 && segment <= visual_count;
+      const bool hit = (is_visual || segment == kGroundSegment) && depth < 1.0f;
       out.depth[destination + col] =
           hit ? static_cast<float>(two_nf / (sum - (2.0 * depth - 1.0) * difference)) : 0.0f;
-      const int visual = hit ? static_cast<int>(segment) - 1 : -1;
+      const int visual = hit && is_visual ? static_cast<int>(segment) - 1 : -1;
       out.visual[destination + col] = visual;
       out.link[destination + col] =
-          hit ? d.visual_links[static_cast<std::size_t>(visual)] : -1;
+          visual >= 0 ? d.visual_links[static_cast<std::size_t>(visual)] : -1;
     }
   }
 }

@@ -7,7 +7,9 @@
 #include <manibench/sdk/common.hpp>
 #include <manibench/sdk/registry.hpp>
 
+#include <cstdint>
 #include <memory>
+#include <new>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -52,14 +54,72 @@ struct PolicyContext {
   Layout action;
 };
 
+using RowMatrixXf = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+using RowMatrixXu8 = Eigen::Matrix<std::uint8_t, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// One observation, viewed in place (valid during act() only). The visual
+// parts are empty (zero rows) in the modes that lack them and when the
+// host is older than ABI 1.1.
 struct Observation {
   Eigen::Map<const Eigen::VectorXd> state;
   uint32_t step;
   const mb_observation* raw;  // for fields newer than this SDK's helpers
+  uint32_t mask_count = 0;    // the task's segmentation masks
+
+  // "pointcloud": one row per point (world frame; supplement D.1 sampling,
+  // zero points pad it to a fixed size): xyz in m, rgb in [0, 1], and
+  // mask_count columns of 0 or 1.
+  Eigen::Map<const RowMatrixXf> points_xyz{nullptr, 0, 3};
+  Eigen::Map<const RowMatrixXf> points_rgb{nullptr, 0, 3};
+  Eigen::Map<const RowMatrixXu8> points_mask{nullptr, 0, 0};
+
+  // "rgbd": one row per pixel (row * image_width + col, row 0 on top), the
+  // cameras stacked along the columns as ManiSkill stacks channels: rgb
+  // 3 per camera (camera c in columns 3c..3c+2), depth 1 per camera (m
+  // along the optical axis, 0 where nothing was hit), masks mask_count per
+  // camera (camera c's mask m in column c * mask_count + m).
+  uint32_t camera_count = 0, image_height = 0, image_width = 0;
+  Eigen::Map<const RowMatrixXf> image_rgb{nullptr, 0, 0};
+  Eigen::Map<const RowMatrixXf> image_depth{nullptr, 0, 0};
+  Eigen::Map<const RowMatrixXu8> image_masks{nullptr, 0, 0};
+
+  explicit Observation(const mb_observation& o)
+      : state(o.state, o.state_dim), step(o.step), raw(&o) {
+    if (!MB_HAS_FIELD(mb_observation, image_masks, o.struct_size)) return;
+    mask_count = o.mask_count;
+    const Eigen::Index n = o.point_count, k = o.mask_count;
+    if (n > 0 && o.points_xyz && o.points_rgb) {
+      new (&points_xyz) Eigen::Map<const RowMatrixXf>(o.points_xyz, n, 3);
+      new (&points_rgb) Eigen::Map<const RowMatrixXf>(o.points_rgb, n, 3);
+      if (o.points_mask) new (&points_mask) Eigen::Map<const RowMatrixXu8>(o.points_mask, n, k);
+    }
+    const Eigen::Index pixels = Eigen::Index(o.image_height) * o.image_width;
+    const Eigen::Index c = o.camera_count;
+    if (pixels > 0 && c > 0 && o.image_rgb && o.image_depth) {
+      camera_count = o.camera_count;
+      image_height = o.image_height;
+      image_width = o.image_width;
+      new (&image_rgb) Eigen::Map<const RowMatrixXf>(o.image_rgb, pixels, 3 * c);
+      new (&image_depth) Eigen::Map<const RowMatrixXf>(o.image_depth, pixels, c);
+      if (o.image_masks)
+        new (&image_masks) Eigen::Map<const RowMatrixXu8>(o.image_masks, pixels, k * c);
+    }
+  }
 
   // A named segment of the state vector.
   Eigen::Map<const Eigen::VectorXd> segment(const SegmentInfo& s) const {
     return Eigen::Map<const Eigen::VectorXd>(state.data() + s.offset, s.size);
+  }
+  // Color channel `channel` (0 r, 1 g, 2 b) of camera `camera` at (row, col).
+  float rgbAt(uint32_t camera, uint32_t row, uint32_t col, uint32_t channel) const {
+    return image_rgb(Eigen::Index(row) * image_width + col, 3 * Eigen::Index(camera) + channel);
+  }
+  float depthAt(uint32_t camera, uint32_t row, uint32_t col) const {
+    return image_depth(Eigen::Index(row) * image_width + col, camera);
+  }
+  bool maskAt(uint32_t camera, uint32_t row, uint32_t col, uint32_t mask) const {
+    return image_masks(Eigen::Index(row) * image_width + col,
+                       Eigen::Index(camera) * mask_count + mask) != 0;
   }
 };
 
@@ -116,8 +176,7 @@ struct PolicyTrampolines {
                        uint32_t action_dim, mb_error* err) {
     return guard(err, [&] {
       if (obs == nullptr) throw Error("no observation", MB_INVALID_ARGUMENT);
-      const Observation o{Eigen::Map<const Eigen::VectorXd>(obs->state, obs->state_dim),
-                          obs->step, obs};
+      const Observation o(*obs);
       const Eigen::VectorXd action = asPolicy(p)->act(o);
       if (action.size() != Eigen::Index(action_dim))
         throw Error("act() returned " + std::to_string(action.size()) +

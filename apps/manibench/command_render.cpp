@@ -1,0 +1,240 @@
+// manibench render: the cameras' images, masks and point clouds of a task
+// after a reset, as files; optionally an episode as a video.
+#include <manibench/environment.hpp>
+#include <manibench/pointcloud.hpp>
+#include <manibench/renderer.hpp>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cli.hpp"
+#include "image_io.hpp"
+
+namespace manibench::cli {
+namespace {
+
+const char* kRenderUsage = R"(usage: manibench render TASK --out DIR [options]
+
+Resets TASK, renders its cameras (the configuration's `cameras`) and writes
+into DIR, per camera:
+  CAMERA_color.png        8-bit RGB
+  CAMERA_depth.png        16-bit gray: millimetres along the optical axis,
+                          0 where nothing was hit
+  CAMERA_mask_MASK.png    8-bit gray: 255 where the task's mask MASK is seen
+and for all cameras together (binary PLY: x y z, red green blue, one
+mask_MASK property per mask):
+  pointcloud_full.ply     every pixel that hit something, world frame
+  pointcloud.ply          the supplement D.1 sample (with --obs pointcloud,
+                          exactly the observation the policy gets)
+With --video, also runs one episode of --policy and records it from a
+third-person camera to an MP4 file (needs the `ffmpeg` program).
+
+Options:
+  --out DIR               output folder (created if missing)
+  --seed S                episode seed (default 0)
+  --object ID             object id (default: drawn from the split by the seed)
+  --split train|test      split to draw the object from (default train)
+  --obs pointcloud|rgbd   observation mode of the environment (default rgbd)
+  --video FILE.mp4        record an episode (needs --policy)
+  --policy NAME|PATH.so   policy acting in the recorded episode
+  --video-size WxH        video frame size (default 640x480)
+  --config FILE, --set KEY=VALUE   configuration layers, as for run
+)";
+
+std::string fileName(const std::string& name) {
+  std::string out = name;
+  std::replace_if(out.begin(), out.end(), [](char c) { return c == '/' || c == ' '; }, '_');
+  return out;
+}
+
+void writeCamera(const std::filesystem::path& dir, const CameraImages& image, const Environment& env) {
+  const std::size_t pixels = std::size_t(image.width) * std::size_t(image.height);
+  std::vector<std::uint8_t> rgb(3 * pixels);
+  for (std::size_t p = 0; p < pixels; ++p)
+    for (std::size_t c = 0; c < 3; ++c) rgb[3 * p + c] = image.rgba[4 * p + c];
+  const std::string base = (dir / fileName(image.camera)).string();
+  writePng8(base + "_color.png", image.width, image.height, 3, rgb);
+  std::vector<std::uint16_t> depth(pixels);
+  for (std::size_t p = 0; p < pixels; ++p)
+    depth[p] = std::uint16_t(std::clamp(std::lround(image.depth[p] * 1000.0f), 0L, 65535L));
+  writePng16(base + "_depth.png", image.width, image.height, depth);
+  const std::vector<std::string>& masks = env.getTaskDescription().masks;
+  for (std::size_t m = 0; m < masks.size(); ++m) {
+    std::vector<std::uint8_t> mask(pixels);
+    for (std::size_t p = 0; p < pixels; ++p)
+      mask[p] = ((env.calcPixelMasks(image, p) >> m) & 1u) ? 255 : 0;
+    writePng8(base + "_mask_" + fileName(masks[m]) + ".png", image.width, image.height, 1, mask);
+  }
+}
+
+std::string shellQuote(const std::string& text) {
+  std::string out = "'";
+  for (char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+// Pipes raw RGB frames into ffmpeg, which encodes them to `path`.
+class VideoWriter {
+ public:
+  VideoWriter(const std::string& path, int width, int height, double fps) : path_(path) {
+    if (std::system("command -v ffmpeg >/dev/null 2>&1") != 0)
+      throw std::runtime_error("--video needs the ffmpeg program (Debian package ffmpeg; "
+                               "scripts/install-deps installs it)");
+    // A dead ffmpeg must give a write error here, not kill this process.
+    std::signal(SIGPIPE, SIG_IGN);
+    const std::string command =
+        "ffmpeg -loglevel error -y -f rawvideo -pix_fmt rgb24 -s " + std::to_string(width) + "x" +
+        std::to_string(height) + " -r " + std::to_string(fps) +
+        " -i - -an -pix_fmt yuv420p " + shellQuote(path);
+    pipe_ = popen(command.c_str(), "w");
+    if (pipe_ == nullptr) throw std::runtime_error("cannot start ffmpeg: " + std::string(std::strerror(errno)));
+  }
+  ~VideoWriter() {
+    if (pipe_) pclose(pipe_);
+  }
+  void write(const CameraImages& image) {
+    const std::size_t pixels = std::size_t(image.width) * std::size_t(image.height);
+    frame_.resize(3 * pixels);
+    for (std::size_t p = 0; p < pixels; ++p)
+      for (std::size_t c = 0; c < 3; ++c) frame_[3 * p + c] = image.rgba[4 * p + c];
+    if (std::fwrite(frame_.data(), 1, frame_.size(), pipe_) != frame_.size())
+      throw std::runtime_error("ffmpeg stopped taking frames for " + path_);
+    ++frames_;
+  }
+  void close() {
+    const int status = pclose(pipe_);
+    pipe_ = nullptr;
+    if (status != 0)
+      throw std::runtime_error("ffmpeg failed to write " + path_ + " (exit status " +
+                               std::to_string(status) + ")");
+  }
+  int getFrameCount() const { return frames_; }
+
+ private:
+  std::string path_;
+  std::FILE* pipe_ = nullptr;
+  std::vector<std::uint8_t> frame_;
+  int frames_ = 0;
+};
+
+void recordVideo(PluginRegistry& registry, Environment& env, const std::string& policy_arg,
+                 const std::string& object, uint64_t seed, const std::string& path, int width,
+                 int height) {
+  const std::string policy_name = resolvePolicy(registry, policy_arg);
+  PolicyInstance policy(registry, policy_name, "", env.calcPolicyLayout());
+  env.reset(object, seed);
+  policy.reset(seed);
+  // Third person: from the front-right, above, looking at the robot's root.
+  const TaskDescription& task = env.getTaskDescription();
+  const Scene& scene = env.getScene();
+  const int robot = scene.findArticulation(task.robot_articulation);
+  const Eigen::Vector3d target =
+      (robot >= 0 ? scene.getRootPose(robot).position : Eigen::Vector3d::Zero()) +
+      Eigen::Vector3d(0, 0, 0.6);
+  CameraSpec camera;
+  camera.name = "third_person";
+  camera.width = width;
+  camera.height = height;
+  camera.fovy = 1.0;
+  camera.far = 20;
+  const Pose pose = calcLookAtPose(target + Eigen::Vector3d(2.5, -2.5, 1.6), target);
+  VideoWriter video(path, width, height, task.control_frequency / task.frame_skip);
+  CameraImages frame;
+  Eigen::VectorXd action;
+  for (;;) {
+    env.updRenderer().render(camera, pose, frame);
+    video.write(frame);
+    policy.act(env.getObservation(), env.getElapsedSteps(), action,
+               env.getObservationMode() == "state" ? nullptr : &env.getVisualObservation());
+    if (env.step(action).done) break;
+  }
+  env.updRenderer().render(camera, pose, frame);
+  video.write(frame);
+  video.close();
+  std::cout << "wrote " << path << ": " << video.getFrameCount() << " frames, "
+            << env.getElapsedSteps() << " steps of policy " << policy_name << "\n";
+}
+
+}  // namespace
+
+int commandRender(int argc, char** argv) {
+  const Arguments args = parseArguments(
+      argc, argv, 2,
+      {"out", "seed", "object", "split", "obs", "video", "policy", "video-size", "config", "set"}, {},
+      kRenderUsage);
+  if (args.help) {
+    std::cout << kRenderUsage;
+    return 0;
+  }
+  if (args.positional.size() != 1) throw UsageError("render needs exactly one TASK", kRenderUsage);
+  if (!args.options.count("out")) throw UsageError("render needs --out DIR", kRenderUsage);
+  const std::string obs = valueOr(args, "obs", "rgbd");
+  if (obs != "rgbd" && obs != "pointcloud")
+    throw UsageError("--obs must be pointcloud or rgbd", kRenderUsage);
+  const std::string split = valueOr(args, "split", "train");
+  if (split != "train" && split != "test")
+    throw UsageError("--split must be train or test", kRenderUsage);
+  const uint64_t seed = parseSeed(valueOr(args, "seed", "0"), kRenderUsage);
+  const std::string video = valueOr(args, "video", "");
+  if (!video.empty() && !args.options.count("policy"))
+    throw UsageError("--video needs --policy NAME", kRenderUsage);
+  int video_width = 640, video_height = 480;
+  if (args.options.count("video-size")) {
+    const std::string size = args.options.at("video-size");
+    char x = 0;
+    int w = 0, h = 0;
+    if (std::sscanf(size.c_str(), "%d%c%d", &w, &x, &h) != 3 || x != 'x' || w < 16 || h < 16 ||
+        w > 8192 || h > 8192 || w % 2 || h % 2)
+      throw UsageError("--video-size must be WxH, even numbers from 16 to 8192, got '" + size + "'",
+                       kRenderUsage);
+    video_width = w;
+    video_height = h;
+  }
+
+  PluginRegistry registry;
+  loadPlugins(registry);
+  ConfigSources sources = getConfigSources(args);
+  sources.overrides.push_back("observation.mode=" + obs);
+  const std::unique_ptr<Environment> env =
+      makeEnvironment(registry, args.positional[0], sources, /*stop_on_success=*/true);
+  const std::string object = args.options.count("object")
+                                 ? args.options.at("object")
+                                 : chooseObject(env->listObjects(split), seed, split);
+  env->reset(object, seed);
+
+  const std::filesystem::path dir(args.options.at("out"));
+  std::error_code error;
+  std::filesystem::create_directories(dir, error);
+  if (error) throw std::runtime_error("cannot create " + dir.string() + ": " + error.message());
+  // The observation already rendered every camera; this renders them again
+  // at the same state (same images) and hands them out.
+  const std::vector<CameraImages>& images = env->renderCameras();
+  for (const CameraImages& image : images) writeCamera(dir, image, *env);
+  PointCloud full;
+  env->fusePointCloud(images, images.size(), full);
+  const std::vector<std::string>& masks = env->getTaskDescription().masks;
+  writePly((dir / "pointcloud_full.ply").string(), full, masks);
+  const PointCloud sample = obs == "pointcloud" ? env->getVisualObservation().points
+                                                : samplePointCloud(full, env->getOptions().pointcloud, seed);
+  writePly((dir / "pointcloud.ply").string(), sample, masks);
+  std::cout << "task " << args.positional[0] << ", object " << object << ", seed " << seed << ": "
+            << images.size() << " camera" << (images.size() == 1 ? "" : "s") << ", "
+            << full.size() << " points (" << sample.size() << " sampled), "
+            << env->updRenderer().getTriangleCount() << " triangles; "
+            << env->updRenderer().getDeviceInfo().gl_renderer << "\nwrote " << dir.string() << "\n";
+  if (!video.empty())
+    recordVideo(registry, *env, args.options.at("policy"), object, seed, video, video_width,
+                video_height);
+  return 0;
+}
+
+}  // namespace manibench::cli
