@@ -1,0 +1,304 @@
+// OpenCabinetDoor-v0 / OpenCabinetDrawer-v0: scene, reset, observation,
+// staged reward and success.
+#include "open_cabinet.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#ifndef MANIBENCH_ROBOT_DIR
+#define MANIBENCH_ROBOT_DIR ""
+#endif
+
+namespace open_cabinet {
+
+using manibench::sdk::Condition;
+using manibench::sdk::Config;
+using manibench::sdk::Error;
+using manibench::sdk::Pose;
+using manibench::sdk::SceneView;
+using manibench::sdk::TaskSpec;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// Finger pad centre in its finger's frame (the URDF's pad collision box).
+const Eigen::Vector3d kPadOffset(0.0, 0.0076, 0.045);
+
+enum Mask : uint32_t { kHandleMask = 0, kTargetLinkMask = 1, kRobotMask = 2 };
+
+std::string taskName(TargetKind kind) {
+  return kind == TargetKind::kDoor ? "OpenCabinetDoor" : "OpenCabinetDrawer";
+}
+
+// Distance from `p` to the segment centre +- half * axis.
+double distanceToSegment(const Eigen::Vector3d& p, const Eigen::Vector3d& centre,
+                         const Eigen::Vector3d& axis, double half) {
+  const double s = std::clamp((p - centre).dot(axis), -half, half);
+  return (p - (centre + s * axis)).norm();
+}
+
+}  // namespace
+
+OpenCabinetTask::OpenCabinetTask(const Config& config, TargetKind kind)
+    : kind_(kind),
+      partnet_dir_(config.get<std::string>("partnet_dir", "")),
+      robot_dir_(config.get<std::string>("robot_dir", MANIBENCH_ROBOT_DIR)),
+      static_speed_(config.get<double>("static_speed", 0.1)),
+      static_angular_speed_(config.get<double>("static_angular_speed", 1.0)),
+      hold_steps_(config.get<uint32_t>("hold_steps", 10)) {
+  if (!(static_speed_ > 0) || !(static_angular_speed_ > 0) || hold_steps_ == 0)
+    throw Error(taskName(kind) + ": static_speed, static_angular_speed and hold_steps must be positive",
+                MB_INVALID_ARGUMENT);
+  if (!partnet_dir_.empty() && !std::filesystem::is_directory(partnet_dir_))
+    throw Error(taskName(kind) + ": task.partnet_dir '" + partnet_dir_ + "' is not a folder", MB_INVALID_ARGUMENT);
+  const std::string yaml_path = robot_dir_ + "/mobile_panda_single.yaml";
+  YAML::Node facts;
+  try {
+    facts = YAML::LoadFile(yaml_path);
+  } catch (const YAML::Exception& e) {
+    throw Error(taskName(kind) + ": cannot read the robot facts " + yaml_path + " (set task.robot_dir): " + e.what(),
+                MB_NOT_FOUND);
+  }
+  robot_joints_ = facts["joints"].as<std::vector<std::string>>();
+  if (robot_joints_.size() != kRobotDof)
+    throw Error(yaml_path + ": expected " + std::to_string(kRobotDof) + " joints", MB_ERROR);
+  const YAML::Node init = facts["initial_configuration"];
+  std::vector<double> q = init["base"].as<std::vector<double>>();
+  const YAML::Node lift = facts["lift_height"][taskName(kind)];
+  q.push_back(lift ? lift.as<double>() : init["lift"].as<double>());
+  for (double x : init["arm"].as<std::vector<double>>()) q.push_back(x);
+  for (double x : init["fingers"].as<std::vector<double>>()) q.push_back(x);
+  if (q.size() != kRobotDof) throw Error(yaml_path + ": initial configuration has the wrong size", MB_ERROR);
+  robot_initial_ = Eigen::Map<const Eigen::VectorXd>(q.data(), Eigen::Index(q.size()));
+  // The three head cameras, as camera entries of the configuration.
+  const YAML::Node cams = facts["cameras"];
+  const YAML::Node heights = cams["mount_height"];
+  const double mount_z = heights[taskName(kind)] ? heights[taskName(kind)].as<double>() : heights["default"].as<double>();
+  std::ostringstream yaml;
+  yaml << "cameras:\n";
+  for (const YAML::Node& m : cams["mounts"]) {
+    const auto xyz = m["xyz"].as<std::vector<double>>();
+    const auto rpy = m["rpy"].as<std::vector<double>>();
+    yaml << "  - name: " << m["name"].as<std::string>() << "\n    articulation: robot\n    link: "
+         << m["parent_link"].as<std::string>() << "\n    pose: {position: [" << xyz[0] << ", " << xyz[1] << ", "
+         << mount_z << "], rpy: [" << rpy[0] << ", " << rpy[1] << ", " << rpy[2] << "]}\n    width: "
+         << cams["width"].as<int>() << "\n    height: " << cams["height"].as<int>() << "\n    fovy: "
+         << cams["fovy"].as<double>() << "\n    near: " << cams["near"].as<double>() << "\n    far: "
+         << cams["far"].as<double>() << "\n";
+  }
+  camera_yaml_ = yaml.str();
+}
+
+TaskSpec OpenCabinetTask::describe() const {
+  TaskSpec spec;
+  const char* what = kind_ == TargetKind::kDoor ? "door" : "drawer";
+  spec.observation = {
+      {"fingertip_positions", 6, "left, right finger pad centres, world (m)"},
+      {"fingertip_velocities", 6, "of the pad centres, world (m/s)"},
+      {"base_position", 2, "x, y of base_link, world (m)"},
+      {"base_yaw", 1, "heading (rad)"},
+      {"base_velocity", 2, "world x, y (m/s)"},
+      {"base_angular_velocity", 1, "yaw rate (rad/s)"},
+      {"joint_positions", kRobotDof, "robot q, actuated joint order"},
+      {"joint_velocities", kRobotDof, "robot qdot, actuated joint order"},
+      {"tcp_pose", 7, "gripper TCP (between the pads): position, quaternion wxyz, world"},
+      {"target_link_pose", 7, std::string("the target ") + what + ": position, quaternion wxyz, world"},
+      {"target_joint", 4, "its joint: q, qdot, lower, upper (rad or m)"},
+      {"target_joint_type", 1, "0 revolute (door), 1 prismatic (drawer)"},
+      {"target_joint_axis", 3, "world; q grows turning about / sliding along it"},
+      {"target_joint_origin", 3, "a point on the joint axis, world (m)"},
+      {"handle_pose", 7, "grasp frame of the handle (x out of the front, z along the grip), world"},
+      {"handle_half_length", 1, "half the grip length (m)"},
+      {"cabinet_center", 3, "centre of the cabinet's bounding box, world (m)"},
+  };
+  spec.success_conditions = {"open_enough", "static", "success"};
+  spec.masks = {"handle", "target_link", "robot"};
+  spec.robot_articulation = "robot";
+  spec.actuated_joints = robot_joints_;
+  spec.default_controller = "mobile_panda";
+  spec.control_frequency = 100;
+  spec.frame_skip = 5;
+  spec.max_episode_steps = 200;
+  // ManiSkill v1 friction: cabinet 1, finger pads 2; the robot's head cameras.
+  spec.default_config = std::string(R"(physics:
+  contact:
+    bodies:
+      - {articulation: cabinet, static_friction: 1.0, dynamic_friction: 1.0}
+      - {articulation: robot, link: right_panda_leftfinger, static_friction: 2.0, dynamic_friction: 2.0}
+      - {articulation: robot, link: right_panda_rightfinger, static_friction: 2.0, dynamic_friction: 2.0}
+)") + camera_yaml_;
+  return spec;
+}
+
+const CabinetModel& OpenCabinetTask::getCabinet(const std::string& cabinet_id) const {
+  auto& slot = cabinets_[cabinet_id];
+  if (!slot)
+    slot = std::make_shared<CabinetModel>(partnet_dir_.empty() ? generateCabinet(cabinet_id)
+                                                                : loadPartNetCabinet(partnet_dir_, cabinet_id));
+  return *slot;
+}
+
+std::vector<std::string> OpenCabinetTask::listObjects(const std::string& split) const {
+  std::vector<std::string> cabinets;
+  if (partnet_dir_.empty()) {
+    cabinets = listGeneratedCabinets(kind_, split);
+  } else {
+    if (split != "train" && split != "test")
+      throw Error("unknown split '" + split + "' (use train or test)", MB_INVALID_ARGUMENT);
+    // <dir>/test.txt lists the test cabinets, one id a line; the rest train.
+    std::vector<std::string> test;
+    if (std::ifstream in(partnet_dir_ + "/test.txt"); in)
+      for (std::string line; std::getline(in, line);)
+        if (!line.empty()) test.push_back(line);
+    for (const std::string& id : listPartNetCabinets(partnet_dir_))
+      if ((std::find(test.begin(), test.end(), id) != test.end()) == (split == "test")) cabinets.push_back(id);
+  }
+  std::vector<std::string> ids;
+  for (const std::string& c : cabinets)
+    for (const TargetLink* t : getCabinet(c).getTargets(kind_)) ids.push_back(c + "_" + t->link);
+  return ids;
+}
+
+void OpenCabinetTask::buildScene(SceneView& scene, const std::string& object_id) {
+  const auto [cabinet_id, link] = splitObjectId(object_id);
+  getCabinet(cabinet_id);
+  cabinet_ = cabinets_.at(cabinet_id);
+  target_ = nullptr;
+  for (const TargetLink* t : cabinet_->getTargets(kind_))
+    if (t->link == link) target_ = t;
+  if (target_ == nullptr)
+    throw Error(taskName(kind_) + ": cabinet " + cabinet_id + " has no " +
+                    (kind_ == TargetKind::kDoor ? "door" : "drawer") + " with a handle named " + link,
+                MB_NOT_FOUND);
+  scene.addGround(0.0);
+  robot_ = scene.addUrdfFile(robot_dir_ + "/mobile_panda_single.urdf", "robot", Pose(), /*fixed_base=*/true);
+  for (std::size_t i = 0; i < robot_joints_.size(); ++i)
+    if (scene.findJoint(robot_, robot_joints_[i]) != i)
+      throw Error(taskName(kind_) + ": robot joint " + robot_joints_[i] + " is not at index " + std::to_string(i));
+  Pose placement;
+  placement.position = cabinet_->placement;
+  cabinet_id_ = scene.addUrdfString(cabinet_->urdf, cabinet_->base_dir, "cabinet", placement, /*fixed_base=*/true);
+  target_link_ = scene.findLink(cabinet_id_, target_->link);
+  target_joint_ = scene.findJoint(cabinet_id_, target_->joint);
+  const mb_joint_info info = scene.getJointInfo(cabinet_id_, target_joint_);
+  lower_ = info.lower;
+  upper_ = info.upper;
+  if (!std::isfinite(lower_)) lower_ = 0;  // continuous joints: a quarter turn
+  if (!std::isfinite(upper_)) upper_ = lower_ + kPi / 2;
+  if (!(upper_ > lower_))
+    throw Error(taskName(kind_) + ": joint " + target_->joint + " of cabinet " + cabinet_id + " has no range");
+  cabinet_joint_count_ = scene.getJointCount(cabinet_id_);
+  left_finger_ = scene.findLink(robot_, "right_panda_leftfinger");
+  right_finger_ = scene.findLink(robot_, "right_panda_rightfinger");
+  tcp_ = scene.findLink(robot_, "right_panda_tcp");
+  scene.addLinkToMask(kHandleMask, cabinet_id_, target_link_, "handle");
+  scene.addLinkToMask(kTargetLinkMask, cabinet_id_, target_link_);
+  scene.addArticulationToMask(kRobotMask, robot_);
+}
+
+void OpenCabinetTask::reset(SceneView& scene, uint64_t seed) {
+  Random rng(seed ^ 0x6f70656e5f636162ULL);
+  // B.2 / ManiSkill v1: 1.6-1.8 m from the cabinet centre, at 0.9-1.1 pi
+  // around it (in front), facing it with +-0.05 pi of heading noise.
+  const Eigen::Vector3d centre = (cabinet_->lower + cabinet_->upper) / 2;
+  const double distance = rng.uniform(1.6, 1.8);
+  const double around = rng.uniform(0.9 * kPi, 1.1 * kPi);
+  const double heading = around + kPi + rng.uniform(-0.05 * kPi, 0.05 * kPi);
+  Eigen::VectorXd q = robot_initial_;
+  q[0] = centre.x() + distance * std::cos(around);
+  q[1] = centre.y() + distance * std::sin(around);
+  q[2] = std::remainder(heading, 2 * kPi);
+  scene.setJointPositions(robot_, q);
+  scene.setJointVelocities(robot_, Eigen::VectorXd::Zero(q.size()));
+  // every door and drawer closed, joint friction and damping drawn anew
+  scene.setJointPositions(cabinet_id_, Eigen::VectorXd::Zero(cabinet_joint_count_));
+  scene.setJointVelocities(cabinet_id_, Eigen::VectorXd::Zero(cabinet_joint_count_));
+  for (uint32_t j = 0; j < cabinet_joint_count_; ++j) {
+    const double friction = rng.uniform(0.05, 0.15);
+    const double damping = rng.uniform(5.0, 20.0);
+    scene.setJointDynamics(cabinet_id_, j, damping, friction);
+  }
+  held_steps_ = 0;
+}
+
+Pose OpenCabinetTask::calcHandlePose(const SceneView& scene) const {
+  const Pose link = scene.getLinkPose(target_link_);
+  Pose handle;
+  handle.position = link.position + link.orientation * target_->handle_position;
+  handle.orientation = link.orientation * Eigen::Quaterniond(target_->handle_rotation);
+  return handle;
+}
+
+Eigen::Vector3d OpenCabinetTask::calcGripperPoint(const SceneView& scene) const {
+  return scene.getLinkPose(tcp_).position;
+}
+
+void OpenCabinetTask::observe(const SceneView& scene, Eigen::Map<Eigen::VectorXd> out) {
+  using L = ObservationLayout;
+  int k = 0;
+  for (const mb_id finger : {left_finger_, right_finger_}) {
+    const Pose pose = scene.getLinkPose(finger);
+    const manibench::sdk::Twist twist = scene.getLinkTwist(finger);
+    const Eigen::Vector3d r = pose.orientation * kPadOffset;
+    out.segment<3>(L::kFingertipPositions + 3 * k) = pose.position + r;
+    out.segment<3>(L::kFingertipVelocities + 3 * k) = twist.linear + twist.angular.cross(r);
+    ++k;
+  }
+  const Eigen::VectorXd q = scene.getJointPositions(robot_);
+  const Eigen::VectorXd qd = scene.getJointVelocities(robot_);
+  out.segment<2>(L::kBasePosition) = q.head<2>();
+  out[L::kBaseYaw] = q[2];
+  out.segment<2>(L::kBaseVelocity) = qd.head<2>();
+  out[L::kBaseAngularVelocity] = qd[2];
+  out.segment<kRobotDof>(L::kJointPositions) = q;
+  out.segment<kRobotDof>(L::kJointVelocities) = qd;
+  auto putPose = [&out](uint32_t at, const Pose& p) {
+    out.segment<3>(at) = p.position;
+    out.segment<4>(at + 3) << p.orientation.w(), p.orientation.x(), p.orientation.y(), p.orientation.z();
+  };
+  putPose(L::kTcpPose, scene.getLinkPose(tcp_));
+  const Pose link = scene.getLinkPose(target_link_);
+  putPose(L::kTargetLinkPose, link);
+  out.segment<4>(L::kTargetJoint) << scene.getJointPositions(cabinet_id_)[target_joint_],
+      scene.getJointVelocities(cabinet_id_)[target_joint_], lower_, upper_;
+  out[L::kTargetJointType] = target_->kind == TargetKind::kDoor ? 0.0 : 1.0;
+  out.segment<3>(L::kJointAxis) = link.orientation * target_->axis;
+  out.segment<3>(L::kJointOrigin) = link.position;
+  putPose(L::kHandlePose, calcHandlePose(scene));
+  out[L::kHandleHalfLength] = target_->handle_half_length;
+  out.segment<3>(L::kCabinetCenter) = (cabinet_->lower + cabinet_->upper) / 2;
+}
+
+OpenCabinetTask::Measured OpenCabinetTask::measure(const SceneView& scene) const {
+  Measured m;
+  m.q = scene.getJointPositions(cabinet_id_)[target_joint_];
+  m.qdot = scene.getJointVelocities(cabinet_id_)[target_joint_];
+  m.open_fraction = (m.q - lower_) / (upper_ - lower_);
+  const Pose handle = calcHandlePose(scene);
+  m.handle_distance = distanceToSegment(calcGripperPoint(scene), handle.position,
+                                        handle.orientation * Eigen::Vector3d::UnitZ(), target_->handle_half_length);
+  const manibench::sdk::Twist twist = scene.getLinkTwist(target_link_);
+  m.linear_speed = twist.linear.norm();
+  m.angular_speed = twist.angular.norm();
+  return m;
+}
+
+double OpenCabinetTask::computeReward(const SceneView& scene, Eigen::Map<const Eigen::VectorXd>) {
+  const Measured m = measure(scene);
+  return calcStagedReward(m.handle_distance, m.open_fraction, m.linear_speed, m.angular_speed);
+}
+
+std::vector<Condition> OpenCabinetTask::evaluateSuccess(const SceneView& scene) {
+  const Measured m = measure(scene);
+  const bool open = m.open_fraction >= kOpenFraction;
+  const bool still = m.linear_speed <= static_speed_ && m.angular_speed <= static_angular_speed_;
+  held_steps_ = (open && still) ? held_steps_ + 1 : 0;  // called once per env step
+  return {{open, m.open_fraction}, {still, m.linear_speed}, {held_steps_ >= hold_steps_, double(held_steps_)}};
+}
+
+}  // namespace open_cabinet

@@ -1,0 +1,303 @@
+// OpenCabinetDoor-v0 / OpenCabinetDrawer-v0 (plugins/open_cabinet): object
+// ids and splits, generated URDFs, reset placement, reward stages, success
+// flags, the random policy. The generator and reward are header/source
+// level checks (compiled in here); everything else runs the real plugin.
+#include <gtest/gtest.h>
+
+#include <manibench/config.hpp>
+#include <manibench/environment.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <random>
+#include <set>
+#include <sstream>
+
+#include "../plugins/open_cabinet/cabinet_generator.cpp"
+#include "test_support.hpp"
+
+namespace {
+
+namespace mb = manibench;
+namespace oc = open_cabinet;
+using L = oc::ObservationLayout;
+
+std::unique_ptr<mb::Environment> makeEnv(const std::string& task, std::vector<std::string> overrides = {}) {
+  mb::ConfigSources sources;
+  sources.overrides = std::move(overrides);
+  const mb::ConfigNode config = mb::loadTaskConfig(mb::testing::getBuildTreeRegistry(), task, sources);
+  return std::make_unique<mb::Environment>(mb::testing::getBuildTreeRegistry(), task,
+                                           mb::calcEnvironmentOptions(config));
+}
+
+std::string cabinetOf(const std::string& object_id) { return object_id.substr(0, object_id.find("_link_")); }
+
+TEST(OpenCabinet, SameIdSameCabinetDifferentIdsDiffer) {
+  EXPECT_EQ(oc::generateCabinet("1003").urdf, oc::generateCabinet("1003").urdf);
+  EXPECT_EQ(oc::generateCabinet("2101").urdf, oc::generateCabinet("2101").urdf);
+  std::set<std::string> urdfs;
+  for (const std::string& id : oc::listGeneratedCabinets(oc::TargetKind::kDoor, "train"))
+    urdfs.insert(oc::generateCabinet(id).urdf);
+  EXPECT_EQ(urdfs.size(), 42u);
+  EXPECT_THROW(oc::generateCabinet("1042"), manibench::sdk::Error);
+  EXPECT_THROW(oc::generateCabinet("abc"), manibench::sdk::Error);
+}
+
+TEST(OpenCabinet, SplitsAreDisjointAndLargeEnough) {
+  for (const std::string task : {"OpenCabinetDoor-v0", "OpenCabinetDrawer-v0"}) {
+    const auto env = makeEnv(task);
+    const std::vector<std::string> train = env->listObjects("train"), test = env->listObjects("test");
+    std::set<std::string> train_cabinets, test_cabinets;
+    for (const std::string& id : train) train_cabinets.insert(cabinetOf(id));
+    for (const std::string& id : test) {
+      test_cabinets.insert(cabinetOf(id));
+      EXPECT_EQ(std::count(train.begin(), train.end(), id), 0) << id;
+    }
+    for (const std::string& c : test_cabinets) EXPECT_EQ(train_cabinets.count(c), 0u) << c;
+    const bool door = task == std::string("OpenCabinetDoor-v0");
+    EXPECT_GE(train_cabinets.size(), door ? 40u : 25u) << task;
+    EXPECT_GE(test_cabinets.size(), 10u) << task;
+    EXPECT_GT(train.size(), train_cabinets.size()) << task << ": some cabinets have several targets";
+  }
+}
+
+TEST(OpenCabinet, TestSplitHoldsHandlesAndSizesTrainingNeverShows) {
+  std::set<oc::HandleType> train_types, test_types;
+  double train_width = 0, test_width = 0;
+  for (const oc::TargetKind kind : {oc::TargetKind::kDoor, oc::TargetKind::kDrawer}) {
+    for (const std::string& id : oc::listGeneratedCabinets(kind, "train")) {
+      const oc::CabinetParams p = oc::getCabinetParams(id);
+      train_types.insert(p.handle.type);
+      train_width = std::max(train_width, p.width);
+      EXPECT_FALSE(oc::generateCabinet(id).getTargets(kind).empty()) << id;
+    }
+    for (const std::string& id : oc::listGeneratedCabinets(kind, "test")) {
+      const oc::CabinetParams p = oc::getCabinetParams(id);
+      test_types.insert(p.handle.type);
+      test_width = std::max(test_width, p.width);
+      EXPECT_FALSE(oc::generateCabinet(id).getTargets(kind).empty()) << id;
+    }
+  }
+  EXPECT_EQ(train_types.count(oc::HandleType::kBoxed), 0u);
+  EXPECT_EQ(test_types.count(oc::HandleType::kBoxed), 1u);
+  EXPECT_GT(test_width, train_width);
+}
+
+TEST(OpenCabinet, HandlesFitTheGripperAndJointRangesAreRealistic) {
+  for (const oc::TargetKind kind : {oc::TargetKind::kDoor, oc::TargetKind::kDrawer})
+    for (const std::string split : {"train", "test"})
+      for (const std::string& id : oc::listGeneratedCabinets(kind, split)) {
+        const oc::CabinetParams p = oc::getCabinetParams(id);
+        // across the grip the fingers open to 2 x 0.04 m
+        EXPECT_LT(p.handle.type == oc::HandleType::kKnob ? p.handle.length : p.handle.thickness, 0.07) << id;
+        EXPECT_GE(p.handle.standoff - p.handle.thickness / 2, 0.03) << id << ": room behind the grip";
+        for (std::size_t c = 0; c < p.cells.size(); ++c) {
+          EXPECT_GE(p.door_limits[c], M_PI / 2 - 1e-9);
+          EXPECT_LE(p.door_limits[c], 2 * M_PI / 3 + 1e-9);
+        }
+      }
+}
+
+// Every generated cabinet loads (one target link each, both splits).
+TEST(OpenCabinet, GeneratedUrdfsLoad) {
+  for (const std::string task : {"OpenCabinetDoor-v0", "OpenCabinetDrawer-v0"}) {
+    const auto env = makeEnv(task);
+    for (const std::string split : {"train", "test"}) {
+      std::set<std::string> seen;
+      for (const std::string& id : env->listObjects(split)) {
+        if (!seen.insert(cabinetOf(id)).second) continue;
+        ASSERT_NO_THROW(env->reset(id, 0)) << task << " " << id;
+        const Eigen::VectorXd& obs = env->getObservation();
+        EXPECT_TRUE(obs.allFinite()) << id;
+        EXPECT_GT(env->getScene().findArticulation("cabinet"), -1);
+      }
+    }
+  }
+  EXPECT_THROW(makeEnv("OpenCabinetDoor-v0")->reset("1003_link_9", 0), std::exception);
+  EXPECT_THROW(makeEnv("OpenCabinetDoor-v0")->reset("2003_link_0", 0), std::exception);  // drawer cabinet
+}
+
+TEST(OpenCabinet, ResetPlacesTheRobotInFrontFacingTheCabinetWithEverythingClosed) {
+  const auto env = makeEnv("OpenCabinetDrawer-v0");
+  const std::string object = env->listObjects("train").front();
+  std::set<double> distances;
+  for (uint64_t seed = 0; seed < 12; ++seed) {
+    env->reset(object, seed);
+    const Eigen::VectorXd s = env->getObservation();
+    const Eigen::Vector2d base = s.segment<2>(L::kBasePosition);
+    const Eigen::Vector2d centre = s.segment<2>(L::kCabinetCenter);
+    const double distance = (base - centre).norm();
+    EXPECT_GE(distance, 1.6) << seed;
+    EXPECT_LE(distance, 1.8) << seed;
+    distances.insert(distance);
+    // in front (the cabinet faces -x), heading at the cabinet within 0.15 pi
+    EXPECT_LT(base.x(), centre.x() - 1.4);
+    const Eigen::Vector2d to_cabinet = (centre - base).normalized();
+    const double heading = s[L::kBaseYaw];
+    EXPECT_GT(to_cabinet.dot(Eigen::Vector2d(std::cos(heading), std::sin(heading))), std::cos(0.16 * M_PI));
+    EXPECT_EQ(s[L::kTargetJoint], 0.0) << "closed";
+    EXPECT_EQ(s[L::kTargetJoint + 1], 0.0);
+    const int cabinet = env->getScene().findArticulation("cabinet");
+    EXPECT_TRUE(env->getScene().getJointPositions(cabinet).isZero());
+  }
+  EXPECT_GE(distances.size(), 10u) << "the placement is randomized";
+  // same seed, same episode start
+  env->reset(object, 5);
+  const Eigen::VectorXd a = env->getObservation();
+  env->reset(env->listObjects("train").back(), 1);
+  env->reset(object, 5);
+  EXPECT_EQ(a, env->getObservation());
+}
+
+TEST(OpenCabinet, EveryRewardStageStrictlyExceedsTheOneBefore) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0, 1);
+  double best1 = -INFINITY, worst2 = INFINITY, best2 = -INFINITY, worst3 = INFINITY;
+  for (int i = 0; i < 20000; ++i) {
+    const double v = 3 * u(rng), w = 5 * u(rng);
+    // stage 1: far from the handle, any opening below 90 %
+    best1 = std::max(best1, oc::calcStagedReward(oc::kContactDistance + 2 * u(rng), 0.9 * u(rng), v, w));
+    // stage 2: within contact range, not yet open enough
+    const double r2 = oc::calcStagedReward(oc::kContactDistance * u(rng), 0.9 * u(rng) * 0.99999, v, w);
+    worst2 = std::min(worst2, r2);
+    best2 = std::max(best2, r2);
+    // stage 3: open enough, anywhere, moving or not
+    worst3 = std::min(worst3, oc::calcStagedReward(3 * u(rng), 0.9 + 0.1 * u(rng), 10 * v, 10 * w));
+  }
+  EXPECT_LT(best1, worst2);
+  EXPECT_LT(best2, worst3);
+  // boundary values
+  EXPECT_LT(oc::calcStagedReward(oc::kContactDistance, 0.5, 0, 0), oc::calcStagedReward(oc::kContactDistance - 1e-9, 0, 0, 0));
+  EXPECT_LT(oc::calcStagedReward(0, 0.9 - 1e-12, 0, 0), oc::calcStagedReward(5, 0.9, 1e3, 1e3));
+  // smooth where approach meets opening: no jump at the boundary
+  EXPECT_NEAR(oc::calcStagedReward(oc::kContactDistance + 1e-9, 0, 0, 0),
+              oc::calcStagedReward(oc::kContactDistance - 1e-9, 0, 0, 0), 1e-8);
+  // within a stage: closer, more open, stiller is better
+  EXPECT_GT(oc::calcStagedReward(0.5, 0, 0, 0), oc::calcStagedReward(1.0, 0, 0, 0));
+  EXPECT_GT(oc::calcStagedReward(0.01, 0.6, 0, 0), oc::calcStagedReward(0.01, 0.3, 0, 0));
+  EXPECT_GT(oc::calcStagedReward(0.01, 0.95, 0.0, 0), oc::calcStagedReward(0.01, 0.95, 0.5, 0));
+}
+
+TEST(OpenCabinet, SuccessNeedsTheJointOpenAndStillForTenSteps) {
+  const auto env = makeEnv("OpenCabinetDrawer-v0");
+  const std::string object = env->listObjects("train").front();
+  env->reset(object, 3);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(env->getControllerDescription().action_dim);
+  mb::StepResult r = env->step(zero);
+  ASSERT_EQ(r.flags.size(), 3u);
+  EXPECT_FALSE(r.flags[0]);
+  EXPECT_NEAR(r.values[0], 0.0, 1e-3) << "open fraction of a closed drawer";
+  EXPECT_FALSE(r.success);
+  EXPECT_LT(r.reward, -3.0 - 2.0 * oc::kContactDistance) << "far from the handle: stage 1";
+  // Open the drawer to 95 % of its range by hand (a test-only state change).
+  const int cabinet = env->getScene().findArticulation("cabinet");
+  const double upper = env->getObservation()[L::kTargetJoint + 3];
+  env->reset(object, 3);
+  Eigen::VectorXd q = env->getScene().getJointPositions(cabinet);
+  const std::string link = object.substr(object.find("_link_") + 1);
+  const int joint = env->getScene().findJoint(cabinet, "joint_" + link.substr(5));
+  ASSERT_GE(joint, 0);
+  q[joint] = 0.95 * upper;
+  env->updScene().setJointPositions(cabinet, q);
+  uint32_t steps = 0;
+  do {
+    r = env->step(zero);
+    ++steps;
+    EXPECT_TRUE(r.flags[0]) << "step " << steps;
+    EXPECT_NEAR(r.values[0], 0.95, 0.02);
+    EXPECT_GT(r.reward, -1.2) << "stage 3";
+  } while (!r.success && steps < 30);
+  EXPECT_TRUE(r.success);
+  EXPECT_TRUE(r.flags[1]);
+  EXPECT_EQ(steps, 10u) << "success after 10 consecutive open and static steps";
+  EXPECT_EQ(r.values[2], 10.0);
+}
+
+// Short episodes: random flailing is the slowest thing to simulate.
+TEST(OpenCabinet, RandomPolicyNeverSucceeds) {
+  for (const std::string task : {"OpenCabinetDoor-v0", "OpenCabinetDrawer-v0"}) {
+    const auto env = makeEnv(task, {"episode.max_steps=40"});
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u(-1, 1);
+    const std::vector<std::string> objects = env->listObjects("train");
+    for (uint64_t seed = 0; seed < 2; ++seed) {
+      env->reset(objects[seed * 7 % objects.size()], seed);
+      Eigen::VectorXd action(env->getControllerDescription().action_dim);
+      mb::StepResult r;
+      double most_open = 0;
+      do {
+        for (Eigen::Index i = 0; i < action.size(); ++i) action[i] = u(rng);
+        r = env->step(action);
+        most_open = std::max(most_open, r.values[0]);
+      } while (!r.done);
+      EXPECT_FALSE(r.success) << task << " seed " << seed;
+      EXPECT_LT(most_open, 0.9) << task << " seed " << seed;
+    }
+  }
+}
+
+TEST(OpenCabinet, ObjectsCommandListsASplit) {
+  const mb::testing::CommandResult test =
+      mb::testing::runCli({"objects", "OpenCabinetDoor-v0", "--split", "test", "--ids"});
+  ASSERT_EQ(test.exit_code, 0) << test.err;
+  const mb::testing::CommandResult train = mb::testing::runCli({"objects", "OpenCabinetDoor-v0", "--ids"});
+  ASSERT_EQ(train.exit_code, 0) << train.err;
+  std::istringstream lines(test.out);
+  int count = 0;
+  for (std::string id; std::getline(lines, id); ++count) {
+    EXPECT_EQ(id.rfind("11", 0), 0u) << id << ": test door cabinets are 1100-1109";
+    EXPECT_EQ(train.out.find(id + "\n"), std::string::npos) << id;
+  }
+  EXPECT_EQ(count, 26);
+  const mb::testing::CommandResult table = mb::testing::runCli({"objects", "OpenCabinetDrawer-v0", "--split", "test"});
+  EXPECT_NE(table.out.find("target links of 10 articulated objects"), std::string::npos) << table.out;
+  const mb::testing::CommandResult bad = mb::testing::runCli({"objects", "OpenCabinetDoor-v0", "--split", "val"});
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--split must be train or test"), std::string::npos) << bad.err;
+}
+
+TEST(OpenCabinet, ExpertRefusesOtherControllers) {
+  const auto env = makeEnv("OpenCabinetDrawer-v0");  // default controller mobile_panda
+  try {
+    mb::PolicyInstance policy(mb::testing::getBuildTreeRegistry(), "open_cabinet_expert", "",
+                              env->calcPolicyLayout("state"));
+    FAIL() << "expected a refusal";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("mobile_panda_ee"), std::string::npos) << e.what();
+  }
+}
+
+// Diagnostics: OPEN_CABINET_TRACE=<task>,<object>,<seed> prints an expert episode
+// (OPEN_CABINET_TRACE_SET=KEY=VALUE adds one configuration key).
+TEST(OpenCabinet, Trace) {
+  const char* spec = std::getenv("OPEN_CABINET_TRACE");
+  if (spec == nullptr) GTEST_SKIP() << "set OPEN_CABINET_TRACE=task,object,seed";
+  std::string s = spec;
+  const std::string task = s.substr(0, s.find(','));
+  s = s.substr(s.find(',') + 1);
+  const std::string object = s.substr(0, s.find(','));
+  const uint64_t seed = std::stoull(s.substr(s.find(',') + 1));
+  std::vector<std::string> overrides = {"control.controller=mobile_panda_ee"};
+  if (const char* extra = std::getenv("OPEN_CABINET_TRACE_SET")) overrides.push_back(extra);  // KEY=VALUE
+  const auto env = makeEnv(task, overrides);
+  mb::PolicyInstance policy(mb::testing::getBuildTreeRegistry(), "open_cabinet_expert", "",
+                            env->calcPolicyLayout("state"));
+  env->reset(object, seed);
+  policy.reset(seed);
+  Eigen::VectorXd action;
+  for (uint32_t step = 0; step < 200; ++step) {
+    const Eigen::VectorXd o = env->getObservation();
+    policy.act(o, step, action);
+    const mb::StepResult r = env->step(action);
+    if (step % 5 == 0 || r.done)
+      std::cout << step << " tcp " << o.segment<3>(L::kTcpPose).transpose() << " handle "
+                << o.segment<3>(L::kHandlePose).transpose() << " q " << o[L::kTargetJoint] << " base "
+                << o.segment<3>(L::kBasePosition).transpose() << " lift " << o[L::kJointPositions + 3]
+                << " fingers " << o.segment<2>(L::kJointPositions + 11).transpose() << " r " << r.reward
+                << "\n   a " << action.transpose() << "\n";
+    if (r.done) break;
+  }
+}
+
+}  // namespace
