@@ -20,8 +20,20 @@
 
 #include "cli.hpp"
 
+namespace manibench::cli {
+int commandEval(int argc, char** argv);  // command_eval.cpp
+}  // namespace manibench::cli
+
 namespace mb = manibench;
 using namespace manibench::cli;
+
+namespace manibench::cli {
+int commandRender(int argc, char** argv);  // command_render.cpp
+}
+
+namespace manibench::cli {
+int commandObjects(int argc, char** argv);  // command_objects.cpp
+}
 
 namespace {
 
@@ -34,6 +46,10 @@ Commands:
                             masks and objects of a task
   run TASK --policy NAME    run one episode and print steps, return, success
   bench TASK                environment steps per second of a task
+  render TASK --out DIR     camera images, masks and point clouds as PNG/PLY
+  eval TASK --policy NAME   evaluate a policy on a split's objects: success
+                            rates per object, CSV and JSON (docs/evaluation.md)
+  objects TASK              object ids of a split (--split train|test)
   config [TASK]             print the merged YAML configuration
   demo                      list the plugins, then run the example task with its
                             scripted expert
@@ -70,6 +86,7 @@ Options:
   --object ID             object id (default: drawn from the split by the seed)
   --split train|test      split to draw the object from (default train)
   --controller NAME       override the task's default controller
+  --obs MODE              observation mode: state (default), pointcloud or rgbd
   --no-early-stop         run to the time limit even after success
   --config FILE           a YAML configuration layer; repeatable, later wins
   --set KEY=VALUE         one key, e.g. --set physics.accuracy=0.001; repeatable
@@ -99,9 +116,11 @@ success and observation; resets are timed separately.
 
 Options:
   --policy NAME|PATH.so   policy acting (default random)
-  --obs MODE              observation mode (default state; only state so far)
+  --obs MODE              observation mode: state (default), pointcloud or rgbd
+                          (the visual modes render every camera at every step)
   --steps N               environment steps to time (default 2000)
   --split train|test      objects to cycle through (default train)
+  --controller NAME       override the task's default controller
   --config FILE, --set KEY=VALUE   configuration layers, as for run
 )";
 
@@ -175,6 +194,17 @@ int commandInfo(int argc, char** argv) {
   if (task.masks.empty()) std::cout << " (none)";
   for (const std::string& m : task.masks) std::cout << " " << m;
   std::cout << "\nobjects: " << train.size() << " train, " << test.size() << " test\n";
+  std::cout << "scene: " << env.getScene().getVisualShapes().size() << " visuals, "
+            << env.getScene().calcVisualTriangleCount()
+            << " mesh triangles (the renderer adds tessellated primitives)\n";
+  std::cout << "cameras:";
+  if (env.getCameras().empty()) std::cout << " (none)";
+  for (const mb::CameraMount& c : env.getCameras())
+    std::cout << " " << c.spec.name << " (" << c.spec.width << "x" << c.spec.height << ", "
+              << (c.articulation.empty() ? std::string("world")
+                                         : c.articulation + (c.link.empty() ? "" : ":" + c.link))
+              << ")";
+  std::cout << "\n";
   return 0;
 }
 
@@ -189,7 +219,7 @@ int runOne(mb::PluginRegistry& registry, const std::string& task_name, const std
   const std::string object =
       object_arg.empty() ? chooseObject(env.listObjects(split), seed, split) : object_arg;
   env.reset(object, seed);
-  mb::PolicyInstance policy(registry, policy_name, "", env.calcPolicyLayout("state"));
+  mb::PolicyInstance policy(registry, policy_name, "", env.calcPolicyLayout());
   std::cout << "task " << task_name << ", policy " << policy_name << ", controller "
             << env.getControllerDescription().name << "\n";
   const mb::EpisodeResult result = mb::runEpisode(env, policy, object, seed);
@@ -197,10 +227,22 @@ int runOne(mb::PluginRegistry& registry, const std::string& task_name, const std
   return 0;
 }
 
+// The configuration sources, with --obs MODE as the last --set observation.mode.
+mb::ConfigSources withObservationMode(const Arguments& args, const char* usage) {
+  mb::ConfigSources sources = getConfigSources(args);
+  if (args.options.count("obs")) {
+    const std::string obs = args.options.at("obs");
+    if (obs != "state" && obs != "pointcloud" && obs != "rgbd")
+      throw UsageError("--obs must be state, pointcloud or rgbd, got '" + obs + "'", usage);
+    sources.overrides.push_back("observation.mode=" + obs);
+  }
+  return sources;
+}
+
 int commandRun(int argc, char** argv) {
   const Arguments args =
       parseArguments(argc, argv, 2,
-                     {"policy", "seed", "object", "split", "controller", "config", "set"},
+                     {"policy", "seed", "object", "split", "controller", "obs", "config", "set"},
                      {"no-early-stop"}, kRunUsage);
   if (args.help) {
     std::cout << kRunUsage;
@@ -215,7 +257,7 @@ int commandRun(int argc, char** argv) {
   mb::PluginRegistry registry;
   loadPlugins(registry);
   return runOne(registry, args.positional[0], args.options.at("policy"), seed,
-                valueOr(args, "object", ""), split, getConfigSources(args),
+                valueOr(args, "object", ""), split, withObservationMode(args, kRunUsage),
                 !args.options.count("no-early-stop"));
 }
 
@@ -243,7 +285,7 @@ int commandConfig(int argc, char** argv) {
 
 int commandBench(int argc, char** argv) {
   const Arguments args = parseArguments(argc, argv, 2,
-                                        {"policy", "obs", "steps", "split", "config", "set"}, {},
+                                        {"policy", "obs", "steps", "split", "controller", "config", "set"}, {},
                                         kBenchUsage);
   if (args.help) {
     std::cout << kBenchUsage;
@@ -251,8 +293,10 @@ int commandBench(int argc, char** argv) {
   }
   if (args.positional.size() != 1) throw UsageError("bench needs exactly one TASK", kBenchUsage);
   const std::string obs = valueOr(args, "obs", "state");
-  if (obs != "state")
-    throw UsageError("--obs " + obs + " is not available yet (only state)", kBenchUsage);
+  if (obs != "state" && obs != "pointcloud" && obs != "rgbd")
+    throw UsageError("--obs must be state, pointcloud or rgbd, got '" + obs + "'", kBenchUsage);
+  mb::ConfigSources sources = getConfigSources(args);
+  if (args.options.count("obs")) sources.overrides.push_back("observation.mode=" + obs);
   const std::string split = valueOr(args, "split", "train");
   if (split != "train" && split != "test")
     throw UsageError("--split must be train or test", kBenchUsage);
@@ -264,10 +308,10 @@ int commandBench(int argc, char** argv) {
   const std::string policy_name = resolvePolicy(registry, valueOr(args, "policy", "random"));
   registry.getEntry(mb::PluginKind::Policy, policy_name);
   const std::unique_ptr<mb::Environment> env =
-      makeEnvironment(registry, args.positional[0], getConfigSources(args), true);
+      makeEnvironment(registry, args.positional[0], sources, true);
   const std::vector<std::string> objects = env->listObjects(split);
   if (objects.empty()) throw std::runtime_error("the " + split + " split has no objects");
-  mb::PolicyInstance policy(registry, policy_name, "", env->calcPolicyLayout(obs));
+  mb::PolicyInstance policy(registry, policy_name, "", env->calcPolicyLayout());
 
   using Clock = std::chrono::steady_clock;
   std::chrono::duration<double> step_time{0}, reset_time{0};
@@ -282,7 +326,8 @@ int commandBench(int argc, char** argv) {
     bool done = false;
     while (!done && steps < target_steps) {
       const auto start = Clock::now();
-      policy.act(env->getObservation(), env->getElapsedSteps(), action);
+      policy.act(env->getObservation(), env->getElapsedSteps(), action,
+                 env->getObservationMode() == "state" ? nullptr : &env->getVisualObservation());
       const mb::StepResult result = env->step(action);
       step_time += Clock::now() - start;
       ++steps;
@@ -291,7 +336,7 @@ int commandBench(int argc, char** argv) {
     }
     ++episodes;
   }
-  std::cout << "task " << args.positional[0] << ", obs " << obs << ", policy " << policy_name
+  std::cout << "task " << args.positional[0] << ", obs " << env->getObservationMode() << ", policy " << policy_name
             << ", controller " << env->getControllerDescription().name << "\n"
             << steps << " env steps in " << episodes << " episodes (" << successes
             << " successful), " << std::fixed << std::setprecision(1)
@@ -333,6 +378,9 @@ int main(int argc, char** argv) {
     if (command == "config") return commandConfig(argc, argv);
     if (command == "demo") return commandDemo(argc, argv);
     if (command == "bench") return commandBench(argc, argv);
+    if (command == "render") return commandRender(argc, argv);
+    if (command == "eval") return manibench::cli::commandEval(argc, argv);
+    if (command == "objects") return manibench::cli::commandObjects(argc, argv);
     throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'",
                      kMainUsage);
   } catch (const UsageError& e) {

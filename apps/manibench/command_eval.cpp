@@ -1,0 +1,268 @@
+// manibench eval: the evaluation kit (docs/evaluation.md). A policy on a
+// task's objects, episodes in worker processes, results as a table, CSV and
+// JSON.
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <manibench/evaluation.hpp>
+#include <sstream>
+
+#include "cli.hpp"
+
+namespace manibench::cli {
+
+namespace {
+
+const char* kEvalUsage = R"(usage: manibench eval [TASK] --policy NAME|PATH.so [options]
+
+Evaluates a policy on a task's objects (ManiSkill's evaluation kit): every
+selected object times every level is one episode, with a seed derived from
+--seed, the object and the level, so two runs give the same numbers. Episodes
+run in worker processes: a policy that crashes, hangs or returns NaN or a
+wrong-size action fails only its episode (recorded with the reason and step).
+Prints a table per object (episodes, success rate, each success condition's
+satisfactory rate) and writes summary.csv, episodes.csv and summary.json.
+Ctrl-C stops the run and writes the results collected so far.
+
+Options:
+  --task TASK             the task (or give it as the first word)
+  --policy NAME|PATH.so   policy plugin by name, or a library file to load
+  --policy-config FILE    YAML handed to the policy's create
+  --obs MODE              observation mode: state, pointcloud or rgbd
+                          (default: the configuration's observation.mode)
+  --split train|test      objects to evaluate on (default test)
+  --objects ID,ID,...     only these objects of the split
+  --episodes-per-object N levels 0..N-1 of every object (default 5)
+  --levels LIST           these levels instead, e.g. 0-9 or 3,7,12 or 0-4,9
+  --seed S                base seed of the episode seeds (default 0)
+  --workers N             worker processes (default 1)
+  --step-timeout SEC      a policy call (reset, act) longer than this fails
+                          its episode (default 10)
+  --env-timeout SEC       limit for an environment reset/step and a worker's
+                          setup (default 300)
+  --out DIR               where the files go (default results)
+  --no-progress           no progress bar (it is shown only on a terminal)
+  --benchmark             run the evaluation with 1 worker, then with
+                          --workers, check that both give the same results
+                          and print the speedup
+  --controller NAME       override the task's default controller
+  --config FILE           a YAML configuration layer; repeatable, later wins
+  --set KEY=VALUE         one key; repeatable
+Exit status: 0 when every episode ran (failed episodes included), 1 on an
+error, 130 when interrupted (partial results written).
+)";
+
+volatile sig_atomic_t g_interrupted = 0;
+
+void onInterrupt(int) { g_interrupted = 1; }
+
+double parsePositive(const std::string& text, const std::string& option) {
+  try {
+    std::size_t used = 0;
+    const double value = std::stod(text, &used);
+    if (used == text.size() && std::isfinite(value) && value > 0) return value;
+  } catch (const std::exception&) {
+  }
+  throw UsageError(option + " needs a positive number, got '" + text + "'", kEvalUsage);
+}
+
+std::string formatDuration(double seconds) {
+  const long s = std::lround(std::max(0.0, seconds));
+  char buffer[32];
+  if (s >= 3600)
+    std::snprintf(buffer, sizeof(buffer), "%ld:%02ld:%02ld", s / 3600, (s / 60) % 60, s % 60);
+  else
+    std::snprintf(buffer, sizeof(buffer), "%02ld:%02ld", s / 60, s % 60);
+  return buffer;
+}
+
+// One line, redrawn in place on the terminal.
+void drawProgress(const EvaluationProgress& p) {
+  const int width = 30;
+  const int filled = p.total ? int(width * p.done / p.total) : 0;
+  std::string bar(std::size_t(filled), '#');
+  bar.resize(width, '.');
+  std::ostringstream line;
+  line << "\r[" << bar << "] " << p.done << "/" << p.total << " episodes, " << p.successes
+       << " successful";
+  if (p.failures) line << ", " << p.failures << " failed";
+  if (p.done > 0 && p.total > p.done)
+    line << ", ~" << formatDuration(p.elapsed / double(p.done) * double(p.total - p.done))
+         << " left";
+  else
+    line << ", " << formatDuration(p.elapsed) << " elapsed";
+  line << "   ";
+  std::cerr << line.str() << std::flush;
+}
+
+std::string readTextFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read the policy configuration '" + path + "'");
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+bool sameResults(const EvaluationResult& a, const EvaluationResult& b) {
+  std::ostringstream x, y;
+  writeEpisodesCsv(x, a);
+  writeEpisodesCsv(y, b);
+  return x.str() == y.str();
+}
+
+}  // namespace
+
+int commandEval(int argc, char** argv) {
+  const Arguments args =
+      parseArguments(argc, argv, 2,
+                     {"task", "policy", "policy-config", "obs", "split", "objects",
+                      "episodes-per-object", "levels", "seed", "workers", "step-timeout",
+                      "env-timeout", "out", "controller", "config", "set"},
+                     {"no-progress", "benchmark"}, kEvalUsage);
+  if (args.help) {
+    std::cout << kEvalUsage;
+    return 0;
+  }
+  std::string task = valueOr(args, "task", "");
+  if (args.positional.size() > 1 || (args.positional.size() == 1 && !task.empty()))
+    throw UsageError("eval takes one TASK (as a word or --task)", kEvalUsage);
+  if (!args.positional.empty()) task = args.positional[0];
+  if (task.empty()) throw UsageError("eval needs a TASK", kEvalUsage);
+  if (!args.options.count("policy"))
+    throw UsageError("eval needs --policy NAME|PATH.so", kEvalUsage);
+
+  EvaluationOptions options;
+  options.task = task;
+  options.split = valueOr(args, "split", "test");
+  if (options.split != "train" && options.split != "test")
+    throw UsageError("--split must be train or test", kEvalUsage);
+  options.seed = parseSeed(valueOr(args, "seed", "0"), kEvalUsage);
+  const uint64_t workers = parseSeed(valueOr(args, "workers", "1"), kEvalUsage, "--workers");
+  if (workers < 1 || workers > 256) throw UsageError("--workers must be 1 to 256", kEvalUsage);
+  options.workers = unsigned(workers);
+  options.step_timeout = parsePositive(valueOr(args, "step-timeout", "10"), "--step-timeout");
+  options.environment_timeout = parsePositive(valueOr(args, "env-timeout", "300"), "--env-timeout");
+  try {
+    if (args.options.count("levels")) {
+      if (args.options.count("episodes-per-object"))
+        throw UsageError("give --levels or --episodes-per-object, not both", kEvalUsage);
+      options.levels = parseLevels(args.options.at("levels"));
+    } else {
+      const uint64_t n =
+          parseSeed(valueOr(args, "episodes-per-object", "5"), kEvalUsage, "--episodes-per-object");
+      if (n == 0 || n > 1000000)
+        throw UsageError("--episodes-per-object must be 1 to 1000000", kEvalUsage);
+      for (uint64_t level = 0; level < n; ++level) options.levels.push_back(level);
+    }
+    if (args.options.count("objects")) options.objects = parseIdList(args.options.at("objects"));
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what(), kEvalUsage);
+  }
+
+  ConfigSources sources = getConfigSources(args);
+  if (args.options.count("obs")) {
+    const std::string obs = args.options.at("obs");
+    const std::vector<std::string>& modes = getObservationModes();
+    if (std::find(modes.begin(), modes.end(), obs) == modes.end())
+      throw UsageError("--obs must be state, pointcloud or rgbd, got '" + obs + "'", kEvalUsage);
+    sources.overrides.push_back("observation.mode=" + obs);
+  }
+  options.observation_mode = valueOr(args, "obs", "");
+  for (const std::string& file : sources.files) options.config_notes.push_back("--config " + file);
+  for (const std::string& set : sources.overrides) options.config_notes.push_back("--set " + set);
+  if (args.options.count("policy-config")) {
+    options.policy_config = readTextFile(args.options.at("policy-config"));
+    options.config_notes.push_back("--policy-config " + args.options.at("policy-config"));
+  }
+  const std::string out_dir = valueOr(args, "out", "results");
+
+  // Everything that can be checked here fails before any worker starts: the
+  // policy library (loader errors), the names, the configuration.
+  PluginRegistry registry;
+  loadPlugins(registry);
+  options.policy = resolvePolicy(registry, args.options.at("policy"));
+  registry.getEntry(PluginKind::Policy, options.policy);
+  registry.getEntry(PluginKind::Task, task);
+  {
+    const ConfigNode config = loadTaskConfig(registry, task, sources);
+    calcEnvironmentOptions(config);
+  }
+  const EnvironmentFactory factory = [&registry, task, sources] {
+    return makeEnvironment(registry, task, sources, true);
+  };
+
+  const bool progress = !args.options.count("no-progress") && isatty(STDERR_FILENO);
+  EvaluationHooks hooks;
+  if (progress) hooks.on_progress = drawProgress;
+  hooks.should_stop = [] { return g_interrupted != 0; };
+  struct sigaction action {
+  }, previous{};
+  action.sa_handler = onInterrupt;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = 0;  // no SA_RESTART: poll() returns at once
+  g_interrupted = 0;
+  sigaction(SIGINT, &action, &previous);
+
+  std::cout << "evaluating policy " << options.policy << " on " << task << " (" << options.split
+            << " split), " << options.levels.size() << " level(s) per object, seed " << options.seed
+            << ", " << options.workers << " worker(s)\n"
+            << std::flush;
+  EvaluationResult baseline, result;
+  bool benchmark = args.options.count("benchmark") != 0;
+  if (benchmark) {
+    EvaluationOptions one = options;
+    one.workers = 1;
+    std::cout << "benchmark: first with 1 worker, then with " << options.workers << "\n"
+              << std::flush;
+    baseline = evaluatePolicy(registry, one, factory, hooks);
+    if (progress) std::cerr << "\n";
+    if (baseline.interrupted) {
+      benchmark = false;
+      result = baseline;
+    }
+  }
+  if (!result.interrupted) result = evaluatePolicy(registry, options, factory, hooks);
+  if (progress) std::cerr << "\n";
+  sigaction(SIGINT, &previous, nullptr);
+
+  std::cout << "policy " << options.policy << " (" << result.policy_library << ", version "
+            << result.policy_library_version << "), controller " << result.task.controller
+            << ", observation " << result.task.observation_mode << "\n\n";
+  printEvaluationTable(std::cout, result);
+  std::cout << "\n"
+            << result.episodes.size() << " of " << result.planned.size() << " episodes in "
+            << std::fixed << std::setprecision(2) << result.seconds << " s ("
+            << std::setprecision(1)
+            << (result.seconds > 0 ? result.episodes.size() / result.seconds : 0) << " episodes/s, "
+            << options.workers << " worker(s), " << result.worker_restarts
+            << " worker restart(s))\n";
+  if (benchmark) {
+    std::cout << "benchmark: 1 worker " << std::setprecision(2) << baseline.seconds << " s, "
+              << options.workers << " workers " << result.seconds << " s, speedup "
+              << (result.seconds > 0 ? baseline.seconds / result.seconds : 0) << "x; results "
+              << (sameResults(baseline, result) ? "identical" : "DIFFER") << "\n";
+  }
+  std::cout.unsetf(std::ios::fixed);
+  for (const std::string& path : writeEvaluationFiles(out_dir, result))
+    std::cout << "wrote " << path << "\n";
+  if (result.interrupted) {
+    std::cerr << "manibench: evaluation stopped (" << result.stop_reason
+              << "): " << result.episodes.size() << " of " << result.planned.size()
+              << " episodes; partial results written\n";
+    return result.stop_reason == "interrupted" ? 130 : 1;
+  }
+  if (benchmark && !sameResults(baseline, result)) {
+    std::cerr << "manibench: the runs with 1 and " << options.workers
+              << " workers gave different results\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace manibench::cli

@@ -1,0 +1,318 @@
+// Aggregation of an evaluation's episodes and its outputs: the terminal
+// table, summary.csv, episodes.csv and summary.json.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <manibench/evaluation.hpp>
+#include <map>
+#include <ostream>
+#include <sstream>
+
+namespace manibench {
+namespace {
+
+// Numbers are printed the same way in every file, so that they can be
+// compared as text: rates and means with 6 significant digits, returns
+// with 9.
+std::string formatNumber(double value, int digits) {
+  if (!std::isfinite(value)) return std::isnan(value) ? "nan" : (value > 0 ? "inf" : "-inf");
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%.*g", digits, value);
+  return buffer;
+}
+std::string formatRate(double value) { return formatNumber(value, 6); }
+std::string formatReturn(double value) { return formatNumber(value, 9); }
+
+std::string escapeCsv(const std::string& field) {
+  if (field.find_first_of(",\"\n\r") == std::string::npos) return field;
+  std::string out = "\"";
+  for (char c : field) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string escapeJson(const std::string& text) {
+  std::string out = "\"";
+  for (unsigned char c : text) {
+    switch (c) {
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\r':
+        out += "\\r";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
+      default:
+        if (c < 0x20) {
+          char buffer[8];
+          std::snprintf(buffer, sizeof(buffer), "\\u%04x", c);
+          out += buffer;
+        } else {
+          out += static_cast<char>(c);
+        }
+    }
+  }
+  return out + "\"";
+}
+
+// A JSON number; JSON has no NaN or infinity, so those become null.
+std::string jsonNumber(double value, int digits) {
+  return std::isfinite(value) ? formatNumber(value, digits) : "null";
+}
+
+template <class T, class F>
+std::string jsonArray(const std::vector<T>& items, F format) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? ", " : "") + format(items[i]);
+  return out + "]";
+}
+
+EvaluationSummary summarize(const std::string& object_id,
+                            const std::vector<const EpisodeRecord*>& episodes,
+                            std::size_t conditions) {
+  EvaluationSummary s;
+  s.object_id = object_id;
+  s.condition_rates.assign(conditions, 0);
+  double total_return = 0, total_steps = 0;
+  for (const EpisodeRecord* r : episodes) {
+    ++s.episodes;
+    if (r->success) ++s.successes;
+    if (r->failed()) ++s.failures;
+    for (std::size_t c = 0; c < conditions && c < r->flags.size(); ++c)
+      s.condition_rates[c] += r->flags[c] ? 1 : 0;
+    total_return += r->total_reward;
+    total_steps += r->steps;
+  }
+  if (s.episodes > 0) {
+    const double n = s.episodes;
+    s.success_rate = s.successes / n;
+    for (double& rate : s.condition_rates) rate /= n;
+    s.mean_return = total_return / n;
+    s.mean_steps = total_steps / n;
+  }
+  return s;
+}
+
+void writeSummaryJson(std::ostream& out, const EvaluationSummary& s,
+                      const std::vector<std::string>& conditions, const std::string& indent) {
+  out << "{\"object\": " << escapeJson(s.object_id) << ", \"episodes\": " << s.episodes
+      << ", \"successes\": " << s.successes << ", \"failures\": " << s.failures
+      << ", \"success_rate\": " << jsonNumber(s.success_rate, 6) << ",\n"
+      << indent << " \"condition_rates\": {";
+  for (std::size_t c = 0; c < conditions.size(); ++c)
+    out << (c ? ", " : "") << escapeJson(conditions[c]) << ": "
+        << jsonNumber(c < s.condition_rates.size() ? s.condition_rates[c] : 0, 6);
+  out << "},\n"
+      << indent << " \"mean_return\": " << jsonNumber(s.mean_return, 9)
+      << ", \"mean_steps\": " << jsonNumber(s.mean_steps, 6) << "}";
+}
+
+}  // namespace
+
+void summarizeEvaluation(EvaluationResult& result) {
+  const std::size_t conditions = result.task.condition_names.size();
+  std::vector<std::string> order;
+  std::map<std::string, std::vector<const EpisodeRecord*>> groups;
+  std::vector<const EpisodeRecord*> all;
+  for (const EpisodeSpec& spec : result.planned)
+    if (!groups.count(spec.object_id)) {
+      order.push_back(spec.object_id);
+      groups[spec.object_id];
+    }
+  for (const EpisodeRecord& r : result.episodes) {
+    groups[r.spec.object_id].push_back(&r);
+    all.push_back(&r);
+  }
+  result.objects.clear();
+  for (const std::string& object : order)
+    if (!groups[object].empty())
+      result.objects.push_back(summarize(object, groups[object], conditions));
+  result.overall = summarize("all", all, conditions);
+}
+
+void printEvaluationTable(std::ostream& out, const EvaluationResult& result) {
+  // The last condition, "success", is the success rate's column already.
+  std::vector<std::string> conditions = result.task.condition_names;
+  if (!conditions.empty() && conditions.back() == "success") conditions.pop_back();
+  std::size_t object_width = 8;
+  for (const EvaluationSummary& s : result.objects)
+    object_width = std::max(object_width, s.object_id.size() + 2);
+  std::vector<std::size_t> widths;
+  for (const std::string& c : conditions) widths.push_back(std::max<std::size_t>(c.size() + 2, 9));
+  out << std::left << std::setw(int(object_width)) << "object" << std::right << std::setw(9)
+      << "episodes" << std::setw(10) << "success";
+  for (std::size_t c = 0; c < conditions.size(); ++c)
+    out << std::setw(int(widths[c])) << conditions[c];
+  out << std::setw(9) << "failed" << std::setw(13) << "mean return" << std::setw(12) << "mean steps"
+      << "\n";
+  auto row = [&](const EvaluationSummary& s) {
+    out << std::left << std::setw(int(object_width)) << s.object_id << std::right << std::setw(9)
+        << s.episodes << std::setw(10) << std::fixed << std::setprecision(3) << s.success_rate;
+    for (std::size_t c = 0; c < conditions.size(); ++c)
+      out << std::setw(int(widths[c])) << s.condition_rates[c];
+    out << std::setw(9) << s.failures << std::setw(13) << std::setprecision(3) << s.mean_return
+        << std::setw(12) << std::setprecision(1) << s.mean_steps << "\n";
+    out.unsetf(std::ios::fixed);
+  };
+  for (const EvaluationSummary& s : result.objects) row(s);
+  std::size_t width = object_width + 9 + 10 + 9 + 13 + 12;
+  for (std::size_t w : widths) width += w;
+  out << std::string(width, '-') << "\n";
+  row(result.overall);
+
+  std::map<std::string, std::size_t> reasons;
+  const EpisodeRecord* first = nullptr;
+  for (const EpisodeRecord& r : result.episodes)
+    if (r.failed()) {
+      ++reasons[r.failure];
+      if (!first) first = &r;
+    }
+  if (first) {
+    out << "\nfailed episodes: " << result.overall.failures << " (";
+    bool comma = false;
+    for (const auto& [reason, count] : reasons) {
+      out << (comma ? ", " : "") << reason << " " << count;
+      comma = true;
+    }
+    out << "), counted as unsuccessful; the first: object " << first->spec.object_id << ", seed "
+        << first->spec.seed << ", " << first->failure << ": " << first->message << "\n";
+  }
+}
+
+void writeSummaryCsv(std::ostream& out, const EvaluationResult& result) {
+  const std::vector<std::string>& conditions = result.task.condition_names;
+  out << "object,episodes,successes,failures,success_rate";
+  for (const std::string& c : conditions) out << "," << escapeCsv("condition_" + c);
+  out << ",mean_return,mean_steps\n";
+  auto row = [&](const EvaluationSummary& s) {
+    out << escapeCsv(s.object_id) << "," << s.episodes << "," << s.successes << "," << s.failures
+        << "," << formatRate(s.success_rate);
+    for (double rate : s.condition_rates) out << "," << formatRate(rate);
+    out << "," << formatReturn(s.mean_return) << "," << formatRate(s.mean_steps) << "\n";
+  };
+  for (const EvaluationSummary& s : result.objects) row(s);
+  row(result.overall);
+}
+
+void writeEpisodesCsv(std::ostream& out, const EvaluationResult& result) {
+  const std::vector<std::string>& conditions = result.task.condition_names;
+  out << "index,object,level,seed,steps,return,success";
+  for (const std::string& c : conditions) out << "," << escapeCsv(c);
+  out << ",failure,failure_step,message\n";
+  for (const EpisodeRecord& r : result.episodes) {
+    out << r.spec.index << "," << escapeCsv(r.spec.object_id) << "," << r.spec.level << ","
+        << r.spec.seed << "," << r.steps << "," << formatReturn(r.total_reward) << ","
+        << (r.success ? 1 : 0);
+    for (std::size_t c = 0; c < conditions.size(); ++c)
+      out << "," << (c < r.flags.size() && r.flags[c] ? 1 : 0);
+    out << "," << escapeCsv(r.failure) << ",";
+    if (r.failure_step >= 0) out << r.failure_step;
+    out << "," << escapeCsv(r.message) << "\n";
+  }
+}
+
+void writeEvaluationJson(std::ostream& out, const EvaluationResult& result) {
+  const EvaluationOptions& o = result.options;
+  const std::vector<std::string>& conditions = result.task.condition_names;
+  auto quote = [](const std::string& s) { return escapeJson(s); };
+  std::vector<std::string> objects;
+  for (const EpisodeSpec& spec : result.planned)
+    if (std::find(objects.begin(), objects.end(), spec.object_id) == objects.end())
+      objects.push_back(spec.object_id);
+  std::map<std::string, std::size_t> reasons;
+  for (const EpisodeRecord& r : result.episodes)
+    if (r.failed()) ++reasons[r.failure];
+
+  out << "{\n";
+  out << "  \"manibench_version\": " << quote(getManibenchVersion()) << ",\n";
+  out << "  \"task\": " << quote(o.task) << ",\n";
+  out << "  \"observation_mode\": " << quote(result.task.observation_mode) << ",\n";
+  out << "  \"controller\": " << quote(result.task.controller) << ",\n";
+  out << "  \"policy\": {\"name\": " << quote(o.policy)
+      << ", \"library\": " << quote(result.policy_library)
+      << ", \"version\": " << quote(result.policy_library_version)
+      << ", \"config\": " << quote(o.policy_config) << "},\n";
+  out << "  \"split\": " << quote(o.split) << ",\n";
+  out << "  \"seed\": " << o.seed << ",\n";
+  out << "  \"objects\": " << jsonArray(objects, quote) << ",\n";
+  out << "  \"levels\": " << jsonArray(o.levels, [](uint64_t v) { return std::to_string(v); })
+      << ",\n";
+  out << "  \"step_timeout_s\": " << jsonNumber(o.step_timeout, 6) << ",\n";
+  out << "  \"configuration\": " << jsonArray(o.config_notes, quote) << ",\n";
+  out << "  \"max_episode_steps\": " << result.task.max_episode_steps << ",\n";
+  out << "  \"success_conditions\": " << jsonArray(conditions, quote) << ",\n";
+  out << "  \"episodes_planned\": " << result.planned.size() << ",\n";
+  out << "  \"episodes_run\": " << result.episodes.size() << ",\n";
+  out << "  \"complete\": " << (result.interrupted ? "false" : "true") << ",\n";
+  out << "  \"stop_reason\": " << quote(result.stop_reason) << ",\n";
+  out << "  \"failures\": {";
+  bool comma = false;
+  for (const auto& [reason, count] : reasons) {
+    out << (comma ? ", " : "") << quote(reason) << ": " << count;
+    comma = true;
+  }
+  out << "},\n";
+  out << "  \"per_object\": [";
+  for (std::size_t i = 0; i < result.objects.size(); ++i) {
+    out << (i ? ",\n    " : "\n    ");
+    writeSummaryJson(out, result.objects[i], conditions, "    ");
+  }
+  out << "\n  ],\n";
+  out << "  \"overall\": ";
+  writeSummaryJson(out, result.overall, conditions, "  ");
+  out << ",\n";
+  // Timings last and on one line: everything above is the same in two
+  // runs of the same evaluation, whatever the number of workers.
+  out << "  \"timing\": {\"seconds\": " << jsonNumber(result.seconds, 6)
+      << ", \"episodes_per_second\": "
+      << jsonNumber(result.seconds > 0 ? result.episodes.size() / result.seconds : 0, 6)
+      << ", \"workers\": " << o.workers << ", \"worker_restarts\": " << result.worker_restarts
+      << "}\n";
+  out << "}\n";
+}
+
+std::vector<std::string> writeEvaluationFiles(const std::string& directory,
+                                              const EvaluationResult& result) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  fs::create_directories(directory, error);
+  if (error)
+    throw EvaluationError("cannot create the output directory '" + directory +
+                          "': " + error.message());
+  std::vector<std::string> written;
+  auto write = [&](const std::string& name,
+                   void (*writer)(std::ostream&, const EvaluationResult&)) {
+    const std::string path = (fs::path(directory) / name).string();
+    const std::string partial = path + ".partial";
+    {
+      std::ofstream file(partial, std::ios::binary | std::ios::trunc);
+      if (!file) throw EvaluationError("cannot write '" + partial + "'");
+      writer(file, result);
+      file.flush();
+      if (!file) throw EvaluationError("cannot write '" + partial + "' (disk full?)");
+    }
+    // Renamed into place, so a reader never sees half a file.
+    fs::rename(partial, path, error);
+    if (error) throw EvaluationError("cannot rename '" + partial + "': " + error.message());
+    written.push_back(path);
+  };
+  write("summary.csv", writeSummaryCsv);
+  write("episodes.csv", writeEpisodesCsv);
+  write("summary.json", writeEvaluationJson);
+  return written;
+}
+
+}  // namespace manibench
