@@ -26,7 +26,7 @@ test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS) $(CTEST_FLAGS)
 
 demo: build
-	$(BUILD_DIR)/bin/manibench demo
+	$(BUILD_DIR)/bin/manibench demo --out $(BUILD_DIR)/demo-results
 
 # Simbody vs MuJoCo env steps per second (docs/performance.md).
 bench: configure

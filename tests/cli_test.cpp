@@ -42,7 +42,7 @@ TEST(Cli, HelpAndUsageErrors) {
   const auto help = runCli({"--help"});
   EXPECT_EQ(help.exit_code, 0);
   EXPECT_TRUE(contains(help.out, "usage: manibench"));
-  for (const char* command : {"list", "info", "run", "bench", "config", "demo"}) {
+  for (const char* command : {"list", "info", "run", "bench", "config", "demo", "eval", "render", "objects"}) {
     const auto r = runCli({command, "--help"});
     EXPECT_EQ(r.exit_code, 0) << command;
     EXPECT_TRUE(contains(r.out, std::string("usage: manibench ") + command)) << r.out;

@@ -1,5 +1,5 @@
 // manibench: the host program. Loads plugins by name and runs them.
-//   manibench list | info TASK | run TASK --policy P --seed S | config TASK | demo
+//   manibench list | info | run | bench | config | render | objects | eval | demo
 // Exit codes: 0 success, 1 failure (reported on stderr), 2 usage error.
 #include <manibench/config.hpp>
 #include <manibench/environment.hpp>
@@ -51,11 +51,12 @@ Commands:
                             rates per object, CSV and JSON (docs/evaluation.md)
   objects TASK              object ids of a split (--split train|test)
   config [TASK]             print the merged YAML configuration
-  demo                      list the plugins, then run the example task with its
-                            scripted expert
+  demo                      list the plugins, then evaluate the cabinet expert
+                            on the OpenCabinetDrawer-v0 test split
 
-Run `manibench <command> --help` for a command's options. info, run, bench and
-config take --config FILE and --set KEY=VALUE (docs/configuration.md).
+Run `manibench <command> --help` for a command's options. info, run, bench,
+render, eval, objects and config take --config FILE and --set KEY=VALUE
+(docs/configuration.md).
 Plugins are searched in $MANIBENCH_PLUGIN_PATH, ~/.local/lib/manibench/plugins,
 the install prefix and the build tree, in that order.
 )";
@@ -124,10 +125,19 @@ Options:
   --config FILE, --set KEY=VALUE   configuration layers, as for run
 )";
 
-const char* kDemoUsage = R"(usage: manibench demo
+const char* kDemoUsage = R"(usage: manibench demo [--out DIR]
 
-Lists the plugins, then runs one episode of the example task Reach-v0 with its
-scripted expert and one with a random policy.
+Lists the plugins, then evaluates the scripted expert (open_cabinet_expert on
+the mobile_panda_ee controller) on the test split of OpenCabinetDrawer-v0 in
+state mode, one episode per object with two workers, and prints the table:
+the same as
+
+  manibench eval OpenCabinetDrawer-v0 --policy open_cabinet_expert \
+      --controller mobile_panda_ee --obs state --split test \
+      --episodes-per-object 1 --workers 2 --seed 0 --out DIR
+
+Options:
+  --out DIR   where the CSV and JSON files go (default demo-results)
 )";
 
 int commandList(int argc, char** argv) {
@@ -348,19 +358,24 @@ int commandBench(int argc, char** argv) {
 }
 
 int commandDemo(int argc, char** argv) {
-  const Arguments args = parseArguments(argc, argv, 2, {}, {}, kDemoUsage);
+  const Arguments args = parseArguments(argc, argv, 2, {"out"}, {}, kDemoUsage);
   if (args.help) {
     std::cout << kDemoUsage;
     return 0;
   }
   if (!args.positional.empty()) throw UsageError("demo takes no arguments", kDemoUsage);
   commandList(2, argv);
-  std::cout << "\n";
-  mb::PluginRegistry registry;
-  loadPlugins(registry);
-  runOne(registry, "Reach-v0", "reach_expert", 0, "", "test", {}, true);
-  std::cout << "\n";
-  return runOne(registry, "Reach-v0", "random", 0, "", "test", {}, true);
+  std::cout << "\n" << std::flush;
+  std::vector<std::string> words = {argv[0], "eval", "OpenCabinetDrawer-v0",
+                                    "--policy", "open_cabinet_expert",
+                                    "--controller", "mobile_panda_ee",
+                                    "--obs", "state", "--split", "test",
+                                    "--episodes-per-object", "1", "--workers", "2",
+                                    "--seed", "0", "--out", valueOr(args, "out", "demo-results")};
+  std::vector<char*> eval_argv;
+  for (std::string& w : words) eval_argv.push_back(w.data());
+  eval_argv.push_back(nullptr);
+  return manibench::cli::commandEval(int(words.size()), eval_argv.data());
 }
 
 }  // namespace
