@@ -268,6 +268,30 @@ TEST(OpenCabinet, ExpertRefusesOtherControllers) {
   }
 }
 
+// The visual modes must not hand a policy the privileged object state (the
+// target link, joint and handle): only the robot's own segments remain, with
+// the same values as in state mode.
+TEST(OpenCabinet, VisualModesPassOnlyTheRobotState) {
+  const auto state_env = makeEnv("OpenCabinetDrawer-v0");
+  const auto cloud_env = makeEnv("OpenCabinetDrawer-v0", {"observation.mode=pointcloud"});
+  const std::string object = state_env->listObjects("test").front();
+  state_env->reset(object, 3);
+  cloud_env->reset(object, 3);
+  const mb::PolicyLayout layout = cloud_env->calcPolicyLayout();
+  const uint32_t agent_dim = state_env->getTaskDescription().agent_state_dim;
+  EXPECT_LT(agent_dim, state_env->getTaskDescription().observation_dim);
+  EXPECT_EQ(layout.observation_dim, agent_dim);
+  ASSERT_EQ(cloud_env->getObservation().size(), Eigen::Index(agent_dim));
+  EXPECT_EQ(cloud_env->getObservation(), state_env->getObservation().head(agent_dim));
+  for (const mb::SegmentDescription& s : layout.observation_segments) {
+    EXPECT_LE(s.offset + s.size, agent_dim) << s.name;
+    EXPECT_EQ(s.name.find("target"), std::string::npos) << s.name;
+    EXPECT_EQ(s.name.find("handle"), std::string::npos) << s.name;
+  }
+  EXPECT_EQ(state_env->calcPolicyLayout().observation_dim,
+            state_env->getTaskDescription().observation_dim);
+}
+
 // Diagnostics: OPEN_CABINET_TRACE=<task>,<object>,<seed> prints an expert episode
 // (OPEN_CABINET_TRACE_SET=KEY=VALUE adds one configuration key).
 TEST(OpenCabinet, Trace) {

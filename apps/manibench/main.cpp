@@ -193,6 +193,8 @@ int commandInfo(int argc, char** argv) {
             << ", " << task.max_episode_steps << " steps per episode\n\n";
   std::cout << "observation (state), " << task.observation_dim << " values:\n";
   printSegments(task.observation_segments);
+  std::cout << "pointcloud and rgbd modes: the first " << task.agent_state_dim
+            << " values (the robot's own state) with the visual data\n";
   std::cout << "\naction, " << controller.action_dim << " values in [-1, 1], controller '"
             << controller.name << "'"
             << ((controller.flags & MB_CONTROLLER_BALANCE_PASSIVE_FORCES) ? " (balances gravity)" : "")

@@ -91,6 +91,14 @@ PolicyLayout Environment::calcPolicyLayout(const std::string& observation_mode) 
   layout.observation_mode = observation_mode.empty() ? options_.observation_mode : observation_mode;
   layout.observation_dim = getTaskDescription().observation_dim;
   layout.observation_segments = getTaskDescription().observation_segments;
+  if (layout.observation_mode != "state") {
+    // Visual modes carry only the robot's own state (as ManiSkill's).
+    layout.observation_dim = getTaskDescription().agent_state_dim;
+    std::vector<SegmentDescription> agent;
+    for (const SegmentDescription& s : layout.observation_segments)
+      if (s.offset + s.size <= layout.observation_dim) agent.push_back(s);
+    layout.observation_segments = std::move(agent);
+  }
   layout.action_dim = getControllerDescription().action_dim;
   layout.action_segments = getControllerDescription().action_segments;
   return layout;
@@ -363,6 +371,8 @@ void Environment::reset(const std::string& object_id, uint64_t seed) {
   scene_->setDriveCommands(robot_, actuated_joints_,
                            std::vector<DriveCommand>(actuated_joints_.size()));
   task_->observe(*bridge_, observation_);
+  if (options_.observation_mode != "state")
+    observation_.conservativeResize(description_.agent_state_dim);
   observeVisual();
 }
 
@@ -404,6 +414,8 @@ StepResult Environment::step(const Eigen::VectorXd& action) {
   result.done = elapsed_steps_ >= task.max_episode_steps ||
                 (options_.stop_on_success && result.success);
   task_->observe(*bridge_, observation_);
+  if (options_.observation_mode != "state")
+    observation_.conservativeResize(description_.agent_state_dim);
   observeVisual();
   if (!std::isfinite(result.reward))
     throw EpisodeFailure(describeEpisode() + ": task reward is not finite");

@@ -89,6 +89,19 @@ TaskInstance::TaskInstance(const PluginRegistry& registry, const std::string& na
     description_.max_episode_steps = info.max_episode_steps;
     if (MB_HAS_FIELD(mb_task_info, default_config, info.struct_size) && info.default_config)
       description_.default_config = info.default_config;
+    description_.agent_state_dim = description_.observation_dim;
+    if (MB_HAS_FIELD(mb_task_info, agent_state_dim, info.struct_size) && info.agent_state_dim > 0) {
+      bool on_boundary = false;
+      for (const SegmentDescription& s : description_.observation_segments)
+        on_boundary = on_boundary || s.offset + s.size == info.agent_state_dim;
+      if (info.agent_state_dim > info.observation_dim || !on_boundary)
+        throw PluginCallError("task '" + name + "': agent_state_dim " +
+                                  std::to_string(info.agent_state_dim) +
+                                  " must end an observation segment within the " +
+                                  std::to_string(info.observation_dim) + " state values",
+                              MB_ERROR);
+      description_.agent_state_dim = info.agent_state_dim;
+    }
     if (!(description_.control_frequency > 0) || description_.frame_skip == 0 ||
         description_.max_episode_steps == 0)
       throw PluginCallError("task '" + name +

@@ -116,6 +116,13 @@ TaskSpec OpenCabinetTask::describe() const {
       {"handle_half_length", 1, "half the grip length (m)"},
       {"cabinet_center", 3, "centre of the cabinet's bounding box, world (m)"},
   };
+  // Everything up to tcp_pose is the robot's own state: what the
+  // pointcloud and rgbd modes pass on (the rest is privileged).
+  spec.agent_state_dim = 0;
+  for (const auto& segment : spec.observation) {
+    spec.agent_state_dim += segment.size;
+    if (segment.name == "tcp_pose") break;
+  }
   spec.success_conditions = {"open_enough", "static", "success"};
   spec.masks = {"handle", "target_link", "robot"};
   spec.robot_articulation = "robot";

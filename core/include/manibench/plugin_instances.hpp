@@ -47,6 +47,9 @@ struct TaskDescription {
   uint32_t frame_skip = 5;
   uint32_t max_episode_steps = 200;
   std::string default_config;  // the task's YAML configuration layer
+  // Leading values of the state that are the robot's own (what the visual
+  // modes keep); equals observation_dim when the task does not say.
+  uint32_t agent_state_dim = 0;
 };
 
 struct ControllerDescription {

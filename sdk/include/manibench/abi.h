@@ -251,6 +251,13 @@ typedef struct mb_task_info {
   /* The task's layer of the YAML configuration (physics, cameras, ...),
    * between the built-in defaults and the user's file; may be NULL. */
   const char* default_config;
+
+  /* ---- ABI 1.1 ------------------------------------------------------- */
+  /* The first agent_state_dim values of the state observation (whole
+   * segments) are the robot's own state: in the pointcloud and rgbd modes
+   * the policy gets only these, as ManiSkill's visual modes give only the
+   * agent's state. 0: the whole vector. */
+  uint32_t agent_state_dim;
 } mb_task_info;
 
 typedef struct mb_task_descriptor {

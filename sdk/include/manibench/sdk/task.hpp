@@ -31,6 +31,10 @@ struct TaskSpec {
   uint32_t max_episode_steps = 200;
   // The task's layer of the YAML configuration (see docs/configuration.md).
   std::string default_config;
+  // How many leading values of `observation` (whole segments) are the
+  // robot's own state, what the pointcloud and rgbd modes pass on in place
+  // of the full state (which holds privileged object state). 0: all.
+  uint32_t agent_state_dim = 0;
 };
 
 // One success condition's outcome: whether it holds, and the value behind
@@ -127,6 +131,7 @@ struct TaskTrampolines {
       info.frame_skip = h.spec.frame_skip;
       info.max_episode_steps = h.spec.max_episode_steps;
       info.default_config = h.spec.default_config.c_str();
+      info.agent_state_dim = h.spec.agent_state_dim;
       writeOutputStruct(out, info);
     });
   }
