@@ -292,6 +292,74 @@ TEST(OpenCabinet, VisualModesPassOnlyTheRobotState) {
             state_env->getTaskDescription().observation_dim);
 }
 
+// Supplement B.3 masks on real renders: one world camera 0.45 m in front of
+// the target handle looking at it, one 0.5 m above the gripper looking down.
+// The handle's pixels carry the handle mask (and target_link: the handle is
+// part of that link, as in ManiSkill) but never the robot mask; the gripper's
+// pixels carry the robot mask only.
+std::string calcProbeCamera(const std::string& name, const Eigen::Vector3d& eye,
+                            const Eigen::Vector3d& direction) {
+  const Eigen::Vector3d d = direction.normalized();
+  // rpy as in URDF (R = Rz(yaw) Ry(pitch)), camera looking along its +x.
+  const double pitch = -std::asin(d.z());
+  const double yaw = std::atan2(d.y(), d.x());
+  std::ostringstream out;
+  out.precision(17);
+  out << "{name: " << name << ", pose: {position: [" << eye.x() << ", " << eye.y() << ", "
+      << eye.z() << "], rpy: [0, " << pitch << ", " << yaw
+      << "]}, width: 48, height: 48, fovy: 0.5, near: 0.05}";
+  return out.str();
+}
+
+TEST(OpenCabinet, HandleAndRobotMasksCoverTheirPixels) {
+  for (const std::string task : {"OpenCabinetDrawer-v0", "OpenCabinetDoor-v0"}) {
+    SCOPED_TRACE(task);
+    const auto state_env = makeEnv(task);
+    const std::string object = state_env->listObjects("test").front();
+    state_env->reset(object, 0);
+    const Eigen::VectorXd s = state_env->getObservation();
+    const Eigen::Vector3d handle = s.segment<3>(L::kHandlePose);
+    const Eigen::Quaterniond handle_rotation(s[L::kHandlePose + 3], s[L::kHandlePose + 4],
+                                             s[L::kHandlePose + 5], s[L::kHandlePose + 6]);
+    const Eigen::Vector3d front = handle_rotation * Eigen::Vector3d::UnitX();
+    const Eigen::Vector3d tcp = s.segment<3>(L::kTcpPose);
+    const std::string cameras =
+        "cameras=[" + calcProbeCamera("at_handle", handle + 0.45 * front, -front) + ", " +
+        calcProbeCamera("at_gripper", tcp + Eigen::Vector3d(0.02, 0, 0.5),
+                        Eigen::Vector3d(-0.02, 0, -0.5)) +
+        "]";
+    const auto env = makeEnv(task, {"observation.mode=rgbd", cameras});
+    env->reset(object, 0);
+    const mb::VisualObservation& v = env->getVisualObservation();
+    ASSERT_EQ(v.camera_count, 2u);
+    ASSERT_EQ(v.mask_count, 3u);  // handle, target_link, robot
+    const uint32_t k = v.mask_count, cams = v.camera_count;
+    auto mask = [&](uint32_t camera, uint32_t row, uint32_t col, uint32_t m) {
+      return v.masks[(row * v.width + col) * k * cams + k * camera + m] != 0;
+    };
+    int handle_pixels = 0, gripper_robot_pixels = 0;
+    for (uint32_t row = 0; row < v.height; ++row)
+      for (uint32_t col = 0; col < v.width; ++col) {
+        if (mask(0, row, col, 0)) {
+          ++handle_pixels;
+          EXPECT_TRUE(mask(0, row, col, 1)) << "handle pixel outside its link";
+          EXPECT_FALSE(mask(0, row, col, 2)) << "handle pixel in the robot mask";
+        }
+        gripper_robot_pixels += mask(1, row, col, 2);
+        EXPECT_FALSE(mask(1, row, col, 0) && mask(1, row, col, 2));
+      }
+    EXPECT_GT(handle_pixels, 20) << "the handle camera sees its handle";
+    bool centre_handle = false;
+    for (uint32_t row = v.height / 2 - 3; row <= v.height / 2 + 3; ++row)
+      for (uint32_t col = v.width / 2 - 3; col <= v.width / 2 + 3; ++col)
+        centre_handle = centre_handle || mask(0, row, col, 0);
+    EXPECT_TRUE(centre_handle) << "the handle lies at the image centre";
+    EXPECT_TRUE(mask(1, v.height / 2, v.width / 2, 2)) << "the gripper is at the image centre";
+    EXPECT_FALSE(mask(1, v.height / 2, v.width / 2, 0));
+    EXPECT_GT(gripper_robot_pixels, 100);
+  }
+}
+
 // Diagnostics: OPEN_CABINET_TRACE=<task>,<object>,<seed> prints an expert episode
 // (OPEN_CABINET_TRACE_SET=KEY=VALUE adds one configuration key).
 TEST(OpenCabinet, Trace) {
