@@ -27,15 +27,7 @@ namespace {
 const std::string kRobotUrdf =
     std::string(MANIBENCH_TEST_SOURCE_DIR) + "/assets/robots/mobile_panda_single.urdf";
 
-const PluginRegistry& getRegistry() {
-  static PluginRegistry* registry = [] {
-    auto* r = new PluginRegistry();
-    r->loadDirectories({MANIBENCH_TEST_BUILD_PLUGIN_DIR});
-    r->loadLibrary(std::string(MANIBENCH_TEST_FIXTURE_DIR) + "/libfixture_robot_testbed.so");
-    return r;
-  }();
-  return *registry;
-}
+const PluginRegistry& getRegistry() { return testing::getRobotTestbedRegistry(); }
 
 // The testbed's options as the configuration layers give them (its
 // default_config declares the head cameras), with `overrides`.

@@ -15,6 +15,8 @@
 #include <random>
 #include <string>
 
+#include "test_support.hpp"
+
 namespace manibench {
 namespace {
 
@@ -27,14 +29,7 @@ const std::string kFloorUrdf =
     "0.02'/></geometry><material name='grey'><color rgba='0.6 0.6 0.6 1'/></material></visual>"
     "</link></robot>";
 
-long readRssKb() {
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  while (std::getline(status, line)) {
-    if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
-  }
-  return -1;
-}
+using testing::readRssKb;
 
 struct RobotScene {
   Scene scene;

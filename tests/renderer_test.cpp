@@ -18,8 +18,20 @@
 #include <thread>
 #include <unistd.h>
 
+#include "test_support.hpp"
+
 namespace manibench {
 namespace {
+
+CameraSpec makeCamera(const std::string& name, int width, int height,
+                      double fovy = CameraSpec().fovy) {
+  CameraSpec camera;
+  camera.name = name;
+  camera.width = width;
+  camera.height = height;
+  camera.fovy = fovy;
+  return camera;
+}
 
 std::string inertial() {
   return "<inertial><mass value='1'/><inertia ixx='0.01' iyy='0.01' izz='0.01' ixy='0' "
@@ -86,14 +98,7 @@ int waitChild(pid_t pid, double seconds) {
   return 128 + WTERMSIG(status);
 }
 
-long readRssKb() {
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  while (std::getline(status, line)) {
-    if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
-  }
-  return -1;
-}
+using testing::readRssKb;
 
 // Runs first (declaration order) so that, when this program runs all its
 // tests in one process, no context exists yet; ctest runs each test alone.
@@ -268,11 +273,7 @@ TEST(Renderer, PlaneDepthIsMetricWithinAMillimetre) {
   scene.addUrdfString(boxUrdf("plate", 0.02, 10, 10), "", "plate", at(2, 0.3, 0.1), true);
   scene.finalize();
   SceneRenderer renderer(scene);
-  CameraSpec camera;
-  camera.name = "front";
-  camera.width = 64;
-  camera.height = 48;
-  camera.fovy = 1.2;
+  CameraSpec camera = makeCamera("front", 64, 48, 1.2);
   CameraImages images;
   Pose pose;
   pose.position = Eigen::Vector3d(0, 0.1, 0.2);
@@ -311,11 +312,7 @@ TEST(Renderer, BoxPointCloudLiesOnItsFaces) {
   scene.addUrdfString(boxUrdf("box", 0.3, 0.2, 0.1), "", "box", box_pose, true);
   scene.finalize();
   SceneRenderer renderer(scene);
-  CameraSpec camera;
-  camera.name = "oblique";
-  camera.width = 160;
-  camera.height = 120;
-  camera.fovy = 0.8;
+  CameraSpec camera = makeCamera("oblique", 160, 120, 0.8);
   CameraImages images;
   renderer.render(camera, calcLookAtPose({1.2, 0.5, 0.9}, box_pose.position), images);
   std::vector<int> pixels;
@@ -368,11 +365,7 @@ TEST(Renderer, GroundIsBackgroundWithMetricDepth) {
   Scene scene;
   build(scene, true);
   SceneRenderer renderer(scene);
-  CameraSpec camera;
-  camera.name = "down";
-  camera.width = 64;
-  camera.height = 48;
-  camera.fovy = 0.9;
+  CameraSpec camera = makeCamera("down", 64, 48, 0.9);
   // 1 m straight above the ground: every ground pixel is at depth 1.
   const Pose down = calcLookAtPose({0, 0, height + 1}, {0, 0, height});
   CameraImages images;
@@ -465,11 +458,7 @@ TEST(Renderer, SegmentationNamesTheVisualAndFollowsTheLink) {
   const int carriage = scene.findLink(slider, "carriage");
   ASSERT_EQ(shapes[1].link, carriage);
   SceneRenderer renderer(scene);
-  CameraSpec camera;
-  camera.name = "top";
-  camera.width = 120;
-  camera.height = 120;
-  camera.fovy = 1.0;
+  CameraSpec camera = makeCamera("top", 120, 120, 1.0);
   const Pose pose = calcLookAtPose({0.0, 0.0, 1.5}, {0, 0, 0}, Eigen::Vector3d::UnitX());
   CameraImages images;
   for (const double y : {0.0, 0.25}) {
@@ -530,10 +519,7 @@ TEST(Renderer, LightingIsAmbientPlusLambert) {
   LightingSpec ambient_only;
   ambient_only.directional.clear();
   SceneRenderer renderer(scene, ambient_only);
-  CameraSpec camera;
-  camera.name = "front";
-  camera.width = 16;
-  camera.height = 16;
+  CameraSpec camera = makeCamera("front", 16, 16);
   CameraImages images;
   renderer.render(camera, Pose(), images);
   EXPECT_NEAR(images.rgba[0], 0.3 * 255, 1.5);  // white x ambient 0.3
@@ -565,10 +551,7 @@ TEST(Renderer, AnyThreadMayRenderOneAtATime) {
   scene.addUrdfString(boxUrdf("plate", 0.02, 10, 10), "", "plate", at(2, 0, 0), true);
   scene.finalize();
   SceneRenderer first(scene), second(scene);
-  CameraSpec camera;
-  camera.name = "front";
-  camera.width = 32;
-  camera.height = 32;
+  CameraSpec camera = makeCamera("front", 32, 32);
   std::vector<int> hits(4, 0);
   std::vector<std::thread> threads;
   for (int t = 0; t < 4; ++t) {
@@ -654,10 +637,7 @@ TEST(Renderer, SceneCyclesDoNotGrowMemory) {
     scene.addUrdfString(sliderUrdf(), "", "slider", at(1, 0, 0), true);
     scene.finalize();
     SceneRenderer renderer(scene);
-    CameraSpec camera;
-    camera.name = "front";
-    camera.width = 128;
-    camera.height = 64;
+    CameraSpec camera = makeCamera("front", 128, 64);
     CameraImages images;
     renderer.render(camera, Pose(), images);
     return countHits(images);

@@ -25,15 +25,7 @@ constexpr int kArm = 4;           // first arm action and first arm joint (root_
 
 // The build tree's plugins plus the testbed task, which lives outside the
 // default search path.
-const PluginRegistry& getRegistry() {
-  static PluginRegistry* registry = [] {
-    auto* r = new PluginRegistry();
-    r->loadDirectories({MANIBENCH_TEST_BUILD_PLUGIN_DIR});
-    r->loadLibrary(std::string(MANIBENCH_TEST_FIXTURE_DIR) + "/libfixture_robot_testbed.so");
-    return r;
-  }();
-  return *registry;
-}
+const PluginRegistry& getRegistry() { return testing::getRobotTestbedRegistry(); }
 
 EnvironmentOptions makeOptions(const std::string& robot, std::optional<uint32_t> frame_skip = {}) {
   EnvironmentOptions options;

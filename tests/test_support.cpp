@@ -20,6 +20,24 @@ PluginRegistry& getBuildTreeRegistry() {
   return *registry;
 }
 
+const PluginRegistry& getRobotTestbedRegistry() {
+  static PluginRegistry* registry = [] {
+    auto* r = new PluginRegistry();
+    r->loadDirectories({MANIBENCH_TEST_BUILD_PLUGIN_DIR});
+    r->loadLibrary(std::string(MANIBENCH_TEST_FIXTURE_DIR) + "/libfixture_robot_testbed.so");
+    return r;
+  }();
+  return *registry;
+}
+
+long readRssKb() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
+  return -1;
+}
+
 namespace {
 std::string readFile(const std::string& path) {
   std::ifstream in(path);

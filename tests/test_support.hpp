@@ -10,6 +10,12 @@ namespace manibench::testing {
 
 // A registry holding the plugins of this build tree (and nothing else).
 PluginRegistry& getBuildTreeRegistry();
+// The build tree's plugins plus the fixture task RobotTestbed-v0 (which
+// lives outside the default search path).
+const PluginRegistry& getRobotTestbedRegistry();
+
+// This process's resident memory (VmRSS), kB; -1 if unknown.
+long readRssKb();
 
 struct CommandResult {
   int exit_code = -1;

@@ -254,6 +254,17 @@ void SceneRenderer::Impl::upload() {
     indices.insert(indices.end(), idx, idx + index_count);
     return range;
   };
+  const auto addItem = [&](int visual, const Range& range, const Eigen::Vector4f& color,
+                           bool closed) {
+    DrawItem item;
+    item.visual = visual;
+    item.base_vertex = range.base_vertex;
+    item.first_index = range.first_index;
+    item.index_count = range.count;
+    item.color = color;
+    item.closed = closed;
+    items.push_back(item);
+  };
 
   const std::vector<VisualShape>& shapes = scene.getVisualShapes();
   std::map<int, int> slot_of_link;
@@ -286,14 +297,9 @@ void SceneRenderer::Impl::upload() {
                                              mesh.indices.data(), mesh.indices.size()))
                       .first;
         }
-        DrawItem item;
-        item.visual = visual;
-        item.base_vertex = found->second.base_vertex;
-        item.first_index = found->second.first_index;
-        item.index_count = found->second.count;
-        item.color = shape.has_material ? shape.color : mesh.color;
-        item.closed = false;  // mesh files may be open or inconsistently wound
-        items.push_back(item);
+        // Mesh files may be open or inconsistently wound: no culling.
+        addItem(visual, found->second, shape.has_material ? shape.color : mesh.color,
+                /*closed=*/false);
       }
       continue;
     }
@@ -320,14 +326,7 @@ void SceneRenderer::Impl::upload() {
                                        mesh.indices.data(), mesh.indices.size()))
                   .first;
     }
-    DrawItem item;
-    item.visual = visual;
-    item.base_vertex = found->second.base_vertex;
-    item.first_index = found->second.first_index;
-    item.index_count = found->second.count;
-    item.color = shape.color;
-    item.closed = true;
-    items.push_back(item);
+    addItem(visual, found->second, shape.color, /*closed=*/true);
   }
   for (const DrawItem& item : items) triangle_count += static_cast<std::size_t>(item.index_count) / 3;
   // The ground quad, always uploaded (4 vertices): whether it is drawn is
