@@ -11,6 +11,7 @@
 #include <iomanip>
 #include <iostream>
 #include <manibench/evaluation.hpp>
+#include <manibench/task_name.hpp>
 #include <sstream>
 
 #include "cli.hpp"
@@ -31,7 +32,9 @@ satisfactory rate) and writes summary.csv, episodes.csv and summary.json.
 Ctrl-C stops the run and writes the results collected so far.
 
 Options:
-  --task TASK             the task (or give it as the first word)
+  --task TASK             the task (or give it as the first word); a fixed-object
+                          id <Task>_<object>-v<N> (e.g. Reach_3-v0) evaluates
+                          only those objects, whatever --split says
   --policy NAME|PATH.so   policy plugin by name, or a library file to load
   --policy-config FILE    YAML handed to the policy's create
   --obs MODE              observation mode: state, pointcloud or rgbd
@@ -188,10 +191,16 @@ int commandEval(int argc, char** argv) {
   loadPlugins(registry);
   options.policy = resolvePolicy(registry, args.options.at("policy"));
   registry.getEntry(PluginKind::Policy, options.policy);
-  registry.getEntry(PluginKind::Task, task);
+  const TaskId task_id = resolveTaskId(registry, task);
   {
     const ConfigNode config = loadTaskConfig(registry, task, sources);
-    calcEnvironmentOptions(config);
+    const EnvironmentOptions environment = calcEnvironmentOptions(config);
+    // A fixed-object id whose objects do not exist fails here, not in every
+    // worker.
+    if (task_id.isFixed()) {
+      const TaskInstance probe(registry, task_id.task, environment.task_config);
+      selectFixedObjects(task_id, probe.listObjects("train"), probe.listObjects("test"));
+    }
   }
   const EnvironmentFactory factory = [&registry, task, sources] {
     return makeEnvironment(registry, task, sources, true);
@@ -209,8 +218,8 @@ int commandEval(int argc, char** argv) {
   g_interrupted = 0;
   sigaction(SIGINT, &action, &previous);
 
-  std::cout << "evaluating policy " << options.policy << " on " << task << " (" << options.split
-            << " split), " << options.levels.size() << " level(s) per object, seed " << options.seed
+  std::cout << "evaluating policy " << options.policy << " on " << task << " ("
+            << (task_id.isFixed() ? "its fixed objects" : options.split + " split") << "), " << options.levels.size() << " level(s) per object, seed " << options.seed
             << ", " << options.workers << " worker(s)\n"
             << std::flush;
   EvaluationResult baseline, result;

@@ -5,6 +5,8 @@
 #include <iostream>
 #include <map>
 
+#include <manibench/task_name.hpp>
+
 #include "cli.hpp"
 
 namespace manibench::cli {
@@ -16,7 +18,10 @@ const char* kObjectsUsage = R"(usage: manibench objects TASK [--split train|test
 Lists the objects of a task's split (default train), as configured (a task
 may read its objects from a folder named in its `task:` keys). Ids of the
 form <object>_link_<k> (one target link of an articulated object, as in
-OpenCabinetDoor-v0) are grouped by object.
+OpenCabinetDoor-v0) are grouped by object. Every object, or group, is also an
+environment of its own: <Task>_<object>-v<N>, e.g. OpenCabinetDrawer_1000-v0
+(every target link of cabinet 1000) or OpenCabinetDrawer_1000_link_0-v0; given
+such an id, this lists its objects (the same whatever the split).
 
 Options:
   --split train|test      the split (default train)
@@ -53,9 +58,20 @@ int commandObjects(int argc, char** argv) {
     if (groups.empty() || groups.back().first != group) groups.push_back({group, {}});
     groups.back().second.push_back(at == std::string::npos ? "" : id.substr(at + 1));
   }
-  std::cout << task << ", split " << split << ": " << ids.size() << " objects";
-  if (groups.size() != ids.size()) std::cout << " (target links of " << groups.size() << " articulated objects)";
+  const std::string& task_name = env->getTaskDescription().name;
+  if (env->getFixedObjects().empty())
+    std::cout << task << ", split " << split << ": " << ids.size() << " object"
+              << (ids.size() == 1 ? "" : "s");
+  else
+    std::cout << task << " (fixed objects of " << task_name << ", whatever the split): "
+              << ids.size() << " object" << (ids.size() == 1 ? "" : "s");
+  if (groups.size() != ids.size())
+    std::cout << " (target links of " << groups.size() << " articulated object"
+              << (groups.size() == 1 ? "" : "s") << ")";
   std::cout << "\n";
+  const std::string fixed_form = mb::makeFixedObjectId(task_name, "<object>");
+  if (env->getFixedObjects().empty() && !fixed_form.empty())
+    std::cout << "one object (or all of a group) as an environment: " << fixed_form << "\n";
   for (const auto& [group, links] : groups) {
     std::cout << "  " << std::left << std::setw(14) << group;
     for (const std::string& link : links)

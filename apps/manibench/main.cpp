@@ -4,6 +4,7 @@
 #include <manibench/config.hpp>
 #include <manibench/environment.hpp>
 #include <manibench/plugin_registry.hpp>
+#include <manibench/task_name.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -54,6 +55,8 @@ Commands:
   demo                      list the plugins, then evaluate the cabinet expert
                             on the OpenCabinetDrawer-v0 test split
 
+TASK is a task name (a random object of the split each episode) or a
+fixed-object id <Task>_<object>-v<N>, e.g. OpenCabinetDrawer_1000-v0.
 Run `manibench <command> --help` for a command's options. info, run, bench,
 render, eval, objects and config take --config FILE and --set KEY=VALUE
 (docs/configuration.md).
@@ -71,7 +74,8 @@ const char* kInfoUsage = R"(usage: manibench info TASK [--controller NAME] [--co
 
 Prints the task's timing, observation layout, the controller's action layout,
 the success conditions, segmentation masks and the objects of each split, as
-configured.
+configured. TASK may be a fixed-object id such as OpenCabinetDrawer_1000-v0
+(<Task>_<object>-v<N>): then the objects are that environment's.
 
 Options:
   --controller NAME       override the task's default controller
@@ -80,6 +84,9 @@ Options:
 )";
 
 const char* kRunUsage = R"(usage: manibench run TASK --policy NAME|PATH.so [options]
+
+TASK is a task name or a fixed-object id <Task>_<object>-v<N> such as
+Reach_3-v0 or OpenCabinetDrawer_1000-v0 (the object is drawn from its own).
 
 Options:
   --policy NAME|PATH.so   policy plugin by name, or a library file to load
@@ -159,6 +166,14 @@ int commandList(int argc, char** argv) {
     std::cout << std::left << std::setw(12) << mb::toString(e.kind) << std::setw(26) << e.name
               << std::setw(10) << lib.version << lib.path << "\n";
   }
+  for (const std::string& task : registry.getNames(mb::PluginKind::Task)) {
+    const std::string form = mb::makeFixedObjectId(task, "<object>");
+    if (form.empty()) continue;
+    std::cout << "\nevery task <Task>-v<N> is also one environment per object (or object group):\n"
+              << "<Task>_<object>-v<N>, e.g. " << form
+              << " (`manibench objects TASK` lists the objects)\n";
+    break;
+  }
   if (!registry.getFailures().empty()) {
     std::cout << "\nrefused libraries:\n";
     for (const mb::LoadFailure& f : registry.getFailures()) std::cout << "  " << f.message << "\n";
@@ -186,6 +201,7 @@ int commandInfo(int argc, char** argv) {
   env.reset(train.front(), 0);  // the action layout needs the robot's joints
   const mb::ControllerDescription& controller = env.getControllerDescription();
 
+  if (!env.getFixedObjects().empty()) std::cout << "environment " << env.getEnvironmentId() << ": ";
   std::cout << "task " << task.name << " ("
             << registry.getLibraries()[registry.getEntry(mb::PluginKind::Task, task.name).library].path
             << ")\n";
@@ -205,7 +221,13 @@ int commandInfo(int argc, char** argv) {
   std::cout << "\nmasks:";
   if (task.masks.empty()) std::cout << " (none)";
   for (const std::string& m : task.masks) std::cout << " " << m;
-  std::cout << "\nobjects: " << train.size() << " train, " << test.size() << " test\n";
+  if (env.getFixedObjects().empty()) {
+    std::cout << "\nobjects: " << train.size() << " train, " << test.size() << " test\n";
+  } else {
+    std::cout << "\nfixed objects (" << env.getFixedObjects().size() << "):";
+    for (const std::string& o : env.getFixedObjects()) std::cout << " " << o;
+    std::cout << "\n";
+  }
   std::cout << "scene: " << env.getScene().getVisualShapes().size() << " visuals, "
             << env.getScene().calcVisualTriangleCount()
             << " mesh triangles (the renderer adds tessellated primitives)\n";

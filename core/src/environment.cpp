@@ -1,4 +1,5 @@
 #include <manibench/environment.hpp>
+#include <manibench/task_name.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -8,9 +9,10 @@
 
 namespace manibench {
 
-Environment::Environment(const PluginRegistry& registry, const std::string& task_name,
+Environment::Environment(const PluginRegistry& registry, const std::string& environment_id,
                          EnvironmentOptions options)
-    : registry_(registry), options_(std::move(options)) {
+    : registry_(registry), options_(std::move(options)), environment_id_(environment_id) {
+  const TaskId id = resolveTaskId(registry_, environment_id);
   if (options_.control_frequency &&
       !(std::isfinite(*options_.control_frequency) && *options_.control_frequency > 0))
     throw std::invalid_argument("control frequency override must be a positive number of Hz, got " +
@@ -52,7 +54,7 @@ Environment::Environment(const PluginRegistry& registry, const std::string& task
   if (options_.pointcloud.masked_total > options_.pointcloud.total)
     throw std::invalid_argument("point cloud sampling: masked_total exceeds total");
   visual_.mode = options_.observation_mode;
-  task_ = std::make_unique<TaskInstance>(registry_, task_name, options_.task_config);
+  task_ = std::make_unique<TaskInstance>(registry_, id.task, options_.task_config);
   description_ = task_->getDescription();
   if (options_.control_frequency) description_.control_frequency = *options_.control_frequency;
   if (options_.frame_skip) description_.frame_skip = *options_.frame_skip;
@@ -62,9 +64,15 @@ Environment::Environment(const PluginRegistry& registry, const std::string& task
       options_.controller.empty() ? task.default_controller : options_.controller;
   // Fail before any physics if the controller does not exist.
   registry_.getEntry(PluginKind::Controller, controller);
-  // Build the first train object's scene now, so that the action layout
-  // (which depends on the robot's joints) is known before the first reset.
+  // Build the first (train or fixed) object's scene now, so that the action
+  // layout (which depends on the robot's joints) is known before the first
+  // reset.
   const std::vector<std::string> train = task_->listObjects("train");
+  if (id.isFixed()) {
+    fixed_objects_ = selectFixedObjects(id, train, task_->listObjects("test"));
+    buildScene(fixed_objects_.front());
+    return;
+  }
   if (train.empty())
     throw PluginCallError("task '" + task.name + "' lists no train objects", MB_ERROR);
   buildScene(train.front());
@@ -105,6 +113,7 @@ PolicyLayout Environment::calcPolicyLayout(const std::string& observation_mode) 
 }
 
 std::vector<std::string> Environment::listObjects(const std::string& split) const {
+  if (!fixed_objects_.empty()) return fixed_objects_;
   return task_->listObjects(split);
 }
 
@@ -352,6 +361,14 @@ void Environment::observeVisual() {
 }
 
 void Environment::reset(const std::string& object_id, uint64_t seed) {
+  if (!fixed_objects_.empty() &&
+      std::find(fixed_objects_.begin(), fixed_objects_.end(), object_id) == fixed_objects_.end()) {
+    std::string objects;
+    for (const std::string& o : fixed_objects_) objects += (objects.empty() ? "" : ", ") + o;
+    throw std::invalid_argument("environment " + environment_id_ + " is fixed to object(s) " +
+                                objects + "; it cannot reset on object '" + object_id +
+                                "' (use " + getTaskDescription().name + " for any object)");
+  }
   if (!scene_built_ || object_id != object_id_) buildScene(object_id);
   // Every episode starts from the freshly built state, so its trajectory
   // depends only on (object, seed, actions), never on earlier episodes.

@@ -163,7 +163,8 @@ struct ConfigSources {
 // Merges the built-in defaults, `task` (when not null) and `sources`,
 // validating each layer as it comes and the result as a whole.
 ConfigNode calcConfig(const TaskDescription* task, const ConfigSources& sources);
-// calcConfig for the task registered as `task_name`. The task is created
+// calcConfig for the task registered as `task_name`, or the task of a
+// fixed-object id (manibench/task_name.hpp). The task is created
 // once with an empty configuration to read its description, so a task must
 // accept an empty configuration and describe itself independently of it.
 ConfigNode loadTaskConfig(const PluginRegistry& registry, const std::string& task_name,

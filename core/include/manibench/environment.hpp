@@ -107,12 +107,23 @@ class Environment {
  public:
   // Loads the task and builds the scene of its first train object (so the
   // controller, and with it the action layout, exists from the start).
-  Environment(const PluginRegistry& registry, const std::string& task_name,
+  // `environment_id` is a task name or a fixed-object id such as
+  // "OpenCabinetDrawer_1000-v0" (manibench/task_name.hpp): then the
+  // environment has only the objects of that id (searched in both splits),
+  // listObjects returns them whatever the split (as ManiSkill's fixed
+  // environments: the object is the choice), the first scene is the first
+  // of them, and a reset on any other object throws std::invalid_argument.
+  Environment(const PluginRegistry& registry, const std::string& environment_id,
               EnvironmentOptions options = {});
   ~Environment();
 
-  // The task's description with the options' timing overrides applied.
+  // The task's description with the options' timing overrides applied; its
+  // name is the registered task's, even for a fixed-object id.
   const TaskDescription& getTaskDescription() const;
+  // The id the environment was made with ("Reach_3-v0", or the task name).
+  const std::string& getEnvironmentId() const { return environment_id_; }
+  // A fixed-object environment's objects; empty for a plain task.
+  const std::vector<std::string>& getFixedObjects() const { return fixed_objects_; }
   const ControllerDescription& getControllerDescription() const;
   // The layout policies see; an empty mode means the environment's own.
   PolicyLayout calcPolicyLayout(const std::string& observation_mode = "") const;
@@ -170,6 +181,8 @@ class Environment {
 
   const PluginRegistry& registry_;
   EnvironmentOptions options_;
+  std::string environment_id_;
+  std::vector<std::string> fixed_objects_;  // empty: every object of the task
   std::unique_ptr<TaskInstance> task_;
   TaskDescription description_;  // task_'s, with the timing overrides
   std::unique_ptr<Scene> scene_;

@@ -1,6 +1,7 @@
 // The layers of the configuration, their merge, and the EnvironmentOptions
 // a merged configuration asks for.
 #include <manibench/config.hpp>
+#include <manibench/task_name.hpp>
 
 #include <cassert>
 #include <charconv>
@@ -277,10 +278,11 @@ ConfigNode calcConfig(const TaskDescription* task, const ConfigSources& sources)
 ConfigNode loadTaskConfig(const PluginRegistry& registry, const std::string& task_name,
                           const ConfigSources& sources) {
   // A first instance, with no configuration, only to read the description
-  // (its default_config layer among it).
+  // (its default_config layer among it). A fixed-object id configures as
+  // its task.
   TaskDescription description;
   {
-    TaskInstance probe(registry, task_name, "");
+    TaskInstance probe(registry, resolveTaskId(registry, task_name).task, "");
     description = probe.getDescription();
   }
   return calcConfig(&description, sources);
