@@ -313,6 +313,40 @@ TEST(ContactTest, LinksOfAnArticulationTouchOnlyWithSelfCollisionAndNeverAcrossA
   }
 }
 
+// The broad phase reuses boxes grown by a margin until a body has moved
+// farther than that margin, counting rotation: a shape 0.8 m out on an arm
+// that only turns about its joint must still meet a post in its way.
+TEST(ContactTest, AnArmThatOnlyTurnsStillMeetsThePostInItsWay) {
+  for (const std::string integrator : {"cpodes", "semi_explicit_euler"}) {
+    SCOPED_TRACE(integrator);
+    PhysicsSettings settings;
+    settings.integrator = integrator;
+    Scene scene(settings);
+    const std::string pendulum =
+        "<?xml version='1.0'?><robot name='pendulum'><link name='base'/>"
+        "<joint name='hinge' type='continuous'><parent link='base'/><child link='arm'/>"
+        "<axis xyz='0 1 0'/></joint>"
+        "<link name='arm'><inertial><origin xyz='0.8 0 0'/><mass value='1'/>"
+        "<inertia ixx='2e-3' ixy='0' ixz='0' iyy='2e-3' iyz='0' izz='2e-3'/></inertial>" +
+        collision(box(0.1, 0.1, 0.1), Eigen::Vector3d(0.8, 0, 0)) +
+        "</link></robot>";
+    const int arm = scene.addUrdfString(pendulum, "", "pendulum", at(0, 0, 1), true);
+    const int post = scene.addUrdfString(
+        singleLink("post", collision(box(0.1, 0.4, 0.2))), "", "post", at(0.62, 0, 0.3), true);
+    scene.finalize();
+    const int arm_link = scene.findLink(arm, "arm"), post_link = scene.findLink(post, "post");
+    double largest_angle = 0;
+    for (int k = 0; k < 150; ++k) {
+      scene.advance(0.01);
+      largest_angle = std::max(largest_angle, scene.getJointPositions(arm)[0]);
+    }
+    // Free, it would swing through pi; the post stops it near 0.7 rad.
+    EXPECT_GT(largest_angle, 0.5);
+    EXPECT_LT(largest_angle, 0.9);
+    EXPECT_GT(scene.getContactForce(post_link, arm_link).norm(), 1.0);
+  }
+}
+
 TEST(ContactTest, SelfCollisionIsABuildTimeSetting) {
   Scene scene;
   const int arm = scene.addUrdfString(overlappingArm(), "", "arm", Pose(), true);

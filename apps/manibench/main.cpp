@@ -120,7 +120,10 @@ const char* kBenchUsage = R"(usage: manibench bench TASK [options]
 Measures environment steps per second: episodes of TASK on the split's
 objects (in turn, seeds 0, 1, ...) until --steps environment steps have run.
 Each env step is frame_skip control steps of physics plus the task's reward,
-success and observation; resets are timed separately.
+success and observation; resets are timed separately. A second line gives
+the integrator's work per env step (steps, failed steps, Newton iterations,
+evaluations of the equations of motion), which does not depend on the load
+of the machine.
 
 Options:
   --policy NAME|PATH.so   policy acting (default random)
@@ -350,6 +353,9 @@ int commandBench(int argc, char** argv) {
   using Clock = std::chrono::steady_clock;
   std::chrono::duration<double> step_time{0}, reset_time{0};
   uint64_t steps = 0, episodes = 0, successes = 0;
+  // Integrator work during env steps only (resets rebuild scenes).
+  int64_t integrator_steps = 0, realizations = 0, iterations = 0;
+  int64_t error_failures = 0, convergence_failures = 0;
   Eigen::VectorXd action;
   while (steps < target_steps) {
     const std::string& object = objects[episodes % objects.size()];
@@ -359,11 +365,18 @@ int commandBench(int argc, char** argv) {
     reset_time += Clock::now() - reset_start;
     bool done = false;
     while (!done && steps < target_steps) {
+      const mb::IntegratorStatistics before = env->getScene().getIntegratorStatistics();
       const auto start = Clock::now();
       policy.act(env->getObservation(), env->getElapsedSteps(), action,
                  env->getObservationMode() == "state" ? nullptr : &env->getVisualObservation());
       const mb::StepResult result = env->step(action);
       step_time += Clock::now() - start;
+      const mb::IntegratorStatistics after = env->getScene().getIntegratorStatistics();
+      integrator_steps += after.steps - before.steps;
+      realizations += after.realizations - before.realizations;
+      iterations += after.iterations - before.iterations;
+      error_failures += after.error_test_failures - before.error_test_failures;
+      convergence_failures += after.convergence_test_failures - before.convergence_test_failures;
       ++steps;
       done = result.done;
       if (done && result.success) ++successes;
@@ -376,7 +389,13 @@ int commandBench(int argc, char** argv) {
             << " successful), " << std::fixed << std::setprecision(1)
             << steps / step_time.count() << " env steps/s (policy + physics + task), "
             << std::setprecision(2) << 1e3 * reset_time.count() / double(episodes)
-            << " ms per reset\n";
+            << " ms per reset\n"
+            << "physics per env step: " << std::setprecision(1)
+            << double(integrator_steps) / double(steps) << " integrator steps ("
+            << double(error_failures) / double(steps) << " error-test and "
+            << double(convergence_failures) / double(steps) << " convergence failures), "
+            << double(iterations) / double(steps) << " Newton iterations, "
+            << double(realizations) / double(steps) << " evaluations of the dynamics\n";
   std::cout.unsetf(std::ios::fixed);
   return 0;
 }

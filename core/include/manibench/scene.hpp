@@ -137,6 +137,18 @@ struct PhysicsSettings {
   double divergence_speed_limit = 1e3;
 };
 
+// Counters of integrator work (Simbody's Integrator statistics, summed).
+struct IntegratorStatistics {
+  std::int64_t steps = 0;             // accepted internal steps
+  std::int64_t attempts = 0;          // tried steps, failed ones included
+  std::int64_t realizations = 0;      // evaluations of the equations of motion
+  std::int64_t iterations = 0;        // Newton iterations (implicit integrators)
+  std::int64_t projections = 0;       // constraint projections
+  std::int64_t error_test_failures = 0;
+  std::int64_t convergence_test_failures = 0;
+  std::int64_t initializations = 0;   // restarts (resets, setters)
+};
+
 // Bad input (malformed URDF, unknown name, wrong vector size, misuse of the
 // build/run phases). The message names the file, link or joint at fault.
 class SceneError : public std::runtime_error {
@@ -260,6 +272,9 @@ class Scene {
   // Integrates `dt` seconds without re-initializing the integrator (unless a
   // setter changed the state). Throws SimulationDiverged on NaN/explosion.
   void advance(double dt);
+  // What the integrators of this scene did so far (every advance() since
+  // finalize(), across re-initializations): the cost behind a step.
+  IntegratorStatistics getIntegratorStatistics() const;
 
   SceneState saveState() const;
   void restoreState(const SceneState& state);

@@ -37,31 +37,39 @@ void JointForces::calcForce(const SimTK::State& state,
                             SimTK::Vector_<SimTK::Vec3>&,
                             SimTK::Vector& mobility_forces) const {
   const JointControls& c = controls_;
+  if (q_index_.empty()) {
+    // Coordinate indices are fixed once the model stage is realized; reading
+    // the state vectors directly avoids a subsystem lookup per joint.
+    for (const JointSlot& slot : slots_) {
+      const SimTK::MobilizedBody& mobod = matter_.getMobilizedBody(slot.mobod);
+      q_index_.push_back(mobod.getFirstQIndex(state));
+      u_index_.push_back(mobod.getFirstUIndex(state));
+    }
+  }
   // Balancing: the generalized force that would hold udot = 0 against
   // gravity and Coriolis/centrifugal terms (inverse dynamics, O(n)).
-  SimTK::Vector residual;
   if (std::find(c.balanced.begin(), c.balanced.end(), 1) != c.balanced.end())
-    matter_.calcResidualForceIgnoringConstraints(
-        state, SimTK::Vector(), gravity_.getBodyForces(state), SimTK::Vector(),
-        residual);
-
+    matter_.calcResidualForceIgnoringConstraints(state, no_mobility_forces_,
+                                                 gravity_.getBodyForces(state), no_udot_,
+                                                 residual_);
+  const SimTK::Vector& q = state.getQ();
+  const SimTK::Vector& u = state.getU();
   for (std::size_t i = 0; i < slots_.size(); ++i) {
     if (!c.driven[i] && !c.balanced[i] && c.damping[i] == 0 && c.friction[i] == 0)
       continue;
-    const SimTK::MobilizedBody& mobod = matter_.getMobilizedBody(slots_[i].mobod);
-    const double q = mobod.getOneQ(state, 0);
-    const double u = mobod.getOneU(state, 0);
+    const double qi = q[q_index_[i]];
+    const double ui = u[u_index_[i]];
     double tau = 0;
     if (c.driven[i]) {
       const DriveCommand& d = c.drives[i];
-      tau = clampEffort(d.stiffness * (d.position_target - q) +
-                            d.damping * (d.velocity_target - u) + d.force,
+      tau = clampEffort(d.stiffness * (d.position_target - qi) +
+                            d.damping * (d.velocity_target - ui) + d.force,
                         slots_[i].effort_limit);
     }
-    tau -= c.damping[i] * u;
-    if (c.friction[i] != 0) tau -= c.friction[i] * std::tanh(u / kFrictionSpeed);
-    if (c.balanced[i]) tau += residual[mobod.getFirstUIndex(state)];
-    mobod.applyOneMobilityForce(state, 0, tau, mobility_forces);
+    tau -= c.damping[i] * ui;
+    if (c.friction[i] != 0) tau -= c.friction[i] * std::tanh(ui / kFrictionSpeed);
+    if (c.balanced[i]) tau += residual_[u_index_[i]];
+    mobility_forces[u_index_[i]] += tau;
   }
 }
 

@@ -59,6 +59,10 @@ class JointForces : public SimTK::Force::Custom::Implementation {
   SimTK::Force::Gravity gravity_;  // a handle to the scene's gravity element
   std::vector<JointSlot> slots_;
   JointControls controls_;
+  // Filled on the first evaluation (see calcForce); scratch after that.
+  mutable std::vector<SimTK::QIndex> q_index_;
+  mutable std::vector<SimTK::UIndex> u_index_;
+  mutable SimTK::Vector residual_, no_mobility_forces_, no_udot_;
 };
 
 }  // namespace scene_detail

@@ -220,6 +220,7 @@ struct Scene::Impl {
   JointForces* joint_forces = nullptr;     // owned by `forces`
   ContactForce* contact_force = nullptr;   // owned by `forces`
   IntegratorPtr integrator{nullptr, [](SimTK::Integrator*) {}};
+  IntegratorStatistics retired_statistics;  // of integrators replaced so far
   SimTK::State state;       // current state while needs_init
   bool needs_init = true;
   bool finalized = false;
@@ -312,6 +313,7 @@ struct Scene::Impl {
 
   // --- stepping ---
   void advance(double dt);
+  IntegratorStatistics calcIntegratorStatistics() const;
   std::string describeMobod(SimTK::MobilizedBodyIndex mobod) const;
   const std::string& getMobodLinkName(SimTK::MobilizedBodyIndex mobod) const;
   // Finds a non-finite or too fast coordinate; returns false if none.
@@ -639,6 +641,19 @@ void Scene::Impl::throwDiverged(const std::string& cause) {
   throw SimulationDiverged(message, mobod.isValid() ? getMobodLinkName(mobod) : "", t);
 }
 
+IntegratorStatistics Scene::Impl::calcIntegratorStatistics() const {
+  IntegratorStatistics total = retired_statistics;
+  if (!integrator) return total;
+  total.steps += integrator->getNumStepsTaken();
+  total.attempts += integrator->getNumStepsAttempted();
+  total.realizations += integrator->getNumRealizations();
+  total.iterations += integrator->getNumIterations();
+  total.projections += integrator->getNumProjections();
+  total.error_test_failures += integrator->getNumErrorTestFailures();
+  total.convergence_test_failures += integrator->getNumConvergenceTestFailures();
+  return total;
+}
+
 void Scene::Impl::advance(double dt) {
   if (!(dt > 0) || !std::isfinite(dt))
     throw SceneError("Scene::advance: dt must be positive and finite, got " + formatTime(dt));
@@ -651,6 +666,8 @@ void Scene::Impl::advance(double dt) {
     if (needs_init) {
       // A fresh integrator rather than initialize() again: CPodes leaks ~2
       // kB per re-initialization (Simbody 3.7), too much at one per episode.
+      retired_statistics = calcIntegratorStatistics();
+      ++retired_statistics.initializations;
       integrator = makeIntegrator(system, settings, kStepsPerCall);
       integrator->initialize(state);
       needs_init = false;
@@ -1045,6 +1062,10 @@ void Scene::setPassiveForceBalancing(int articulation, const std::vector<int>& j
 void Scene::advance(double dt) {
   impl_->requireFinalized("advance");
   impl_->advance(dt);
+}
+
+IntegratorStatistics Scene::getIntegratorStatistics() const {
+  return impl_->calcIntegratorStatistics();
 }
 
 SceneState Scene::saveState() const {

@@ -40,17 +40,54 @@ ContactForce::ContactForce(const SimTK::SimbodyMatterSubsystem& matter,
       shapes_(std::move(shapes)),
       self_collision_(std::move(self_collision)),
       law_(law) {
+  shape_body_.assign(shapes_.size(), -1);
   for (std::size_t i = 0; i < shapes_.size(); ++i) {
     const ContactShape& shape = shapes_[i];
     assert(shape.articulation < static_cast<int>(self_collision_.size()));
     assert(shape.inverse_mass >= 0);
-    parent_.push_back(shape.body == SimTK::GroundIndex ? SimTK::MobilizedBodyIndex()
-                                                       : matter_.getMobilizedBody(shape.body)
-                                                             .getParentMobilizedBody()
-                                                             .getMobilizedBodyIndex());
-    (shape.geometry.kind == ShapeKind::HalfSpace ? half_spaces_ : finite_)
-        .push_back(static_cast<int>(i));
+    const bool on_ground = shape.body == SimTK::GroundIndex;
+    parent_.push_back(on_ground ? SimTK::MobilizedBodyIndex()
+                                : matter_.getMobilizedBody(shape.body)
+                                      .getParentMobilizedBody()
+                                      .getMobilizedBodyIndex());
+    const bool half_space = shape.geometry.kind == ShapeKind::HalfSpace;
+    (half_space ? half_spaces_ : finite_).push_back(static_cast<int>(i));
+    if (on_ground) continue;
+    int b = 0;
+    while (b < static_cast<int>(bodies_.size()) &&
+           bodies_[b].mobod->getMobilizedBodyIndex() != shape.body)
+      ++b;
+    if (b == static_cast<int>(bodies_.size())) {
+      bodies_.emplace_back();
+      bodies_.back().mobod = &matter_.getMobilizedBody(shape.body);
+    }
+    BodyShapes& body = bodies_[b];
+    body.shapes.push_back(static_cast<int>(i));
+    shape_body_[i] = b;
+    if (half_space) {
+      body.has_half_space = true;
+      continue;
+    }
+    Vec3 lo, hi;
+    shape.geometry.calcBoundingBox(shape.X_BS, lo, hi);
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3 p((corner & 1) ? hi[0] : lo[0], (corner & 2) ? hi[1] : lo[1],
+                   (corner & 4) ? hi[2] : lo[2]);
+      body.radius = std::max(body.radius, p.norm());
+    }
   }
+  X_ref_.resize(bodies_.size());
+  ref_valid_.assign(bodies_.size(), 0);
+  X_GB_.resize(bodies_.size());
+  fat_lo_.resize(shapes_.size());
+  fat_hi_.resize(shapes_.size());
+  for (std::size_t i = 0; i < shapes_.size(); ++i)
+    if (shape_body_[i] < 0) {  // fixed for good
+      shapes_[i].geometry.calcBoundingBox(shapes_[i].X_BS, fat_lo_[i], fat_hi_[i]);
+      fat_lo_[i] -= Vec3(kBroadPhaseMargin);
+      fat_hi_[i] += Vec3(kBroadPhaseMargin);
+    }
+  shape_stamp_.assign(shapes_.size(), 0);
   X_GS_.resize(shapes_.size());
   lo_.resize(shapes_.size());
   hi_.resize(shapes_.size());
@@ -90,27 +127,56 @@ bool ContactForce::isPairAllowed(int i, int j) const {
   return true;
 }
 
+void ContactForce::updateCandidates(const SimTK::State& state) const {
+  for (std::size_t b = 0; b < bodies_.size(); ++b) {
+    const BodyShapes& body = bodies_[b];
+    const Transform& X = body.mobod->getBodyTransform(state);
+    X_GB_[b] = X;
+    if (ref_valid_[b] && !body.has_half_space) {
+      const Transform& X_ref = X_ref_[b];
+      const double moved = (X.p() - X_ref.p()).norm() +
+                           (X.R().asMat33() - X_ref.R().asMat33()).norm() * body.radius;
+      // The slack covers rounding in the boxes.
+      if (moved + 1e-9 <= kBroadPhaseMargin) continue;
+    }
+    X_ref_[b] = X;
+    ref_valid_[b] = 1;
+    candidates_valid_ = false;
+    for (int i : body.shapes) {
+      shapes_[i].geometry.calcBoundingBox(X * shapes_[i].X_BS, fat_lo_[i], fat_hi_[i]);
+      fat_lo_[i] -= Vec3(kBroadPhaseMargin);
+      fat_hi_[i] += Vec3(kBroadPhaseMargin);
+    }
+  }
+  if (!candidates_valid_) {
+    findCandidates();
+    candidates_valid_ = true;
+  }
+}
+
 // Half spaces against every finite shape whose box reaches below them;
 // finite shapes among themselves by sweep and prune along the axis where
-// they spread most. The result is sorted, so contact order (and with it
-// every floating-point sum) depends only on the state.
-void ContactForce::findPairs() const {
-  pairs_.clear();
+// they spread most. Sorted, so that contact order (and with it every
+// floating-point sum) depends only on the state.
+void ContactForce::findCandidates() const {
+  candidates_.clear();
   for (int h : half_spaces_) {
-    const Vec3 n = X_GS_[h].z();
-    const double plane = SimTK::dot(X_GS_[h].p(), n);
+    const bool moving = shape_body_[h] >= 0;
+    const Transform X_GH = moving ? X_ref_[shape_body_[h]] * shapes_[h].X_BS : shapes_[h].X_BS;
+    const Vec3 n = X_GH.z();
+    const double plane = SimTK::dot(X_GH.p(), n);
     for (int i : finite_) {
       if (!isPairAllowed(h, i)) continue;
-      // Lowest corner of i's box along n.
+      // Lowest corner of i's box along n (a moving plane: every shape).
       double low = 0;
-      for (int k = 0; k < 3; ++k) low += n[k] * (n[k] >= 0 ? lo_[i][k] : hi_[i][k]);
-      if (low < plane) pairs_.emplace_back(std::min(h, i), std::max(h, i));
+      for (int k = 0; k < 3; ++k) low += n[k] * (n[k] >= 0 ? fat_lo_[i][k] : fat_hi_[i][k]);
+      if (moving || low < plane) candidates_.emplace_back(std::min(h, i), std::max(h, i));
     }
   }
   if (finite_.size() > 1) {
     Vec3 mean(0), mean_sq(0);
     for (int i : finite_) {
-      const Vec3 c = (lo_[i] + hi_[i]) / 2;
+      const Vec3 c = (fat_lo_[i] + fat_hi_[i]) / 2;
       mean += c;
       mean_sq += c.elementwiseMultiply(c);
     }
@@ -118,9 +184,10 @@ void ContactForce::findPairs() const {
     const Vec3 variance = mean_sq / count - (mean / count).elementwiseMultiply(mean / count);
     int axis = variance[0] >= variance[1] ? 0 : 1;
     if (variance[2] > variance[axis]) axis = 2;
-    // Insertion sort: the order of the previous evaluation is nearly right.
+    // Insertion sort: the order of the previous rebuild is nearly right.
     auto before = [&](int a, int b) {
-      return lo_[a][axis] < lo_[b][axis] || (lo_[a][axis] == lo_[b][axis] && a < b);
+      return fat_lo_[a][axis] < fat_lo_[b][axis] ||
+             (fat_lo_[a][axis] == fat_lo_[b][axis] && a < b);
     };
     for (std::size_t n = 1; n < order_.size(); ++n) {
       const int v = order_[n];
@@ -133,29 +200,31 @@ void ContactForce::findPairs() const {
       const int i = order_[p];
       for (std::size_t q = p + 1; q < order_.size(); ++q) {
         const int j = order_[q];
-        if (lo_[j][axis] > hi_[i][axis]) break;
-        if (lo_[j][other1] > hi_[i][other1] || lo_[i][other1] > hi_[j][other1] ||
-            lo_[j][other2] > hi_[i][other2] || lo_[i][other2] > hi_[j][other2])
+        if (fat_lo_[j][axis] > fat_hi_[i][axis]) break;
+        if (fat_lo_[j][other1] > fat_hi_[i][other1] || fat_lo_[i][other1] > fat_hi_[j][other1] ||
+            fat_lo_[j][other2] > fat_hi_[i][other2] || fat_lo_[i][other2] > fat_hi_[j][other2])
           continue;
-        if (isPairAllowed(i, j)) pairs_.emplace_back(std::min(i, j), std::max(i, j));
+        if (isPairAllowed(i, j)) candidates_.emplace_back(std::min(i, j), std::max(i, j));
       }
     }
   }
-  std::sort(pairs_.begin(), pairs_.end());
+  std::sort(candidates_.begin(), candidates_.end());
+}
+
+void ContactForce::ensureShapeBox(int i) const {
+  if (shape_stamp_[i] == evaluation_) return;
+  shape_stamp_[i] = evaluation_;
+  const int b = shape_body_[i];
+  X_GS_[i] = b < 0 ? shapes_[i].X_BS : X_GB_[b] * shapes_[i].X_BS;
+  shapes_[i].geometry.calcBoundingBox(X_GS_[i], lo_[i], hi_[i]);
 }
 
 double ContactForce::evaluate(const SimTK::State& state, Mode mode,
                               SimTK::Vector_<SpatialVec>* body_forces,
                               std::vector<Report>* reports) const {
   const bool dynamic = mode != Mode::Energy;  // needs velocities
-  for (std::size_t i = 0; i < shapes_.size(); ++i) {
-    const ContactShape& shape = shapes_[i];
-    X_GS_[i] = shape.body == SimTK::GroundIndex
-                   ? shape.X_BS
-                   : matter_.getMobilizedBody(shape.body).getBodyTransform(state) * shape.X_BS;
-    shape.geometry.calcBoundingBox(X_GS_[i], lo_[i], hi_[i]);
-  }
-  findPairs();
+  ++evaluation_;
+  updateCandidates(state);
 
   const std::vector<FrictionAnchor>& previous =
       forces_.getDiscreteVariable(state, anchors_index_).getValue<FrictionAnchorSet>().anchors;
@@ -166,10 +235,24 @@ double ContactForce::evaluate(const SimTK::State& state, Mode mode,
                 .anchors;
     next->clear();
   }
-  std::size_t cursor = 0;  // into `previous`, which is sorted like pairs_
+  std::size_t cursor = 0;  // into `previous`, which is sorted like candidates_
   double energy = 0;
 
-  for (const auto& [ia, ib] : pairs_) {
+  for (const auto& [ia, ib] : candidates_) {
+    // Exactly the pairs whose current boxes overlap go on.
+    ensureShapeBox(ia);
+    ensureShapeBox(ib);
+    const bool a_is_plane = shapes_[ia].geometry.kind == ShapeKind::HalfSpace;
+    if (a_is_plane || shapes_[ib].geometry.kind == ShapeKind::HalfSpace) {
+      const int h = a_is_plane ? ia : ib, i = a_is_plane ? ib : ia;
+      const Vec3 n = X_GS_[h].z();
+      double low = 0;
+      for (int k = 0; k < 3; ++k) low += n[k] * (n[k] >= 0 ? lo_[i][k] : hi_[i][k]);
+      if (!(low < SimTK::dot(X_GS_[h].p(), n))) continue;
+    } else if (lo_[ib][0] > hi_[ia][0] || lo_[ia][0] > hi_[ib][0] || lo_[ib][1] > hi_[ia][1] ||
+               lo_[ia][1] > hi_[ib][1] || lo_[ib][2] > hi_[ia][2] || lo_[ia][2] > hi_[ib][2]) {
+      continue;
+    }
     narrow_.calcContacts(shapes_[ia].geometry, X_GS_[ia], shapes_[ib].geometry, X_GS_[ib],
                          manifold_);
     if (manifold_.empty()) continue;

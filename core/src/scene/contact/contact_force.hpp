@@ -1,5 +1,6 @@
 // Every contact of a scene in one Force::Custom: broad phase (half spaces
-// against bounding boxes, sweep and prune among the rest), narrow phase
+// against bounding boxes, sweep and prune among the rest, over boxes with a
+// margin that stay valid for many evaluations), narrow phase
 // (contact_geometry.hpp) and the force law, applied straight to the bodies.
 // Scratch buffers persist between evaluations, so the loop does not
 // allocate once warm (except inside FCL's GJK/EPA).
@@ -31,6 +32,10 @@
 
 namespace manibench {
 namespace scene_detail {
+
+// How far (m) a body may move before the broad phase looks again. Larger:
+// fewer rebuilds, more candidate pairs to filter.
+constexpr double kBroadPhaseMargin = 0.02;
 
 struct ContactShape {
   ShapeGeometry geometry;
@@ -113,9 +118,25 @@ class ContactForce : public SimTK::Force::Custom::Implementation {
   double evaluate(const SimTK::State& state, Mode mode,
                   SimTK::Vector_<SimTK::SpatialVec>* body_forces,
                   std::vector<Report>* reports) const;
-  void findPairs() const;
+  // Moves the reference pose of every body that left its margin, and
+  // rebuilds the candidate pairs if any did.
+  void updateCandidates(const SimTK::State& state) const;
+  void findCandidates() const;
+  // The shape's pose and exact bounding box at the current evaluation.
+  void ensureShapeBox(int shape) const;
   bool isPairAllowed(int i, int j) const;
   static PairMaterial combine(const ContactMaterial& a, const ContactMaterial& b);
+
+  // Every body that carries shapes (Ground excluded).
+  struct BodyShapes {
+    const SimTK::MobilizedBody* mobod = nullptr;
+    std::vector<int> shapes;
+    // Farthest point, from the body origin, of the points whose bounding
+    // box calcBoundingBox builds (corners, centres): no point moves more
+    // than |dp| + |dR|_F * radius when the body's pose changes by dp, dR.
+    double radius = 0;
+    bool has_half_space = false;  // a moving plane: candidate of every shape
+  };
 
   const SimTK::SimbodyMatterSubsystem& matter_;
   const SimTK::GeneralForceSubsystem& forces_;
@@ -124,14 +145,30 @@ class ContactForce : public SimTK::Force::Custom::Implementation {
   FrictionLaw law_;
   std::vector<SimTK::MobilizedBodyIndex> parent_;  // per shape: its body's parent
   std::vector<int> half_spaces_, finite_;          // shape indices by kind
+  std::vector<BodyShapes> bodies_;
+  std::vector<int> shape_body_;  // per shape: index into bodies_, -1 on Ground
   mutable SimTK::DiscreteVariableIndex anchors_index_;
 
-  // Scratch, reused across evaluations (no allocation once warm).
+  // Broad phase, persistent between evaluations. Each body has a reference
+  // pose; its shapes' boxes at that pose, grown by kBroadPhaseMargin, give
+  // the candidate pairs, valid while no body has moved farther than the
+  // margin from its reference. The exact boxes of the current pose then
+  // filter the candidates, so the pairs tested are exactly the pairs whose
+  // current boxes overlap, whatever the history.
+  mutable std::vector<SimTK::Transform> X_ref_;  // per body
+  mutable std::vector<char> ref_valid_;          // per body
+  mutable std::vector<SimTK::Vec3> fat_lo_, fat_hi_;  // per shape
+  mutable std::vector<int> order_;  // finite shapes by fat lower bound, kept between calls
+  mutable std::vector<std::pair<int, int>> candidates_;  // sorted
+  mutable bool candidates_valid_ = false;
+
+  // Per evaluation: body poses, and (lazily) shape poses and exact boxes.
+  mutable std::uint64_t evaluation_ = 0;
+  mutable std::vector<SimTK::Transform> X_GB_;  // per body
+  mutable std::vector<std::uint64_t> shape_stamp_;
   mutable NarrowPhase narrow_;
   mutable std::vector<SimTK::Transform> X_GS_;
   mutable std::vector<SimTK::Vec3> lo_, hi_;
-  mutable std::vector<int> order_;  // finite shapes by lower bound, kept between calls
-  mutable std::vector<std::pair<int, int>> pairs_;
   mutable std::vector<ContactPoint> manifold_;
 };
 
