@@ -355,7 +355,7 @@ int commandBench(int argc, char** argv) {
   uint64_t steps = 0, episodes = 0, successes = 0;
   // Integrator work during env steps only (resets rebuild scenes).
   int64_t integrator_steps = 0, realizations = 0, iterations = 0;
-  int64_t error_failures = 0, convergence_failures = 0;
+  int64_t error_failures = 0, convergence_failures = 0, jacobians = 0;
   Eigen::VectorXd action;
   while (steps < target_steps) {
     const std::string& object = objects[episodes % objects.size()];
@@ -375,6 +375,7 @@ int commandBench(int argc, char** argv) {
       integrator_steps += after.steps - before.steps;
       realizations += after.realizations - before.realizations;
       iterations += after.iterations - before.iterations;
+      jacobians += after.jacobians - before.jacobians;
       error_failures += after.error_test_failures - before.error_test_failures;
       convergence_failures += after.convergence_test_failures - before.convergence_test_failures;
       ++steps;
@@ -395,6 +396,7 @@ int commandBench(int argc, char** argv) {
             << double(error_failures) / double(steps) << " error-test and "
             << double(convergence_failures) / double(steps) << " convergence failures), "
             << double(iterations) / double(steps) << " Newton iterations, "
+            << double(jacobians) / double(steps) << " Jacobians, "
             << double(realizations) / double(steps) << " evaluations of the dynamics\n";
   std::cout.unsetf(std::ios::fixed);
   return 0;

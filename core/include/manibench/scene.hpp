@@ -143,6 +143,7 @@ struct IntegratorStatistics {
   std::int64_t attempts = 0;          // tried steps, failed ones included
   std::int64_t realizations = 0;      // evaluations of the equations of motion
   std::int64_t iterations = 0;        // Newton iterations (implicit integrators)
+  std::int64_t jacobians = 0;         // difference-quotient Jacobians (cpodes)
   std::int64_t projections = 0;       // constraint projections
   std::int64_t error_test_failures = 0;
   std::int64_t convergence_test_failures = 0;

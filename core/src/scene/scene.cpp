@@ -27,6 +27,7 @@
 
 #include "Simbody.h"
 #include "scene/contact/contact_force.hpp"
+#include "scene/cpodes_stepper.hpp"
 #include "scene/joint_forces.hpp"
 #include "scene/urdf_model.hpp"
 
@@ -108,40 +109,23 @@ std::string checkMaterial(const ContactMaterial& m) {
   return "";
 }
 
-// SimTK::Integrator's destructor is not virtual: delete as the real type.
-using IntegratorPtr = std::unique_ptr<SimTK::Integrator, void (*)(SimTK::Integrator*)>;
-
-IntegratorPtr makeIntegrator(const SimTK::MultibodySystem& system,
-                             const PhysicsSettings& settings, int steps_per_call) {
-  IntegratorPtr integrator(nullptr, [](SimTK::Integrator*) {});
-  if (settings.integrator == "cpodes") {
-    integrator = IntegratorPtr(
-        new SimTK::CPodesIntegrator(system, SimTK::CPodes::BDF, SimTK::CPodes::Newton),
-        [](SimTK::Integrator* p) { delete static_cast<SimTK::CPodesIntegrator*>(p); });
-    integrator->setAccuracy(settings.accuracy);
-    // BDF above order 2 is not A-stable: lightly damped stiff modes (a body
-    // held by its friction springs) then grow instead of decaying.
-    static_cast<SimTK::CPodesIntegrator*>(integrator.get())->setOrderLimit(2);
-  } else if (settings.integrator == "rk_merson") {
-    integrator = IntegratorPtr(
-        new SimTK::RungeKuttaMersonIntegrator(system),
-        [](SimTK::Integrator* p) { delete static_cast<SimTK::RungeKuttaMersonIntegrator*>(p); });
-    integrator->setAccuracy(settings.accuracy);
-  } else {
-    assert(settings.integrator == "semi_explicit_euler");
-    integrator = IntegratorPtr(
-        new SimTK::SemiExplicitEulerIntegrator(system, settings.fixed_step),
-        [](SimTK::Integrator* p) { delete static_cast<SimTK::SemiExplicitEulerIntegrator*>(p); });
-  }
+std::unique_ptr<scene_detail::Stepper> makeStepper(const SimTK::MultibodySystem& system,
+                                                   const SimTK::State& initial,
+                                                   const PhysicsSettings& settings) {
   // Mimic couplings (the only constraints) are held to 1e-8 rather than
   // the accuracy: CPodes at 1e-4 let them drift by 5e-6 rad. Scenes
-  // without constraints keep Simbody's default, bit for bit.
-  if (system.getMatterSubsystem().getNumConstraints() > 0)
-    integrator->setConstraintTolerance(kConstraintTolerance);
-  integrator->setInternalStepLimit(steps_per_call);
-  // Land exactly on each control tick so that commands switch there.
-  integrator->setAllowInterpolation(false);
-  return integrator;
+  // without constraints keep Simbody's default (a tenth of the accuracy).
+  const bool constrained = system.getMatterSubsystem().getNumConstraints() > 0;
+  if (settings.integrator != "cpodes")
+    return scene_detail::makeSimbodyStepper(system, initial, settings,
+                                            constrained ? kConstraintTolerance : 0);
+  scene_detail::CPodesOptions options;
+  options.accuracy = settings.accuracy;
+  // BDF above order 2 is not A-stable: lightly damped stiff modes (a body
+  // held by its friction springs) then grow instead of decaying.
+  options.max_order = 2;
+  options.constraint_tolerance = constrained ? kConstraintTolerance : settings.accuracy / 10;
+  return scene_detail::makeCPodesStepper(system, initial, options);
 }
 
 std::string formatTime(double t) {
@@ -219,8 +203,8 @@ struct Scene::Impl {
   ContactMaterial ground_material;
   JointForces* joint_forces = nullptr;     // owned by `forces`
   ContactForce* contact_force = nullptr;   // owned by `forces`
-  IntegratorPtr integrator{nullptr, [](SimTK::Integrator*) {}};
-  IntegratorStatistics retired_statistics;  // of integrators replaced so far
+  std::unique_ptr<scene_detail::Stepper> stepper;
+  IntegratorStatistics retired_statistics;  // of steppers replaced so far
   SimTK::State state;       // current state while needs_init
   bool needs_init = true;
   bool finalized = false;
@@ -280,13 +264,13 @@ struct Scene::Impl {
 
   // --- state access ---
   const SimTK::State& getState() const {
-    return needs_init ? state : integrator->getState();
+    return needs_init ? state : stepper->getState();
   }
   // The state to modify; the integrator restarts from it on the next
   // advance().
   SimTK::State& updStateAndRestart() {
     if (!needs_init) {
-      state = integrator->getState();
+      state = stepper->getState();
       needs_init = true;
     }
     return state;
@@ -299,7 +283,7 @@ struct Scene::Impl {
   // Joint controls changed: forces cached in the current state are stale.
   // No restart needed; the integrator picks the new forces up.
   void invalidateForces() {
-    SimTK::State& s = needs_init ? state : integrator->updAdvancedState();
+    SimTK::State& s = needs_init ? state : stepper->updState();
     s.invalidateAllCacheAtOrAbove(SimTK::Stage::Dynamics);
   }
   JointControls& updControls() { return joint_forces->updControls(); }
@@ -615,7 +599,7 @@ void Scene::Impl::throwDiverged(const std::string& cause) {
   // advance() restarts from it (and will fail again unless a restore or a
   // setter repaired it).
   // (If initialize() itself failed, `state` already is that state.)
-  if (!needs_init) state = integrator->getState();
+  if (!needs_init) state = stepper->getState();
   needs_init = true;
   SimTK::MobilizedBodyIndex mobod;
   std::string what;
@@ -643,14 +627,16 @@ void Scene::Impl::throwDiverged(const std::string& cause) {
 
 IntegratorStatistics Scene::Impl::calcIntegratorStatistics() const {
   IntegratorStatistics total = retired_statistics;
-  if (!integrator) return total;
-  total.steps += integrator->getNumStepsTaken();
-  total.attempts += integrator->getNumStepsAttempted();
-  total.realizations += integrator->getNumRealizations();
-  total.iterations += integrator->getNumIterations();
-  total.projections += integrator->getNumProjections();
-  total.error_test_failures += integrator->getNumErrorTestFailures();
-  total.convergence_test_failures += integrator->getNumConvergenceTestFailures();
+  if (!stepper) return total;
+  const IntegratorStatistics now = stepper->getStatistics();
+  total.steps += now.steps;
+  total.attempts += now.attempts;
+  total.realizations += now.realizations;
+  total.iterations += now.iterations;
+  total.jacobians += now.jacobians;
+  total.projections += now.projections;
+  total.error_test_failures += now.error_test_failures;
+  total.convergence_test_failures += now.convergence_test_failures;
   return total;
 }
 
@@ -668,26 +654,21 @@ void Scene::Impl::advance(double dt) {
       // kB per re-initialization (Simbody 3.7), too much at one per episode.
       retired_statistics = calcIntegratorStatistics();
       ++retired_statistics.initializations;
-      integrator = makeIntegrator(system, settings, kStepsPerCall);
-      integrator->initialize(state);
+      stepper = makeStepper(system, state, settings);
       needs_init = false;
     }
-    const double t_end = integrator->getTime() + dt;
-    const int first_step = integrator->getNumStepsTaken();
+    const double t_end = stepper->getState().getTime() + dt;
+    const std::int64_t first_step = stepper->getStatistics().steps;
     const double budget = std::max<double>(kMinStepBudget, std::ceil(dt / kMinMeanStepSize));
-    while (integrator->getTime() < t_end) {
-      const SimTK::Integrator::SuccessfulStepStatus status = integrator->stepTo(t_end);
-      if (status == SimTK::Integrator::EndOfSimulation)
-        throw std::runtime_error("the integrator ended the simulation");
-      if (status != SimTK::Integrator::ReachedStepLimit) continue;
+    while (!stepper->stepTo(t_end, kStepsPerCall)) {
       SimTK::MobilizedBodyIndex mobod;
       std::string what;
-      if (findDivergence(integrator->getState(), mobod, what)) throwDiverged("");
-      const int steps = integrator->getNumStepsTaken() - first_step;
+      if (findDivergence(stepper->getState(), mobod, what)) throwDiverged("");
+      const std::int64_t steps = stepper->getStatistics().steps - first_step;
       if (steps > budget) {
         std::ostringstream cause;
         cause << "the integrator took " << steps << " steps and reached only t="
-              << integrator->getTime() << " s";
+              << stepper->getState().getTime() << " s";
         throw std::runtime_error(cause.str());
       }
     }
@@ -702,7 +683,7 @@ void Scene::Impl::advance(double dt) {
   }
   SimTK::MobilizedBodyIndex mobod;
   std::string what;
-  if (findDivergence(integrator->getState(), mobod, what)) throwDiverged("");
+  if (findDivergence(stepper->getState(), mobod, what)) throwDiverged("");
 }
 
 // --- Scene -------------------------------------------------------------------
