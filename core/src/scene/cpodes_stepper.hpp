@@ -57,6 +57,12 @@ struct CPodesOptions {
   // bounce on the floor and slows a Panda joint's measured step response;
   // 0.01 (Simbody's choice) passes both.
   double newton_coefficient = 0.01;
+  // Newton iterations before a step counts as not converging. Each such
+  // failure costs a new difference-quotient Jacobian (one evaluation per
+  // state variable); CPODES' default of 3 gave up on iterations that were
+  // converging slowly. 5: 18% fewer evaluations for the cabinet expert, 8%
+  // under random actions, the same convergence test.
+  int max_newton_iterations = 5;
   double constraint_tolerance = 1e-3;
 };
 
