@@ -92,7 +92,8 @@ class CPodesStepper final : public Stepper, private SimTK::CPodesSystem {
     check(cpodes_.lapackDense(ny), "lapackDense");
     check(cpodes_.setMaxOrd(options_.max_order), "setMaxOrd");
     check(cpodes_.setNonlinConvCoef(options_.newton_coefficient), "setNonlinConvCoef");
-    check(cpodes_.setMaxNonlinIters(options_.max_newton_iterations), "setMaxNonlinIters");
+    check(cpodes_.setMaxNonlinIters(project_ ? 3 : options_.max_newton_iterations),
+          "setMaxNonlinIters");
     if (project_) check(cpodes_.projDefine(), "projDefine");
     y_ = state_.getY();
     yp_.resize(ny);

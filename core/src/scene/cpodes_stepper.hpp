@@ -57,11 +57,13 @@ struct CPodesOptions {
   // bounce on the floor and slows a Panda joint's measured step response;
   // 0.01 (Simbody's choice) passes both.
   double newton_coefficient = 0.01;
-  // Newton iterations before a step counts as not converging. Each such
-  // failure costs a new difference-quotient Jacobian (one evaluation per
-  // state variable); CPODES' default of 3 gave up on iterations that were
-  // converging slowly. 5: 18% fewer evaluations for the cabinet expert, 8%
-  // under random actions, the same convergence test.
+  // Newton iterations before a step counts as not converging, for systems
+  // without free bodies or constraints (the others keep CPODES' default
+  // of 3). Each such failure costs a new difference-quotient Jacobian (one
+  // evaluation per state variable). Measured: 5 takes 18% fewer
+  // evaluations for the cabinet expert and 8% under random actions, but
+  // the heap of 12 free bodies in tests/contact_scenes.hpp runs 2.5x
+  // slower with 4 or 5 than with 3.
   int max_newton_iterations = 5;
   double constraint_tolerance = 1e-3;
 };
