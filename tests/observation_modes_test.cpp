@@ -40,7 +40,7 @@ bool isOnVisualOf(const Scene& scene, int articulation, const Eigen::Vector3d& p
     const Eigen::Quaterniond q = link.orientation * v.pose_in_link.orientation;
     const Eigen::Vector3d origin = link.position + link.orientation * v.pose_in_link.position;
     const Eigen::Vector3d local = q.conjugate() * (p - origin);
-    Eigen::Vector3d lo, hi;
+    Eigen::Vector3d lo = Eigen::Vector3d::Zero(), hi = lo;  // every kind sets both
     switch (v.kind) {
       case VisualShape::Kind::Box: hi = v.size / 2; lo = -hi; break;
       case VisualShape::Kind::Sphere: hi = Eigen::Vector3d::Constant(v.size.x()); lo = -hi; break;
@@ -249,7 +249,9 @@ TEST(ObservationModes, RgbdStacksCamerasAlongChannels) {
       ASSERT_EQ(v.rgb[p * 9 + 3 * c + 1], images[c].rgba[4 * p + 1] / 255.0f);
       const bool robot = v.masks[p * 3 + c] != 0;
       ASSERT_EQ(robot, images[c].visual[p] >= 0) << "only the robot is drawn";
-      if (robot) EXPECT_GT(v.depth[p * 3 + c], 0.1f);
+      if (robot) {
+        EXPECT_GT(v.depth[p * 3 + c], 0.1f);
+      }
       robot_pixels += robot;
     }
   EXPECT_GT(robot_pixels, 500u);

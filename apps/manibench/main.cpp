@@ -122,8 +122,8 @@ objects (in turn, seeds 0, 1, ...) until --steps environment steps have run.
 Each env step is frame_skip control steps of physics plus the task's reward,
 success and observation; resets are timed separately. A second line gives
 the integrator's work per env step (steps, failed steps, Newton iterations,
-evaluations of the equations of motion), which does not depend on the load
-of the machine.
+Jacobians, evaluations of the equations of motion), which does not depend
+on the load of the machine.
 
 Options:
   --policy NAME|PATH.so   policy acting (default random)
@@ -354,8 +354,7 @@ int commandBench(int argc, char** argv) {
   std::chrono::duration<double> step_time{0}, reset_time{0};
   uint64_t steps = 0, episodes = 0, successes = 0;
   // Integrator work during env steps only (resets rebuild scenes).
-  int64_t integrator_steps = 0, realizations = 0, iterations = 0;
-  int64_t error_failures = 0, convergence_failures = 0, jacobians = 0;
+  mb::IntegratorStatistics physics;
   Eigen::VectorXd action;
   while (steps < target_steps) {
     const std::string& object = objects[episodes % objects.size()];
@@ -371,13 +370,8 @@ int commandBench(int argc, char** argv) {
                  env->getObservationMode() == "state" ? nullptr : &env->getVisualObservation());
       const mb::StepResult result = env->step(action);
       step_time += Clock::now() - start;
-      const mb::IntegratorStatistics after = env->getScene().getIntegratorStatistics();
-      integrator_steps += after.steps - before.steps;
-      realizations += after.realizations - before.realizations;
-      iterations += after.iterations - before.iterations;
-      jacobians += after.jacobians - before.jacobians;
-      error_failures += after.error_test_failures - before.error_test_failures;
-      convergence_failures += after.convergence_test_failures - before.convergence_test_failures;
+      physics += env->getScene().getIntegratorStatistics();
+      physics -= before;
       ++steps;
       done = result.done;
       if (done && result.success) ++successes;
@@ -392,12 +386,12 @@ int commandBench(int argc, char** argv) {
             << std::setprecision(2) << 1e3 * reset_time.count() / double(episodes)
             << " ms per reset\n"
             << "physics per env step: " << std::setprecision(1)
-            << double(integrator_steps) / double(steps) << " integrator steps ("
-            << double(error_failures) / double(steps) << " error-test and "
-            << double(convergence_failures) / double(steps) << " convergence failures), "
-            << double(iterations) / double(steps) << " Newton iterations, "
-            << double(jacobians) / double(steps) << " Jacobians, "
-            << double(realizations) / double(steps) << " evaluations of the dynamics\n";
+            << double(physics.steps) / double(steps) << " integrator steps ("
+            << double(physics.error_test_failures) / double(steps) << " error-test and "
+            << double(physics.convergence_test_failures) / double(steps) << " convergence failures), "
+            << double(physics.iterations) / double(steps) << " Newton iterations, "
+            << double(physics.jacobians) / double(steps) << " Jacobians, "
+            << double(physics.realizations) / double(steps) << " evaluations of the dynamics\n";
   std::cout.unsetf(std::ios::fixed);
   return 0;
 }

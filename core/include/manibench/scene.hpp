@@ -148,6 +148,31 @@ struct IntegratorStatistics {
   std::int64_t error_test_failures = 0;
   std::int64_t convergence_test_failures = 0;
   std::int64_t initializations = 0;   // restarts (resets, setters)
+
+  IntegratorStatistics& operator+=(const IntegratorStatistics& o) {
+    steps += o.steps;
+    attempts += o.attempts;
+    realizations += o.realizations;
+    iterations += o.iterations;
+    jacobians += o.jacobians;
+    projections += o.projections;
+    error_test_failures += o.error_test_failures;
+    convergence_test_failures += o.convergence_test_failures;
+    initializations += o.initializations;
+    return *this;
+  }
+  IntegratorStatistics& operator-=(const IntegratorStatistics& o) {
+    steps -= o.steps;
+    attempts -= o.attempts;
+    realizations -= o.realizations;
+    iterations -= o.iterations;
+    jacobians -= o.jacobians;
+    projections -= o.projections;
+    error_test_failures -= o.error_test_failures;
+    convergence_test_failures -= o.convergence_test_failures;
+    initializations -= o.initializations;
+    return *this;
+  }
 };
 
 // Bad input (malformed URDF, unknown name, wrong vector size, misuse of the

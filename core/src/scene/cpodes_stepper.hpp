@@ -51,7 +51,9 @@ std::unique_ptr<Stepper> makeSimbodyStepper(const SimTK::System& system,
 
 struct CPodesOptions {
   double accuracy = 1e-2;       // relative tolerance; absolute is a tenth of it
-  int max_order = 2;            // BDF above 2 is not A-stable
+  // BDF above order 2 is not A-stable: lightly damped stiff modes (a body
+  // held by its friction springs) then grow instead of decaying.
+  int max_order = 2;
   // Newton convergence test, as a fraction of the error tolerance. CPODES'
   // default 0.1 is 20% faster on the cabinet scenes but lets a 1 g cube
   // bounce on the floor and slows a Panda joint's measured step response;

@@ -121,9 +121,6 @@ std::unique_ptr<scene_detail::Stepper> makeStepper(const SimTK::MultibodySystem&
                                             constrained ? kConstraintTolerance : 0);
   scene_detail::CPodesOptions options;
   options.accuracy = settings.accuracy;
-  // BDF above order 2 is not A-stable: lightly damped stiff modes (a body
-  // held by its friction springs) then grow instead of decaying.
-  options.max_order = 2;
   options.constraint_tolerance = constrained ? kConstraintTolerance : settings.accuracy / 10;
   return scene_detail::makeCPodesStepper(system, initial, options);
 }
@@ -627,16 +624,7 @@ void Scene::Impl::throwDiverged(const std::string& cause) {
 
 IntegratorStatistics Scene::Impl::calcIntegratorStatistics() const {
   IntegratorStatistics total = retired_statistics;
-  if (!stepper) return total;
-  const IntegratorStatistics now = stepper->getStatistics();
-  total.steps += now.steps;
-  total.attempts += now.attempts;
-  total.realizations += now.realizations;
-  total.iterations += now.iterations;
-  total.jacobians += now.jacobians;
-  total.projections += now.projections;
-  total.error_test_failures += now.error_test_failures;
-  total.convergence_test_failures += now.convergence_test_failures;
+  if (stepper) total += stepper->getStatistics();
   return total;
 }
 

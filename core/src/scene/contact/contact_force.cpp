@@ -21,6 +21,13 @@ double step5(double x) {
   return x3 * (10 + x * (6 * x - 15));
 }
 
+// The lowest point of the box [lo, hi] along direction n.
+double calcLowestAlong(const Vec3& n, const Vec3& lo, const Vec3& hi) {
+  double low = 0;
+  for (int k = 0; k < 3; ++k) low += n[k] * (n[k] >= 0 ? lo[k] : hi[k]);
+  return low;
+}
+
 std::uint64_t pairKey(int a, int b) {
   return static_cast<std::uint64_t>(a) << 32 | static_cast<std::uint32_t>(b);
 }
@@ -82,11 +89,7 @@ ContactForce::ContactForce(const SimTK::SimbodyMatterSubsystem& matter,
   fat_lo_.resize(shapes_.size());
   fat_hi_.resize(shapes_.size());
   for (std::size_t i = 0; i < shapes_.size(); ++i)
-    if (shape_body_[i] < 0) {  // fixed for good
-      shapes_[i].geometry.calcBoundingBox(shapes_[i].X_BS, fat_lo_[i], fat_hi_[i]);
-      fat_lo_[i] -= Vec3(kBroadPhaseMargin);
-      fat_hi_[i] += Vec3(kBroadPhaseMargin);
-    }
+    if (shape_body_[i] < 0) calcGrownBox(static_cast<int>(i), shapes_[i].X_BS);  // fixed for good
   shape_stamp_.assign(shapes_.size(), 0);
   X_GS_.resize(shapes_.size());
   lo_.resize(shapes_.size());
@@ -127,6 +130,12 @@ bool ContactForce::isPairAllowed(int i, int j) const {
   return true;
 }
 
+void ContactForce::calcGrownBox(int i, const Transform& X_GS) const {
+  shapes_[i].geometry.calcBoundingBox(X_GS, fat_lo_[i], fat_hi_[i]);
+  fat_lo_[i] -= Vec3(kBroadPhaseMargin);
+  fat_hi_[i] += Vec3(kBroadPhaseMargin);
+}
+
 void ContactForce::updateCandidates(const SimTK::State& state) const {
   for (std::size_t b = 0; b < bodies_.size(); ++b) {
     const BodyShapes& body = bodies_[b];
@@ -142,11 +151,7 @@ void ContactForce::updateCandidates(const SimTK::State& state) const {
     X_ref_[b] = X;
     ref_valid_[b] = 1;
     candidates_valid_ = false;
-    for (int i : body.shapes) {
-      shapes_[i].geometry.calcBoundingBox(X * shapes_[i].X_BS, fat_lo_[i], fat_hi_[i]);
-      fat_lo_[i] -= Vec3(kBroadPhaseMargin);
-      fat_hi_[i] += Vec3(kBroadPhaseMargin);
-    }
+    for (int i : body.shapes) calcGrownBox(i, X * shapes_[i].X_BS);
   }
   if (!candidates_valid_) {
     findCandidates();
@@ -167,10 +172,9 @@ void ContactForce::findCandidates() const {
     const double plane = SimTK::dot(X_GH.p(), n);
     for (int i : finite_) {
       if (!isPairAllowed(h, i)) continue;
-      // Lowest corner of i's box along n (a moving plane: every shape).
-      double low = 0;
-      for (int k = 0; k < 3; ++k) low += n[k] * (n[k] >= 0 ? fat_lo_[i][k] : fat_hi_[i][k]);
-      if (moving || low < plane) candidates_.emplace_back(std::min(h, i), std::max(h, i));
+      // A moving plane: every shape.
+      if (moving || calcLowestAlong(n, fat_lo_[i], fat_hi_[i]) < plane)
+        candidates_.emplace_back(std::min(h, i), std::max(h, i));
     }
   }
   if (finite_.size() > 1) {
@@ -246,9 +250,7 @@ double ContactForce::evaluate(const SimTK::State& state, Mode mode,
     if (a_is_plane || shapes_[ib].geometry.kind == ShapeKind::HalfSpace) {
       const int h = a_is_plane ? ia : ib, i = a_is_plane ? ib : ia;
       const Vec3 n = X_GS_[h].z();
-      double low = 0;
-      for (int k = 0; k < 3; ++k) low += n[k] * (n[k] >= 0 ? lo_[i][k] : hi_[i][k]);
-      if (!(low < SimTK::dot(X_GS_[h].p(), n))) continue;
+      if (!(calcLowestAlong(n, lo_[i], hi_[i]) < SimTK::dot(X_GS_[h].p(), n))) continue;
     } else if (lo_[ib][0] > hi_[ia][0] || lo_[ia][0] > hi_[ib][0] || lo_[ib][1] > hi_[ia][1] ||
                lo_[ia][1] > hi_[ib][1] || lo_[ib][2] > hi_[ia][2] || lo_[ia][2] > hi_[ib][2]) {
       continue;

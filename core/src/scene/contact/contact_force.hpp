@@ -122,6 +122,8 @@ class ContactForce : public SimTK::Force::Custom::Implementation {
   // rebuilds the candidate pairs if any did.
   void updateCandidates(const SimTK::State& state) const;
   void findCandidates() const;
+  // Shape i's box at pose X_GS, grown by kBroadPhaseMargin.
+  void calcGrownBox(int i, const SimTK::Transform& X_GS) const;
   // The shape's pose and exact bounding box at the current evaluation.
   void ensureShapeBox(int shape) const;
   bool isPairAllowed(int i, int j) const;
