@@ -28,7 +28,7 @@ inline std::string formatNumber(double x) {
 //   base_max_velocity: 0.5  yaw_max_velocity: 3.14  lift_max_velocity: 0.5
 //   arm_max_velocity: 3.14  cutoff_hz: 40 (read by the VelocityStage)
 //   base_damping: 1000      (root_x, root_y, root_yaw, lift)
-//   arm_damping: [200, 250, 200, 100, 100, 100, 100]  (joint1..7, or one
+//   arm_damping: [200, 300, 200, 100, 100, 100, 100]  (joint1..7, or one
 //                           number for all; ManiSkill: 100, see README.md)
 //   gripper_stiffness: 1000 gripper_damping: 50  (N/m, N s/m)
 //   gripper_closed: 0.0     gripper_open: 0.04   (m per finger)
@@ -40,7 +40,7 @@ inline std::string formatNumber(double x) {
 // (400 on joints 1-4 cost 15% of the cabinet expert's speed).
 inline std::array<double, kPandaArmJoints> readArmDamping(const sdk::Config& config,
                                                           const std::string& controller) {
-  std::array<double, kPandaArmJoints> damping = {200, 250, 200, 100, 100, 100, 100};
+  std::array<double, kPandaArmJoints> damping = {200, 300, 200, 100, 100, 100, 100};
   if (!config.has("arm_damping")) return damping;
   if (config.node()["arm_damping"].IsSequence()) {
     const auto values = config.get<std::vector<double>>("arm_damping", {});
