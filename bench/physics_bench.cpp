@@ -167,7 +167,8 @@ bool isSelected(const Options& options, const std::string& name) {
 
 PhysicsSettings makeSettings(const BenchScene& scene, const Options& options) {
   PhysicsSettings settings;
-  settings.integrator = options.integrator.empty() ? scene.integrator : options.integrator;
+  settings.integrator =
+      parseIntegrator(options.integrator.empty() ? scene.integrator : options.integrator);
   if (options.accuracy > 0) settings.accuracy = options.accuracy;
   if (options.fixed_step > 0) settings.fixed_step = options.fixed_step;
   // MuJoCo has one friction coefficient: use it for both of Simbody's.
@@ -178,8 +179,8 @@ PhysicsSettings makeSettings(const BenchScene& scene, const Options& options) {
 
 std::string describeIntegrator(const PhysicsSettings& settings) {
   std::ostringstream s;
-  s << settings.integrator;
-  if (settings.integrator == "semi_explicit_euler")
+  s << getIntegratorName(settings.integrator);
+  if (settings.integrator == Integrator::SemiExplicitEuler)
     s << " h=" << settings.fixed_step;
   else
     s << " acc=" << settings.accuracy;

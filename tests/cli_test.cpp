@@ -173,7 +173,7 @@ TEST(Cli, ConfigExplainNamesEveryOrigin) {
                          "physics.accuracy=0.001"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(contains(r.out, "frequency: 100  # task Reach-v0 description")) << r.out;
-  EXPECT_TRUE(contains(r.out, "integrator: cpodes  # task Reach-v0 defaults:2")) << r.out;
+  EXPECT_TRUE(contains(r.out, "integrator: implicit_euler  # task Reach-v0 defaults:2")) << r.out;
   EXPECT_TRUE(contains(r.out, "gravity: [0, 0, -9.81]  # built-in defaults:")) << r.out;
   EXPECT_TRUE(contains(r.out, "default_density: 800  # " + file.path() + ":3")) << r.out;
   EXPECT_TRUE(contains(r.out, "accuracy: 0.001  # --set physics.accuracy=0.001")) << r.out;

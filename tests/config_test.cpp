@@ -221,13 +221,13 @@ TEST(Config, EveryKindOfSchemaErrorNamesFileLineAndKey) {
       {"physics:\n  acuracy: 0.1\n", "2: physics.acuracy: unknown key (did you mean physics.accuracy?)"},
       {"# comment\naccuracy: 0.1\n", "2: accuracy: unknown key (did you mean physics.accuracy?)"},
       {"physics:\n  integrator: euler\n",
-       "2: physics.integrator: must be one of cpodes, rk_merson, semi_explicit_euler, got euler"},
+       "2: physics.integrator: must be one of implicit_euler, cpodes, rk_merson, semi_explicit_euler, got euler"},
       {"physics:\n  fixed_step: 1\n", "2: physics.fixed_step: must be in (0, 0.1], got 1"},
       {"physics:\n  self_collision:\n    arm: yes\n",
        "3: physics.self_collision.arm: must be true or false, got yes"},
       {"physics:\n  contact:\n    ground: {dynamic_friction: 0.9}\n",
        "3: physics.contact.ground.dynamic_friction: must not exceed static_friction (0.8, from "
-       "built-in defaults:23), got 0.9"},
+       "built-in defaults:24), got 0.9"},
       {"physics:\n  gravity: [0, 0]\n",
        "2: physics.gravity: must be a list of 3 numbers [x, y, z], got a list of 2"},
       {"physics:\n  gravity:\n    - 0\n    - 0\n    - down\n",
@@ -288,13 +288,13 @@ TEST(Config, RelationsAreCheckedAcrossLayers) {
   const std::string message = getConfigError([&] { calcWithFile(file); });
   EXPECT_EQ(message, file.path() +
                          ":4: physics.contact.default.static_friction: must be at least "
-                         "dynamic_friction (0.6, from built-in defaults:24), got 0.5");
+                         "dynamic_friction (0.6, from built-in defaults:25), got 0.5");
   // A body inherits the default's static friction.
   const TempFile body(
       "physics:\n  contact:\n    bodies:\n      - {articulation: arm, link: tip, dynamic_friction: 0.9}\n");
   EXPECT_TRUE(startsWith(getConfigError([&] { calcWithFile(body); }),
                          body.path() + ":4: physics.contact.bodies[0].dynamic_friction: must not exceed "
-                                       "static_friction (0.8, from built-in defaults:23)"));
+                                       "static_friction (0.8, from built-in defaults:24)"));
 }
 
 TEST(Config, ListItemsGetTheirDefaults) {
@@ -365,6 +365,7 @@ TEST(Config, BuiltinDefaultsMatchPhysicsSettingsAndCoverTheSchema) {
   const PhysicsSettings expected;
   EXPECT_EQ(options.physics.gravity_z, expected.gravity_z);
   EXPECT_EQ(options.physics.integrator, expected.integrator);
+  EXPECT_EQ(options.physics.implicit_step, expected.implicit_step);
   EXPECT_EQ(options.physics.accuracy, expected.accuracy);
   EXPECT_EQ(options.physics.fixed_step, expected.fixed_step);
   EXPECT_EQ(options.physics.friction_stiffness, expected.friction_stiffness);
@@ -516,9 +517,11 @@ TEST(ConfigEnvironment, ReachTaskLayerIsPartOfTheMerge) {
 }
 
 TEST(ConfigEnvironment, IntegratorSettingsChangeTheTrajectory) {
+  // Reach's integrator: implicit_euler at 2 ms.
   const auto reference = recordZeroActionEpisode(*makeEnvironment({}), 20);
-  const auto same = recordZeroActionEpisode(*makeEnvironment({{}, {"physics.accuracy=1.0e-2"}}), 20);
-  const auto precise = recordZeroActionEpisode(*makeEnvironment({{}, {"physics.accuracy=1e-6"}}), 20);
+  const auto same = recordZeroActionEpisode(*makeEnvironment({{}, {"physics.implicit_step=2.0e-3"}}), 20);
+  const auto precise = recordZeroActionEpisode(
+      *makeEnvironment({{}, {"physics.integrator=cpodes", "physics.accuracy=1e-6"}}), 20);
   const auto merson = recordZeroActionEpisode(*makeEnvironment({{}, {"physics.integrator=rk_merson"}}), 20);
   // Semi-explicit Euler needs a step well below the velocity drives' time
   // constant (inertia / damping, ~1.6e-4 s for Reach's forearm).
@@ -544,14 +547,20 @@ TEST(ConfigEnvironment, IntegratorSettingsChangeTheTrajectory) {
 TEST(ConfigEnvironment, GravityComesFromTheConfiguration) {
   // joint_velocity balances gravity by inverse dynamics, so with gravity on
   // or off the arm tracks the same velocities: the difference lies in the
-  // drive torques, visible as slightly different tracking errors. What must
-  // hold: both run, and moon gravity changes the trajectory.
-  const auto earth = recordZeroActionEpisode(*makeEnvironment({}), 10);
-  const auto moon = recordZeroActionEpisode(*makeEnvironment({{}, {"physics.gravity=[0, 0, -1.62]"}}), 10);
+  // drive torques. What must hold: the scene gets the configured gravity,
+  // and the balancing cancels it (to rounding: implicit_euler's fixed steps
+  // see exactly the same forces; error-controlled integrators differed by
+  // their step choices).
+  auto earth_env = makeEnvironment({});
+  auto moon_env = makeEnvironment({{}, {"physics.gravity=[0, 0, -1.62]"}});
+  EXPECT_EQ(earth_env->getScene().getPhysicsSettings().gravity_z, -9.81);
+  EXPECT_EQ(moon_env->getScene().getPhysicsSettings().gravity_z, -1.62);
+  const auto earth = recordZeroActionEpisode(*earth_env, 10);
+  const auto moon = recordZeroActionEpisode(*moon_env, 10);
   double difference = 0;
   for (std::size_t i = 0; i < earth.size(); ++i)
     difference = std::max(difference, (earth[i] - moon[i]).cwiseAbs().maxCoeff());
-  EXPECT_GT(difference, 0.0);
+  EXPECT_LT(difference, 1e-9);
 }
 
 TEST(ConfigEnvironment, TimingOverridesChangeTheEnvironmentForReal) {

@@ -187,7 +187,7 @@ struct PileScene {
   }
   static PhysicsSettings makeSettings(const std::string& integrator) {
     PhysicsSettings settings;
-    settings.integrator = integrator;
+    settings.integrator = parseIntegrator(integrator);
     return settings;
   }
   void tick(int k) {

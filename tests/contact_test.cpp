@@ -82,7 +82,7 @@ struct RestResult {
 RestResult simulateRest(const Support& support, const Rester& rester,
                         const std::string& integrator) {
   PhysicsSettings settings;
-  settings.integrator = integrator;
+  settings.integrator = parseIntegrator(integrator);
   Scene scene(settings);
   int support_link = -1;
   int support_art = -1;
@@ -140,7 +140,7 @@ TEST_P(ContactMatrixTest, EveryPairCarriesARestingBody) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Integrators, ContactMatrixTest,
-                         ::testing::Values("cpodes", "semi_explicit_euler"));
+                         ::testing::Values("implicit_euler", "cpodes", "semi_explicit_euler"));
 
 // --- friction ----------------------------------------------------------------------
 
@@ -157,7 +157,7 @@ struct SlopeRun {
 SlopeRun runSlope(double mu, const std::string& integrator, double drop = 0) {
   const double theta = 20 * kPi / 180;
   PhysicsSettings settings;
-  settings.integrator = integrator;
+  settings.integrator = parseIntegrator(integrator);
   Scene scene(settings);
   ContactMaterial material;
   material.static_friction = material.dynamic_friction = mu;
@@ -227,14 +227,14 @@ TEST_P(FrictionTest, BoxSlidesAtMu02WithTheCoulombAcceleration) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Integrators, FrictionTest,
-                         ::testing::Values("cpodes", "semi_explicit_euler"));
+                         ::testing::Values("implicit_euler", "cpodes", "semi_explicit_euler"));
 
 TEST_P(FrictionTest, ASlidingBallStartsRollingAtFiveSeventhsOfItsSpeed) {
   // Solid ball, no spin, 1 m/s: friction slows it to 5/7 m/s, then it rolls
   // (v = w r) without slipping.
   const double r = 0.05;
   PhysicsSettings settings;
-  settings.integrator = GetParam();
+  settings.integrator = parseIntegrator(GetParam());
   Scene scene(settings);
   scene.addGround(0);
   const int ball =
@@ -259,7 +259,7 @@ TEST_P(FrictionTest, LightObjectsComeToRestToo) {
   // contact frequency limit for light free bodies keeps them down.
   for (double size : {0.01, 0.02, 0.03}) {
     PhysicsSettings settings;
-    settings.integrator = GetParam();
+    settings.integrator = parseIntegrator(GetParam());
     Scene scene(settings);
     scene.addGround(0);
     const int cube = scene.addUrdfString(singleLink("cube", collision(box(size, size, size))), "",
@@ -329,10 +329,10 @@ TEST(ContactTest, LinksOfAnArticulationTouchOnlyWithSelfCollisionAndNeverAcrossA
 // farther than that margin, counting rotation: a shape 0.8 m out on an arm
 // that only turns about its joint must still meet a post in its way.
 TEST(ContactTest, AnArmThatOnlyTurnsStillMeetsThePostInItsWay) {
-  for (const std::string integrator : {"cpodes", "semi_explicit_euler"}) {
+  for (const std::string integrator : {"implicit_euler", "cpodes", "semi_explicit_euler"}) {
     SCOPED_TRACE(integrator);
     PhysicsSettings settings;
-    settings.integrator = integrator;
+    settings.integrator = parseIntegrator(integrator);
     Scene scene(settings);
     const std::string pendulum =
         "<?xml version='1.0'?><robot name='pendulum'><link name='base'/>"
@@ -373,7 +373,7 @@ class StackTest : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(StackTest, FourBoxesStandStill) {
   PhysicsSettings settings;
-  settings.integrator = GetParam();
+  settings.integrator = parseIntegrator(GetParam());
   Scene scene(settings);
   scene.addGround(0);
   std::vector<int> boxes;
@@ -403,17 +403,19 @@ TEST_P(StackTest, FourBoxesStandStill) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Integrators, StackTest,
-                         ::testing::Values("cpodes", "semi_explicit_euler"));
+                         ::testing::Values("implicit_euler", "cpodes", "semi_explicit_euler"));
 
 // --- determinism ---------------------------------------------------------------------------
 
-// The many-body integrator here; CPodes in contact_scenario_test.cpp (the
+// The fixed-step integrators here; CPodes in contact_scenario_test.cpp (the
 // pile takes it ~45 s).
 TEST(DeterminismTest, AContactRichPileIsBitIdenticalInTwoScenes) {
+  expectPileIsBitIdentical("implicit_euler", 1000);
   expectPileIsBitIdentical("semi_explicit_euler", 1000);
 }
 
 TEST(DeterminismTest, RestoringAStateReplaysThePileBitIdentically) {
+  expectPileReplays("implicit_euler");
   expectPileReplays("semi_explicit_euler");
 }
 
@@ -693,8 +695,9 @@ TEST(ContactTest, BadMaterialsAndSettingsAreSceneErrors) {
                    {"already finalized"});
 
   PhysicsSettings settings;
-  settings.integrator = "euler";
-  expectSceneError([&] { Scene s(settings); }, {"'euler'", "semi_explicit_euler"});
+  expectSceneError([&] { parseIntegrator("euler"); }, {"'euler'", "semi_explicit_euler"});
+  settings.implicit_step = 0;
+  expectSceneError([&] { Scene s(settings); }, {"implicit_step"});
   settings = PhysicsSettings();
   settings.fixed_step = 0;
   expectSceneError([&] { Scene s(settings); }, {"fixed_step"});
@@ -705,7 +708,7 @@ TEST(ContactTest, BadMaterialsAndSettingsAreSceneErrors) {
 
 TEST(ContactTest, SemiExplicitEulerLandsOnEveryControlTick) {
   PhysicsSettings settings;
-  settings.integrator = "semi_explicit_euler";
+  settings.integrator = Integrator::SemiExplicitEuler;
   settings.fixed_step = 3e-4;  // does not divide 10 ms
   Scene scene(settings);
   scene.addGround(0);

@@ -145,7 +145,7 @@ PhysicsSettings zeroGravity() {
 
 PhysicsSettings preciseSettings() {
   PhysicsSettings settings;
-  settings.integrator = "rk_merson";
+  settings.integrator = Integrator::RkMerson;
   settings.accuracy = 1e-8;
   settings.gravity_z = -kG;
   return settings;
@@ -517,7 +517,7 @@ struct ContactScene {
   }
   static PhysicsSettings makeSettings(const std::string& integrator) {
     PhysicsSettings settings;
-    settings.integrator = integrator;
+    settings.integrator = parseIntegrator(integrator);
     // Explicit Euler needs h < 2 m/c: the arm's drive damping (100) on its
     // lightest mode (0.017 kg m^2) allows 3.4e-4 s, not the default 5e-4.
     settings.fixed_step = 1e-4;
@@ -554,7 +554,7 @@ struct ContactScene {
 };
 
 TEST(SceneTest, TwoScenesWithTheSameInputsAreBitIdentical) {
-  for (const char* integrator : {"cpodes", "rk_merson", "semi_explicit_euler"}) {
+  for (const char* integrator : {"implicit_euler", "cpodes", "rk_merson", "semi_explicit_euler"}) {
     ContactScene a(integrator), b(integrator);
     for (int k = 0; k < 200; ++k) {
       a.tick(k);
@@ -629,9 +629,11 @@ TEST(SceneTest, NaNDriveForceDivergesNamingTheLink) {
 }
 
 TEST(SceneTest, AbsurdDriveStiffnessDivergesNamingTheLink) {
+  // implicit_euler takes drive stiffness into its step and stays stable at
+  // any stiffness (ImplicitEulerIsStableAtAbsurdStiffness below).
   for (const char* integrator : {"cpodes", "rk_merson", "semi_explicit_euler"}) {
     PhysicsSettings settings;
-    settings.integrator = integrator;
+    settings.integrator = parseIntegrator(integrator);
     Scene scene(settings);
     const int s = scene.addUrdfString(spinnerUrdf(0.1, ""), "", "spinner", Pose(), true);
     scene.finalize();
@@ -651,6 +653,58 @@ TEST(SceneTest, AbsurdDriveStiffnessDivergesNamingTheLink) {
     scene.setJointPositions(s, Eigen::VectorXd::Zero(1));
     scene.setJointVelocities(s, Eigen::VectorXd::Zero(1));
     EXPECT_NO_THROW(scene.advance(0.01)) << integrator;
+  }
+}
+
+TEST(SceneTest, ImplicitEulerIsStableAtAbsurdStiffnessAndDivergesOnAbsurdForce) {
+  PhysicsSettings settings;
+  settings.integrator = Integrator::ImplicitEuler;
+  Scene scene(settings);
+  const int s = scene.addUrdfString(spinnerUrdf(0.1, ""), "", "spinner", Pose(), true);
+  scene.finalize();
+  // Stiffness 1e30 (h^2 k / I = 4e25): the drive lands on its target in
+  // one step and holds it.
+  DriveCommand absurd;
+  absurd.position_target = 1;
+  absurd.stiffness = 1e30;
+  scene.setDriveCommands(s, {0}, {absurd});
+  for (int k = 0; k < 10; ++k) scene.advance(0.01);
+  EXPECT_NEAR(scene.getJointPositions(s)[0], 1.0, 1e-9);
+  EXPECT_NEAR(scene.getJointVelocities(s)[0], 0.0, 1e-6);
+  // A force of 1e30 N m is explicit: the speed explodes and the link is named.
+  DriveCommand push;
+  push.force = 1e30;
+  scene.setDriveCommands(s, {0}, {push});
+  try {
+    scene.advance(0.01);
+    FAIL() << "no SimulationDiverged";
+  } catch (const SimulationDiverged& e) {
+    EXPECT_EQ(e.body(), "blade") << e.what();
+    EXPECT_NE(std::string(e.what()).find("link 'blade' of articulation 'spinner'"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// Without stiff forces the step is semi-implicit (symplectic) Euler:
+// u+ = u + h a, q+ = q + h u+. Under a constant force from rest that gives
+// q(t) = a t^2 / 2 (1 + h / t) exactly: positions lead by h a t / 2 (first
+// order, like MuJoCo's and PhysX's default steps), speeds are exact.
+TEST(SceneTest, ImplicitEulerIsSemiImplicitEulerForSmoothForces) {
+  for (double h : {2e-3, 1e-3}) {
+    PhysicsSettings settings = zeroGravity();
+    settings.integrator = Integrator::ImplicitEuler;
+    settings.implicit_step = h;
+    Scene scene(settings);
+    const int s = scene.addUrdfString(spinnerUrdf(0.5, ""), "", "s", Pose(), true);
+    scene.finalize();
+    DriveCommand push;
+    push.force = 1.0;  // a = 2 rad/s^2
+    scene.setDriveCommands(s, {0}, {push});
+    for (int k = 0; k < 100; ++k) scene.advance(0.01);
+    const double a = 2.0, t = 1.0;
+    EXPECT_NEAR(scene.getJointVelocities(s)[0], a * t, 1e-12) << h;
+    EXPECT_NEAR(scene.getJointPositions(s)[0], a * t * t / 2 * (1 + h / t), 1e-12) << h;
   }
 }
 
@@ -822,9 +876,7 @@ TEST(SceneTest, MisuseIsASceneError) {
   expectSceneError([&] { scene.getLinkPose(99); }, "no link 99");
   expectSceneError([&] { scene.advance(-1); }, "dt must be positive");
   expectSceneError([&] { scene.setJointDynamics(arm, 0, -1, 0); }, "non-negative");
-  PhysicsSettings euler;
-  euler.integrator = "euler";
-  EXPECT_THROW(Scene{euler}, SceneError);
+  EXPECT_THROW(parseIntegrator("euler"), SceneError);
 }
 
 }  // namespace

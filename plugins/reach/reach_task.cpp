@@ -118,8 +118,8 @@ TaskSpec ReachTask::describe() const {
   // Reach's layer of the YAML configuration (docs/configuration.md): the
   // solver it is tuned for, and a camera that sees the whole arm from the side.
   spec.default_config = R"(physics:
-  integrator: cpodes   # stiff velocity drives on two joints, no free bodies
-  accuracy: 1.0e-2
+  integrator: implicit_euler   # stiff velocity drives: implicit, fixed steps
+  implicit_step: 2.0e-3
 cameras:
   - name: side
     pose: {position: [0, -2.0, 0.8], rpy: [0, 0, 1.5707963267948966]}

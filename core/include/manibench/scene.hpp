@@ -112,15 +112,33 @@ struct ContactMaterial {
   double viscous_friction = 0.0;  // s/m: mu = dynamic + viscous * slip speed
 };
 
+// How a scene's equations of motion are integrated (docs/performance.md
+// compares them).
+enum class Integrator {
+  // Fixed step `implicit_step`, linearly implicit Euler: the stiff forces
+  // (drives, joint damping, friction and limit stops, contact springs and
+  // dampers) enter the step through their analytic derivatives, so the
+  // cost of a step does not depend on how stiff or jerky they are.
+  ImplicitEuler,
+  // CPODES (BDF, Newton): implicit, error-controlled; cost grows with
+  // discontinuities (jerky commands) and with the square of the body count.
+  CPodes,
+  // Runge-Kutta-Merson: explicit, error-controlled (smooth motion; with
+  // contact it needs accuracy 1e-4 or it rings).
+  RkMerson,
+  // Fixed step `fixed_step`, semi-explicit Euler: stiff joint drives need
+  // h < 2 I / damping.
+  SemiExplicitEuler,
+};
+// "implicit_euler", "cpodes", "rk_merson", "semi_explicit_euler".
+const char* getIntegratorName(Integrator integrator);
+// The inverse of getIntegratorName; throws SceneError naming the choices.
+Integrator parseIntegrator(const std::string& name);
+
 struct PhysicsSettings {
   double gravity_z = -9.81;
-  // "cpodes": implicit, error-controlled (stiff articulated scenes, up to
-  // ~20 free bodies); "semi_explicit_euler": fixed step `fixed_step` (many
-  // free bodies in contact, where CPodes' dense Jacobian grows with the
-  // square of the body count; stiff joint drives need h < 2 I / damping);
-  // "rk_merson": explicit, error-controlled (smooth motion; with contact it
-  // needs accuracy 1e-4 or it rings).
-  std::string integrator = "cpodes";
+  Integrator integrator = Integrator::ImplicitEuler;
+  double implicit_step = 2e-3;  // s, implicit_euler
   double accuracy = 1e-2;    // cpodes, rk_merson
   double fixed_step = 5e-4;  // s, semi_explicit_euler
   // Material of every link until Scene::setContactMaterial says otherwise,
@@ -212,6 +230,9 @@ class Scene {
   ~Scene();
   Scene(const Scene&) = delete;
   Scene& operator=(const Scene&) = delete;
+
+  // The settings the scene was made with.
+  const PhysicsSettings& getPhysicsSettings() const;
 
   // --- building: before finalize() ---------------------------------------
   void addGround(double height);

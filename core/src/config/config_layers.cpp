@@ -23,7 +23,8 @@ episode:
   max_steps: null          # null: the task's
 physics:
   gravity: [0, 0, -9.81]
-  integrator: cpodes
+  integrator: implicit_euler
+  implicit_step: 2.0e-3
   accuracy: 1.0e-2
   fixed_step: 5.0e-4
   friction_stiffness: 1.0e+5
@@ -305,7 +306,8 @@ EnvironmentOptions calcEnvironmentOptions(const ConfigNode& config) {
                       gravity.items[0].scalar + ", " + gravity.items[1].scalar + ", " +
                       gravity.items[2].scalar + "]");
   physics.gravity_z = *calcNumber(gravity.items[2]);
-  physics.integrator = getPath(config, "physics.integrator").scalar;
+  physics.integrator = parseIntegrator(getPath(config, "physics.integrator").scalar);
+  physics.implicit_step = getNumber(config, "physics.implicit_step");
   physics.accuracy = getNumber(config, "physics.accuracy");
   physics.fixed_step = getNumber(config, "physics.fixed_step");
   physics.friction_stiffness = getNumber(config, "physics.friction_stiffness");

@@ -140,11 +140,15 @@ std::vector<ConfigKey> makeSchema() {
   k.push_back(Key("physics", T::Map, "the Simbody scene's solver, gravity and contact"));
   k.push_back(Key("physics.gravity", T::Vector3, "gravity, m/s^2, world frame (z up)"));
   k.push_back(Key("physics.integrator", T::Enum,
-                  "cpodes: implicit, error-controlled, for stiff articulated scenes (up to ~20 "
-                  "free bodies); rk_merson: explicit Runge-Kutta-Merson, error-controlled; "
-                  "semi_explicit_euler: fixed step physics.fixed_step, for many free bodies in "
-                  "contact")
-                  .oneOf({"cpodes", "rk_merson", "semi_explicit_euler"}));
+                  "implicit_euler: fixed step physics.implicit_step, implicit in the stiff forces "
+                  "(drives, joint damping and stops, contact): the same cost per step whatever "
+                  "the actions; cpodes: implicit, error-controlled (cost grows with jerky "
+                  "actions and with many free bodies); rk_merson: explicit Runge-Kutta-Merson, "
+                  "error-controlled; semi_explicit_euler: fixed step physics.fixed_step, explicit")
+                  .oneOf({"implicit_euler", "cpodes", "rk_merson", "semi_explicit_euler"}));
+  k.push_back(Key("physics.implicit_step", T::Number, "step of implicit_euler, s")
+                  .above(0)
+                  .atMost(0.1));
   k.push_back(Key("physics.accuracy", T::Number,
                   "relative accuracy of cpodes and rk_merson; smaller is more precise and slower")
                   .above(0)

@@ -1,4 +1,4 @@
-#include "scene/cpodes_stepper.hpp"
+#include "scene/stepper.hpp"
 
 #include <cmath>
 #include <sstream>
@@ -13,61 +13,6 @@ namespace {
 // refreshes them anyway. Refreshing at every internal step costs one more
 // force evaluation per step (~15% of a cabinet step) for no measured gain.
 constexpr double kDiscreteUpdateInterval = 0.01;  // s
-
-// --- Simbody's integrators ---------------------------------------------------------
-
-class SimbodyStepper final : public Stepper {
- public:
-  SimbodyStepper(const SimTK::System& system, const SimTK::State& initial,
-                 const PhysicsSettings& settings, double constraint_tolerance) {
-    // SimTK::Integrator's destructor is not virtual: own the concrete type.
-    if (settings.integrator == "rk_merson") {
-      rk_merson_ = std::make_unique<SimTK::RungeKuttaMersonIntegrator>(system);
-      integrator_ = rk_merson_.get();
-      integrator_->setAccuracy(settings.accuracy);
-    } else {
-      euler_ = std::make_unique<SimTK::SemiExplicitEulerIntegrator>(system, settings.fixed_step);
-      integrator_ = euler_.get();
-    }
-    if (constraint_tolerance > 0) integrator_->setConstraintTolerance(constraint_tolerance);
-    // Land exactly on each control tick so that commands switch there.
-    integrator_->setAllowInterpolation(false);
-    integrator_->initialize(initial);
-  }
-
-  const SimTK::State& getState() const override { return integrator_->getState(); }
-  SimTK::State& updState() override { return integrator_->updAdvancedState(); }
-
-  bool stepTo(double t_end, int step_limit) override {
-    integrator_->setInternalStepLimit(step_limit);
-    while (integrator_->getTime() < t_end) {
-      const SimTK::Integrator::SuccessfulStepStatus status = integrator_->stepTo(t_end);
-      if (status == SimTK::Integrator::EndOfSimulation)
-        throw std::runtime_error("the integrator ended the simulation");
-      if (status == SimTK::Integrator::ReachedStepLimit) return integrator_->getTime() >= t_end;
-    }
-    return true;
-  }
-
-  IntegratorStatistics getStatistics() const override {
-    IntegratorStatistics s;
-    s.steps = integrator_->getNumStepsTaken();
-    s.attempts = integrator_->getNumStepsAttempted();
-    s.realizations = integrator_->getNumRealizations();
-    s.iterations = integrator_->getNumIterations();
-    s.projections = integrator_->getNumProjections();
-    s.error_test_failures = integrator_->getNumErrorTestFailures();
-    s.convergence_test_failures = integrator_->getNumConvergenceTestFailures();
-    return s;
-  }
-
- private:
-  std::unique_ptr<SimTK::RungeKuttaMersonIntegrator> rk_merson_;
-  std::unique_ptr<SimTK::SemiExplicitEulerIntegrator> euler_;
-  SimTK::Integrator* integrator_ = nullptr;
-};
-
-// --- CPODES --------------------------------------------------------------------------
 
 class CPodesStepper final : public Stepper, private SimTK::CPodesSystem {
  public:
@@ -262,13 +207,6 @@ class CPodesStepper final : public Stepper, private SimTK::CPodesSystem {
 };
 
 }  // namespace
-
-std::unique_ptr<Stepper> makeSimbodyStepper(const SimTK::System& system,
-                                            const SimTK::State& initial,
-                                            const PhysicsSettings& settings,
-                                            double constraint_tolerance) {
-  return std::make_unique<SimbodyStepper>(system, initial, settings, constraint_tolerance);
-}
 
 std::unique_ptr<Stepper> makeCPodesStepper(const SimTK::System& system,
                                            const SimTK::State& initial,

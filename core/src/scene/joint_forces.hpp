@@ -1,13 +1,17 @@
 // Every per-joint generalized force of a scene in one Force::Custom: drives,
-// passive damping, Coulomb friction and passive-force balancing. One element
-// per scene keeps the per-evaluation cost to a single loop and a single
-// inverse-dynamics pass, however many joints are balanced.
+// passive damping, Coulomb friction, limit stops and passive-force
+// balancing. One element per scene keeps the per-evaluation cost to a single
+// loop and a single inverse-dynamics pass, however many joints are
+// balanced, and gives the implicit step every joint's derivatives in one
+// place.
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include "Simbody.h"
 #include "manibench/scene.hpp"
+#include "scene/implicit_terms.hpp"
 
 namespace manibench {
 namespace scene_detail {
@@ -18,11 +22,22 @@ namespace scene_detail {
 // keeps it within what the drive dampings already demand of CPodes.
 constexpr double kFrictionSpeed = 1e-2;
 
+// Joint limit stops, Hunt-Crossley-like (as Simbody's MobilityLinearStop):
+// beyond a limit by x, f = -k x (1 + d qdot) towards the range, never
+// pulling. 1e5 keeps a 1 kg slider within 0.1 mm of its limit under
+// gravity, a 10 N m load within 0.1 mrad. d = 10 makes hitting a stop
+// practically inelastic; with d = 1 a slider resting on its stop kept
+// chattering at CPodes' default accuracy.
+constexpr double kLimitStiffness = 1e5;     // N/m or N m/rad
+constexpr double kLimitDissipation = 10.0;  // s/m or s/rad
+
 // A movable joint as the force element sees it. Joints are numbered across
 // the scene: articulation a's joint j is slot joint_offset[a] + j.
 struct JointSlot {
   SimTK::MobilizedBodyIndex mobod;
   double effort_limit = 0;  // 0: unlimited
+  double lower = -std::numeric_limits<double>::infinity();  // limit stops
+  double upper = std::numeric_limits<double>::infinity();
 };
 
 // The values a controller or task changes during an episode. They live
@@ -36,7 +51,7 @@ struct JointControls {
   std::vector<double> friction;
 };
 
-class JointForces : public SimTK::Force::Custom::Implementation {
+class JointForces : public SimTK::Force::Custom::Implementation, public ImplicitForce {
  public:
   JointForces(const SimTK::SimbodyMatterSubsystem& matter,
               const SimTK::Force::Gravity& gravity,
@@ -53,8 +68,13 @@ class JointForces : public SimTK::Force::Custom::Implementation {
   SimTK::Real calcPotentialEnergy(const SimTK::State&) const override {
     return 0;
   }
+  // Drives (saturating ones as SaturatingForce), damping, friction and
+  // stops, each on its own joint: diagonal entries only.
+  void addImplicitTerms(const SimTK::State& state, ImplicitTerms& terms) const override;
 
  private:
+  void ensureIndices(const SimTK::State& state) const;
+
   const SimTK::SimbodyMatterSubsystem& matter_;
   SimTK::Force::Gravity gravity_;  // a handle to the scene's gravity element
   std::vector<JointSlot> slots_;

@@ -27,7 +27,7 @@
 
 #include "Simbody.h"
 #include "scene/contact/contact_force.hpp"
-#include "scene/cpodes_stepper.hpp"
+#include "scene/stepper.hpp"
 #include "scene/joint_forces.hpp"
 #include "scene/urdf_model.hpp"
 
@@ -48,15 +48,9 @@ namespace {
 constexpr double kConstraintTolerance = 1e-8;  // mimic joints, rad or m
 constexpr double kTinyMass = 1e-3;     // kg
 constexpr double kTinyInertia = 1e-6;  // kg m^2, about the body origin
-// Joint limit stops: Hunt-Crossley-like f = -k x (1 + d qdot). 1e5 keeps a
-// 1 kg slider within 0.1 mm of its limit under gravity, a 10 N m load within
-// 0.1 mrad. d = 10 makes hitting a stop practically inelastic; with d = 1 a
-// slider resting on its stop kept chattering at CPodes' default accuracy.
-constexpr double kLimitStiffness = 1e5;     // N/m or N m/rad
 // See FrictionLaw::max_frequency: 2000 rad/s leaves bodies over 0.1 kg on
 // their material stiffness and lets CPodes at accuracy 1e-2 rest a 1 g cube.
 constexpr double kMaxContactFrequency = 2000;  // rad/s
-constexpr double kLimitDissipation = 10.0;  // s/m or s/rad
 // Divergence by step size: an advance() whose integrator steps average
 // below kMinMeanStepSize (after kMinStepBudget steps) is a blow-up, not a
 // stiff but healthy system (those take ~10-30 us steps even explicitly).
@@ -111,18 +105,34 @@ std::string checkMaterial(const ContactMaterial& m) {
 
 std::unique_ptr<scene_detail::Stepper> makeStepper(const SimTK::MultibodySystem& system,
                                                    const SimTK::State& initial,
-                                                   const PhysicsSettings& settings) {
+                                                   const PhysicsSettings& settings,
+                                                   const scene_detail::JointForces* joint_forces,
+                                                   const scene_detail::ContactForce* contact_force) {
   // Mimic couplings (the only constraints) are held to 1e-8 rather than
   // the accuracy: CPodes at 1e-4 let them drift by 5e-6 rad. Scenes
   // without constraints keep Simbody's default (a tenth of the accuracy).
   const bool constrained = system.getMatterSubsystem().getNumConstraints() > 0;
-  if (settings.integrator != "cpodes")
-    return scene_detail::makeSimbodyStepper(system, initial, settings,
-                                            constrained ? kConstraintTolerance : 0);
-  scene_detail::CPodesOptions options;
-  options.accuracy = settings.accuracy;
-  options.constraint_tolerance = constrained ? kConstraintTolerance : settings.accuracy / 10;
-  return scene_detail::makeCPodesStepper(system, initial, options);
+  switch (settings.integrator) {
+    case Integrator::ImplicitEuler: {
+      scene_detail::ImplicitEulerOptions options;
+      options.step = settings.implicit_step;
+      options.constraint_tolerance = constrained ? kConstraintTolerance : 0;
+      return scene_detail::makeImplicitEulerStepper(system, initial, {joint_forces, contact_force},
+                                                    options);
+    }
+    case Integrator::CPodes: {
+      scene_detail::CPodesOptions options;
+      options.accuracy = settings.accuracy;
+      options.constraint_tolerance =
+          constrained ? kConstraintTolerance : settings.accuracy / 10;
+      return scene_detail::makeCPodesStepper(system, initial, options);
+    }
+    case Integrator::RkMerson:
+    case Integrator::SemiExplicitEuler:
+      break;
+  }
+  return scene_detail::makeSimbodyStepper(system, initial, settings,
+                                          constrained ? kConstraintTolerance : 0);
 }
 
 std::string formatTime(double t) {
@@ -132,6 +142,33 @@ std::string formatTime(double t) {
 }
 
 }  // namespace
+
+// --- Integrator ---------------------------------------------------------
+
+namespace {
+constexpr std::pair<Integrator, const char*> kIntegratorNames[] = {
+    {Integrator::ImplicitEuler, "implicit_euler"},
+    {Integrator::CPodes, "cpodes"},
+    {Integrator::RkMerson, "rk_merson"},
+    {Integrator::SemiExplicitEuler, "semi_explicit_euler"},
+};
+}  // namespace
+
+const char* getIntegratorName(Integrator integrator) {
+  for (const auto& [value, name] : kIntegratorNames)
+    if (value == integrator) return name;
+  assert(false && "every Integrator has a name");
+  return "?";
+}
+
+Integrator parseIntegrator(const std::string& name) {
+  std::string choices;
+  for (const auto& [value, known] : kIntegratorNames) {
+    if (name == known) return value;
+    choices += std::string(choices.empty() ? "'" : ", '") + known + "'";
+  }
+  throw SceneError("PhysicsSettings: unknown integrator '" + name + "' (expected " + choices + ")");
+}
 
 // --- SceneState ---------------------------------------------------------
 
@@ -413,10 +450,6 @@ void Scene::Impl::buildArticulation(Articulation& art, std::vector<ContactShape>
         mobod = SimTK::MobilizedBody::Pin(parent, X_PJ * SimTK::Transform(R),
                                           rigid, SimTK::Transform(R));
       }
-      if (joint.lower > -SimTK::Infinity || joint.upper < SimTK::Infinity)
-        SimTK::Force::MobilityLinearStop(forces, mobod, SimTK::MobilizerQIndex(0),
-                                         kLimitStiffness, kLimitDissipation,
-                                         joint.lower, joint.upper);
     }
     art.body_mobods[b] = mobod.getMobilizedBodyIndex();
     const double inverse_mass = b == 0 ? 1 / mass.getMass() : 0;  // free roots only
@@ -481,11 +514,12 @@ void Scene::Impl::finalize() {
   law.damping = settings.friction_damping;
   // Light free bodies: h w <= 1 for fixed explicit steps, else the rate at
   // which CPodes at its default accuracy still resolves contact.
-  law.max_frequency = settings.integrator == "semi_explicit_euler"
+  law.max_frequency = settings.integrator == Integrator::SemiExplicitEuler
                           ? 1 / settings.fixed_step
                           : kMaxContactFrequency;
   contact_force =
       new ContactForce(matter, forces, std::move(shapes), std::move(self_collision), law);
+  contact_force->setLinearizationKept(settings.integrator == Integrator::ImplicitEuler);
   SimTK::Force::Custom(forces, contact_force);
 
   // Joint slots and their URDF dynamics.
@@ -497,7 +531,7 @@ void Scene::Impl::finalize() {
       for (std::size_t b = 0; b < art.model.bodies.size(); ++b)
         if (art.model.bodies[b].joint == joint.index) mobod = art.body_mobods[b];
       assert(mobod.isValid());
-      slots.push_back({mobod, joint.effort_limit});
+      slots.push_back({mobod, joint.effort_limit, joint.lower, joint.upper});
       joint_mobods.push_back(mobod);
       controls.damping.push_back(joint.damping);
       controls.friction.push_back(joint.friction);
@@ -642,7 +676,7 @@ void Scene::Impl::advance(double dt) {
       // kB per re-initialization (Simbody 3.7), too much at one per episode.
       retired_statistics = calcIntegratorStatistics();
       ++retired_statistics.initializations;
-      stepper = makeStepper(system, state, settings);
+      stepper = makeStepper(system, state, settings, joint_forces, contact_force);
       needs_init = false;
     }
     const double t_end = stepper->getState().getTime() + dt;
@@ -679,16 +713,14 @@ void Scene::Impl::advance(double dt) {
 Scene::Scene(PhysicsSettings settings) {
   auto positive = [](double v) { return v > 0 && std::isfinite(v); };
   auto non_negative = [](double v) { return v >= 0 && std::isfinite(v); };
-  if (settings.integrator != "cpodes" && settings.integrator != "rk_merson" &&
-      settings.integrator != "semi_explicit_euler")
-    throw SceneError("PhysicsSettings: unknown integrator '" + settings.integrator +
-                     "' (expected 'cpodes', 'rk_merson' or 'semi_explicit_euler')");
   if (!positive(settings.accuracy) || !positive(settings.fixed_step) ||
+      !positive(settings.implicit_step) ||
       !std::isfinite(settings.gravity_z) || !positive(settings.friction_stiffness) ||
       !non_negative(settings.friction_damping) || !positive(settings.default_density) ||
       !positive(settings.divergence_speed_limit))
     throw SceneError(
-        "PhysicsSettings: accuracy, fixed_step, friction_stiffness, default_density and "
+        "PhysicsSettings: accuracy, fixed_step, implicit_step, friction_stiffness, "
+        "default_density and "
         "divergence_speed_limit must be positive, friction_damping non-negative, "
         "gravity_z finite");
   const ContactMaterial& material = settings.default_material;
@@ -698,6 +730,8 @@ Scene::Scene(PhysicsSettings settings) {
 }
 
 Scene::~Scene() = default;
+
+const PhysicsSettings& Scene::getPhysicsSettings() const { return impl_->settings; }
 
 void Scene::addGround(double height) {
   impl_->requireBuilding("addGround");

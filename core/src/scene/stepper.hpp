@@ -1,23 +1,16 @@
-// Time stepping of a scene's Simbody system, behind one small interface:
-// either one of Simbody's integrators (RK-Merson, semi-explicit Euler) or
-// CPodesStepper, which drives SUNDIALS CPODES (BDF, Newton, dense
-// difference-quotient Jacobian) through SimTK::CPodes itself.
-//
-// Why not SimTK::CPodesIntegrator: measured on the cabinet scenes it
-//  - copies the whole SimTK::State (every cache entry) for each evaluation
-//    of the equations of motion, dozens per control step;
-//  - projects onto the constraint manifold after every step even when the
-//    system has no constraints and no quaternions (a position
-//    realization per step for nothing).
-// CPodesStepper evaluates in one persistent State and projects only when
-// the system has constraints or quaternions. It refreshes auto-update
-// discrete variables (the friction anchors) at the end of each stepTo()
-// and at least every 10 ms of simulated time within one.
+// Time stepping of a scene's Simbody system, behind one small interface.
+// Four implementations, chosen by PhysicsSettings::integrator:
+//  - ImplicitEulerStepper (implicit_euler_stepper.cpp): fixed step,
+//    linearly implicit in the stiff forces (implicit_terms.hpp);
+//  - CPodesStepper (cpodes_stepper.cpp): SUNDIALS CPODES (BDF, Newton,
+//    dense difference-quotient Jacobian) driven through SimTK::CPodes;
+//  - Simbody's own RK-Merson and semi-explicit Euler (simbody_stepper.cpp).
 #pragma once
 
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "Simbody.h"
 #include "manibench/scene.hpp"
@@ -28,7 +21,7 @@ namespace scene_detail {
 class Stepper {
  public:
   virtual ~Stepper() = default;
-  // The current state, realized through Acceleration.
+  // The current state. Callers realize the stages they read.
   virtual const SimTK::State& getState() const = 0;
   // For cache invalidation when forces defined outside the state change
   // (drive commands); the stepper continues without a restart.
@@ -70,9 +63,36 @@ struct CPodesOptions {
   double constraint_tolerance = 1e-3;
 };
 
+// Why not SimTK::CPodesIntegrator: measured on the cabinet scenes it
+//  - copies the whole SimTK::State (every cache entry) for each evaluation
+//    of the equations of motion, dozens per control step;
+//  - projects onto the constraint manifold after every step even when the
+//    system has no constraints and no quaternions (a position
+//    realization per step for nothing).
+// CPodesStepper evaluates in one persistent State and projects only when
+// the system has constraints or quaternions. It refreshes auto-update
+// discrete variables (the friction anchors) at the end of each stepTo()
+// and at least every 10 ms of simulated time within one.
 std::unique_ptr<Stepper> makeCPodesStepper(const SimTK::System& system,
                                            const SimTK::State& initial,
                                            const CPodesOptions& options);
+
+class ImplicitForce;
+
+struct ImplicitEulerOptions {
+  double step = 2e-3;  // s; each stepTo() lands on its end in equal steps no longer
+  // Mimic couplings (holonomic constraints) are projected to this after
+  // each step; 0 keeps Simbody's default.
+  double constraint_tolerance = 0;
+};
+
+// `forces`: every force element whose stiffness the step treats
+// implicitly; the rest of the system's forces are explicit. They must
+// outlive the stepper.
+std::unique_ptr<Stepper> makeImplicitEulerStepper(const SimTK::MultibodySystem& system,
+                                                  const SimTK::State& initial,
+                                                  std::vector<const ImplicitForce*> forces,
+                                                  const ImplicitEulerOptions& options);
 
 }  // namespace scene_detail
 }  // namespace manibench

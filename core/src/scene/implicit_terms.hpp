@@ -1,0 +1,61 @@
+// What the linearly implicit Euler step (implicit_euler_stepper.cpp) needs
+// of the stiff forces besides their value at the start of a step: how they
+// change with the generalized speeds and positions during the step.
+//
+// A step of size h from (q, u) solves
+//   (M + h D + h^2 K) du = h (F - h K u),   u+ = u + du,   q+ = q + h N(q) u+
+// where F = M udot is the net generalized force at the start, D = -dF/du the
+// damping and K = -(dF/dq) N the stiffness, both in the space of u (for a
+// contact, J^T C J and J^T K J with J the contact point's velocity
+// Jacobian). Forces left out of D and K (gravity, Coriolis, balancing) are
+// explicit; stiff ones put in stay stable at any step size.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "Simbody.h"
+
+namespace manibench {
+namespace scene_detail {
+
+// A one-dof generalized force whose linear law saturates at +-limit (a
+// drive with an effort limit). It stays out of the matrices: each step the
+// stepper finds whether, at the step's end, the law lies within the limit
+// (it then acts linearly, implicit) or beyond it (a constant +-limit).
+// Deciding it at the start instead makes a damping drive chatter between
+// its two limits whenever one step's velocity change crosses the linear
+// band (12 N m on a Panda wrist: 2.4 rad/s per 2 ms step against a band of
+// 0.12 rad/s).
+struct SaturatingForce {
+  int u = 0;             // index of its generalized speed
+  double applied = 0;    // what the force element applied (clamped)
+  double unclamped = 0;  // the linear law at the step's start
+  double damping = 0;    // -d(law)/du
+  double stiffness = 0;  // -d(law)/dq
+  double limit = 0;      // > 0
+};
+
+struct ImplicitTerms {
+  Eigen::MatrixXd damping;    // nu x nu, -dF/du
+  Eigen::MatrixXd stiffness;  // nu x nu, -(dF/dq) N
+  std::vector<SaturatingForce> saturating;
+
+  void reset(int nu) {
+    damping.setZero(nu, nu);
+    stiffness.setZero(nu, nu);
+    saturating.clear();
+  }
+};
+
+// A force element that linearizes itself for the implicit step.
+class ImplicitForce {
+ public:
+  virtual ~ImplicitForce() = default;
+  // `state` is realized through Dynamics, and this element's force was
+  // evaluated at it (the stepper invalidates Dynamics before realizing).
+  virtual void addImplicitTerms(const SimTK::State& state, ImplicitTerms& terms) const = 0;
+};
+
+}  // namespace scene_detail
+}  // namespace manibench
