@@ -15,12 +15,15 @@
 // (ManiSkill's 500 Hz), measured against CPODES in docs/performance.md.
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
 #include "scene/implicit_terms.hpp"
 #include "scene/stepper.hpp"
+#include "scene/tree_structure.hpp"
 
 namespace manibench {
 namespace scene_detail {
@@ -41,11 +44,12 @@ class ImplicitEulerStepper final : public Stepper {
         matter_(system.getMatterSubsystem()),
         forces_(std::move(forces)),
         options_(options),
-        state_(initial) {
-    system_.realize(state_, SimTK::Stage::Model);
+        state_(initial),
+        trees_(matter_, realizeModel(system, state_)) {
     // Quaternions drift off unit length, constraints off their manifold.
     quaternions_ = state_.getNQ() != state_.getNU();
-    constrained_ = state_.getNYErr() > 0;
+    constrained_ = matter_.getNumConstraints() > 0;  // quaternions count in NYErr too
+    island_of_tree_.resize(trees_.getNumTrees());
   }
 
   const SimTK::State& getState() const override { return state_; }
@@ -73,33 +77,33 @@ class ImplicitEulerStepper final : public Stepper {
   IntegratorStatistics getStatistics() const override { return statistics_; }
 
  private:
+  // Trees joined by contact points, solved together.
+  struct Island {
+    std::vector<int> trees, offsets;  // tree-local u's of trees[i] start at offsets[i]
+    int size = 0;
+    std::vector<int> points, saturating;  // indices into terms_
+  };
+
+  static const SimTK::State& realizeModel(const SimTK::System& system, SimTK::State& state) {
+    system.realize(state, SimTK::Stage::Model);
+    return state;
+  }
+
   void takeStep(double h) {
     const int nu = state_.getNU();
     // The force elements keep their linearization from their last
     // evaluation: make sure that was at this state.
     state_.invalidateAllCacheAtOrAbove(SimTK::Stage::Dynamics);
-    system_.realize(state_, SimTK::Stage::Acceleration);
+    calcNetForce();
     ++statistics_.realizations;
-
-    matter_.calcM(state_, simbody_mass_);
-    mass_.resize(nu, nu);
-    for (int col = 0; col < nu; ++col)
-      for (int row = 0; row < nu; ++row) mass_(row, col) = simbody_mass_(row, col);
+    trees_.update(state_);
     terms_.reset(nu);
     for (const ImplicitForce* force : forces_) force->addImplicitTerms(state_, terms_);
 
-    // F = M a with a = udot, the explicit acceleration (Simbody's O(n)
-    // forward dynamics). Solved directly for du rather than for its
-    // difference from the explicit step h a: at absurd stiffness (h^2 k /
-    // m ~ 1e25) that difference cancels two huge numbers.
     u_ = state_.getU();
-    udot_ = state_.getUDot();
-    Eigen::Map<const Eigen::VectorXd> u(&u_[0], nu), a(&udot_[0], nu);
-    base_matrix_ = mass_;
-    base_matrix_ += h * terms_.damping + (h * h) * terms_.stiffness;
-    base_rhs_.noalias() = h * (mass_ * a);
-    base_rhs_.noalias() -= (h * h) * (terms_.stiffness * u);
-    solveWithSaturation(h, u);
+    findIslands();
+    du_.resize(nu);
+    for (const Island& island : islands_) solveIsland(island, h);
 
     // The friction anchors (auto-update discrete variables) this state's
     // evaluation computed hold from the next step on. Taken before q and u
@@ -120,48 +124,184 @@ class ImplicitEulerStepper final : public Stepper {
     ++statistics_.attempts;
   }
 
-  // Solves (base + saturating terms) du = rhs into du_. A saturating force
-  // acts linearly in the solve if its law stays within the limit at the
-  // step's end, else as its limit; the sides are guessed from the start and
-  // corrected until consistent (an active-set iteration, at most
+  // force_ = F = M udot, the net generalized force at the step's start
+  // (applied minus Coriolis and gyroscopic). Without constraints, by
+  // inverse dynamics at udot = 0 (one O(n) pass; Simbody's forward dynamics
+  // would first build the articulated-body inertias, a 6 x 6 LAPACK inverse
+  // per free body); with them, from the constrained accelerations.
+  void calcNetForce() {
+    if (constrained_) {
+      system_.realize(state_, SimTK::Stage::Acceleration);
+      matter_.multiplyByM(state_, state_.getUDot(), force_);
+      return;
+    }
+    system_.realize(state_, SimTK::Stage::Dynamics);
+    matter_.calcResidualForceIgnoringConstraints(
+        state_, system_.getMobilityForces(state_, SimTK::Stage::Dynamics),
+        system_.getRigidBodyForces(state_, SimTK::Stage::Dynamics), no_udot_, force_);
+    force_ *= -1;
+  }
+
+  int findRoot(int tree) {
+    while (tree_root_[tree] != tree) tree = tree_root_[tree] = tree_root_[tree_root_[tree]];
+    return tree;
+  }
+
+  // Groups the trees into islands: union-find over the contact points
+  // between two moving bodies.
+  void findIslands() {
+    const int trees = trees_.getNumTrees();
+    tree_root_.resize(trees);
+    for (int t = 0; t < trees; ++t) tree_root_[t] = t;
+    for (const PointCoupling& p : terms_.points) {
+      const int a = trees_.getTree(p.body_a), b = trees_.getTree(p.body_b);
+      if (a >= 0 && b >= 0) tree_root_[findRoot(a)] = findRoot(b);
+    }
+    island_count_ = 0;
+    std::fill(island_of_tree_.begin(), island_of_tree_.end(), -1);
+    for (int t = 0; t < trees; ++t) {
+      const int root = findRoot(t);
+      if (island_of_tree_[root] < 0) {
+        island_of_tree_[root] = island_count_++;
+        if (static_cast<int>(islands_.size()) < island_count_) islands_.emplace_back();
+        Island& island = islands_[island_of_tree_[root]];
+        island.trees.clear();
+        island.offsets.clear();
+        island.points.clear();
+        island.saturating.clear();
+        island.size = 0;
+      }
+      island_of_tree_[t] = island_of_tree_[root];
+      Island& island = islands_[island_of_tree_[t]];
+      island.trees.push_back(t);
+      island.offsets.push_back(island.size);
+      island.size += static_cast<int>(trees_.getTreeU(t).size());
+    }
+    islands_.resize(island_count_);
+    for (int i = 0; i < static_cast<int>(terms_.points.size()); ++i) {
+      const PointCoupling& p = terms_.points[i];
+      const int tree = trees_.getTree(p.body_b) >= 0 ? trees_.getTree(p.body_b)
+                                                      : trees_.getTree(p.body_a);
+      if (tree >= 0) islands_[island_of_tree_[tree]].points.push_back(i);
+    }
+    for (int i = 0; i < static_cast<int>(terms_.saturating.size()); ++i)
+      islands_[island_of_tree_[trees_.getTreeOfU(terms_.saturating[i].u)]].saturating.push_back(i);
+  }
+
+  // The island-local index of global speed u (the island holds u's tree).
+  int getLocalIndex(const Island& island, int u) const {
+    const int tree = trees_.getTreeOfU(u);
+    for (std::size_t i = 0; i < island.trees.size(); ++i)
+      if (island.trees[i] == tree) return island.offsets[i] + trees_.getLocalIndexOfU(u);
+    assert(false && "u belongs to the island");
+    return -1;
+  }
+
+  // Assembles (M + h D + h^2 K) du = h (M a - h K u) over the island and
+  // solves it into du_.
+  void solveIsland(const Island& island, double h) {
+    const int n = island.size;
+    base_matrix_.setZero(n, n);
+    local_u_.resize(n);
+    base_rhs_.resize(n);
+    for (std::size_t i = 0; i < island.trees.size(); ++i) {
+      const std::vector<int>& tree_u = trees_.getTreeU(island.trees[i]);
+      const int offset = island.offsets[i], size = static_cast<int>(tree_u.size());
+      trees_.calcMassBlock(island.trees[i], base_matrix_.block(offset, offset, size, size));
+      for (int k = 0; k < size; ++k) {
+        local_u_[offset + k] = u_[tree_u[k]];
+        base_rhs_[offset + k] = h * force_[tree_u[k]];
+      }
+    }
+    // Solved for du directly, not for its difference from the explicit
+    // step h M^-1 F: at absurd stiffness (h^2 k / m ~ 1e25) that difference
+    // cancels huge numbers.
+    for (std::size_t i = 0; i < island.trees.size(); ++i) {
+      const std::vector<int>& tree_u = trees_.getTreeU(island.trees[i]);
+      for (std::size_t k = 0; k < tree_u.size(); ++k) {
+        const int local = island.offsets[i] + static_cast<int>(k), u = tree_u[k];
+        base_matrix_(local, local) += h * terms_.damping[u] + h * h * terms_.stiffness[u];
+        base_rhs_[local] -= h * h * terms_.stiffness[u] * local_u_[local];
+      }
+    }
+    for (int index : island.points) {
+      const PointCoupling& p = terms_.points[index];
+      point_jacobian_.setZero(3, n);
+      addPointJacobian(island, p.body_b, p.point, 1.0);
+      addPointJacobian(island, p.body_a, p.point, -1.0);
+      weighted_.noalias() = (h * p.damping + h * h * p.stiffness) * point_jacobian_;
+      base_matrix_.noalias() += point_jacobian_.transpose() * weighted_;
+      const Eigen::Vector3d stretch_rate = p.stiffness * (point_jacobian_ * local_u_);
+      base_rhs_.noalias() -= (h * h) * (point_jacobian_.transpose() * stretch_rate);
+    }
+    solveWithSaturation(island, h);
+    for (std::size_t i = 0; i < island.trees.size(); ++i) {
+      const std::vector<int>& tree_u = trees_.getTreeU(island.trees[i]);
+      for (std::size_t k = 0; k < tree_u.size(); ++k)
+        du_[tree_u[k]] = local_du_[island.offsets[i] + static_cast<int>(k)];
+    }
+  }
+
+  void addPointJacobian(const Island& island, SimTK::MobilizedBodyIndex body,
+                        const Eigen::Vector3d& point, double sign) {
+    const int tree = trees_.getTree(body);
+    if (tree < 0) return;
+    for (std::size_t i = 0; i < island.trees.size(); ++i)
+      if (island.trees[i] == tree) {
+        trees_.addPointJacobian(
+            body, point, sign,
+            point_jacobian_.middleCols(island.offsets[i],
+                                       static_cast<Eigen::Index>(trees_.getTreeU(tree).size())));
+        return;
+      }
+  }
+
+  // Solves (base + saturating terms) du = rhs into local_du_. A saturating
+  // force acts linearly in the solve if its law stays within the limit at
+  // the step's end, else as its limit; the sides are guessed from the start
+  // and corrected until consistent (an active-set iteration, at most
   // kMaxSaturationSolves factorizations).
-  void solveWithSaturation(double h, const Eigen::Map<const Eigen::VectorXd>& u) {
-    std::vector<SaturatingForce>& saturating = terms_.saturating;
-    side_.assign(saturating.size(), 0);
-    for (std::size_t i = 0; i < saturating.size(); ++i) {
-      const SaturatingForce& f = saturating[i];
+  void solveWithSaturation(const Island& island, double h) {
+    const std::size_t count = island.saturating.size();
+    side_.assign(count, 0);
+    saturating_index_.resize(count);
+    for (std::size_t i = 0; i < count; ++i) {
+      const SaturatingForce& f = terms_.saturating[island.saturating[i]];
+      saturating_index_[i] = getLocalIndex(island, f.u);
       if (f.unclamped > f.limit) side_[i] = 1;
       if (f.unclamped < -f.limit) side_[i] = -1;
     }
     for (int solve = 1;; ++solve) {
       matrix_ = base_matrix_;
       rhs_ = base_rhs_;
-      for (std::size_t i = 0; i < saturating.size(); ++i) {
-        const SaturatingForce& f = saturating[i];
+      for (std::size_t i = 0; i < count; ++i) {
+        const SaturatingForce& f = terms_.saturating[island.saturating[i]];
+        const int k = saturating_index_[i];
         // M a holds what the force element applied; replace it with the
         // side's force.
         if (side_[i] == 0) {
-          matrix_(f.u, f.u) += h * f.damping + h * h * f.stiffness;
-          rhs_[f.u] += h * (f.unclamped - f.applied) - h * h * f.stiffness * u[f.u];
+          matrix_(k, k) += h * f.damping + h * h * f.stiffness;
+          rhs_[k] += h * (f.unclamped - f.applied) - h * h * f.stiffness * local_u_[k];
         } else {
-          rhs_[f.u] += h * (side_[i] * f.limit - f.applied);
+          rhs_[k] += h * (side_[i] * f.limit - f.applied);
         }
       }
       solve_.compute(matrix_);
       if (solve_.info() == Eigen::Success) {
-        du_ = solve_.solve(rhs_);
+        local_du_ = solve_.solve(rhs_);
       } else {
         // Not positive definite (a negative damping or stiffness from a
         // plugin's drive): LU still gives the step.
-        du_ = matrix_.partialPivLu().solve(rhs_);
+        local_du_ = matrix_.partialPivLu().solve(rhs_);
       }
       ++statistics_.iterations;
-      if (saturating.empty() || solve == kMaxSaturationSolves) return;
+      if (count == 0 || solve == kMaxSaturationSolves) return;
       bool consistent = true;
-      for (std::size_t i = 0; i < saturating.size(); ++i) {
-        const SaturatingForce& f = saturating[i];
+      for (std::size_t i = 0; i < count; ++i) {
+        const SaturatingForce& f = terms_.saturating[island.saturating[i]];
+        const int k = saturating_index_[i];
         const double at_end =
-            f.unclamped - f.damping * du_[f.u] - f.stiffness * h * (u[f.u] + du_[f.u]);
+            f.unclamped - f.damping * local_du_[k] - f.stiffness * h * (local_u_[k] + local_du_[k]);
         // A linear force beyond its limit saturates on that side; a
         // saturated one whose law is back within the limit (or beyond the
         // other one: it overshot) acts linearly again, never flipping
@@ -197,17 +337,21 @@ class ImplicitEulerStepper final : public Stepper {
   std::vector<const ImplicitForce*> forces_;
   ImplicitEulerOptions options_;
   SimTK::State state_;
+  TreeStructure trees_;
   bool quaternions_ = false, constrained_ = false;
   IntegratorStatistics statistics_;
 
   // Scratch, kept between steps.
-  SimTK::Vector u_, udot_, qdot_;
-  SimTK::Matrix simbody_mass_;
-  Eigen::MatrixXd mass_;
+  SimTK::Vector u_, force_, qdot_, no_udot_;
   ImplicitTerms terms_;
+  std::vector<int> tree_root_, island_of_tree_;
+  std::vector<Island> islands_;
+  int island_count_ = 0;
+  Eigen::VectorXd du_;
   Eigen::MatrixXd base_matrix_, matrix_;
-  Eigen::VectorXd base_rhs_, rhs_, du_;
-  std::vector<int> side_;
+  Eigen::VectorXd base_rhs_, rhs_, local_u_, local_du_;
+  Eigen::Matrix<double, 3, Eigen::Dynamic> point_jacobian_, weighted_;
+  std::vector<int> side_, saturating_index_;
   Eigen::LLT<Eigen::MatrixXd> solve_;
 };
 

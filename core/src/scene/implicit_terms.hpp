@@ -5,10 +5,15 @@
 // A step of size h from (q, u) solves
 //   (M + h D + h^2 K) du = h (F - h K u),   u+ = u + du,   q+ = q + h N(q) u+
 // where F = M udot is the net generalized force at the start, D = -dF/du the
-// damping and K = -(dF/dq) N the stiffness, both in the space of u (for a
-// contact, J^T C J and J^T K J with J the contact point's velocity
-// Jacobian). Forces left out of D and K (gravity, Coriolis, balancing) are
-// explicit; stiff ones put in stay stable at any step size.
+// damping and K = -(dF/dq) N the stiffness, both in the space of u. Forces
+// left out of D and K (gravity, Coriolis, balancing) are explicit; stiff
+// ones put in stay stable at any step size.
+//
+// Force elements describe D and K in two sparse forms, which the stepper
+// assembles per contact island (tree_structure.hpp): joint-space terms on
+// the diagonal, and contact points whose 3 x 3 damping C and stiffness K
+// act on the relative velocity of the two bodies' material points there
+// (J^T C J with J that velocity's Jacobian).
 #pragma once
 
 #include <Eigen/Core>
@@ -20,7 +25,7 @@ namespace manibench {
 namespace scene_detail {
 
 // A one-dof generalized force whose linear law saturates at +-limit (a
-// drive with an effort limit). It stays out of the matrices: each step the
+// drive with an effort limit). It stays out of the diagonal: each step the
 // stepper finds whether, at the step's end, the law lies within the limit
 // (it then acts linearly, implicit) or beyond it (a constant +-limit).
 // Deciding it at the start instead makes a damping drive chatter between
@@ -36,14 +41,25 @@ struct SaturatingForce {
   double limit = 0;      // > 0
 };
 
+// A contact point's force law, linearized: the force on B changes by
+// -damping v - stiffness x for a velocity v and a displacement x of B's
+// material point at `point` relative to A's (Ground frame).
+struct PointCoupling {
+  SimTK::MobilizedBodyIndex body_a, body_b;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d damping, stiffness;  // symmetric, positive semidefinite
+};
+
 struct ImplicitTerms {
-  Eigen::MatrixXd damping;    // nu x nu, -dF/du
-  Eigen::MatrixXd stiffness;  // nu x nu, -(dF/dq) N
+  Eigen::VectorXd damping;    // per u: -dF_u/du_u of joint-space forces
+  Eigen::VectorXd stiffness;  // per u: -dF_u/dq_u
+  std::vector<PointCoupling> points;
   std::vector<SaturatingForce> saturating;
 
   void reset(int nu) {
-    damping.setZero(nu, nu);
-    stiffness.setZero(nu, nu);
+    damping.setZero(nu);
+    stiffness.setZero(nu);
+    points.clear();
     saturating.clear();
   }
 };

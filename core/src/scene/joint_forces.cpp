@@ -134,8 +134,8 @@ void JointForces::addImplicitTerms(const SimTK::State& state, ImplicitTerms& ter
         stiffness += d.stiffness;
       }
     }
-    terms.damping(k, k) += damping;
-    terms.stiffness(k, k) += stiffness;
+    terms.damping[k] += damping;
+    terms.stiffness[k] += stiffness;
   }
 }
 

@@ -333,10 +333,10 @@ double ContactForce::evaluate(const SimTK::State& state, Mode mode,
         // Normal: fn n with fn = k d (1 + 1.5 c ddot), d falling by n.x.
         // Tangential: -kt stretch - ct slip while it sticks; sliding, the
         // capped force turns with them but keeps its size.
-        PointLinearization& point = linearization_.emplace_back();
+        PointCoupling& point = linearization_.emplace_back();
         point.body_a = a.body;
         point.body_b = b.body;
-        point.point = c.point;
+        point.point = Eigen::Vector3d(c.point[0], c.point[1], c.point[2]);
         const Eigen::Vector3d normal_axis(n[0], n[1], n[2]);
         const Eigen::Matrix3d normal = normal_axis * normal_axis.transpose();
         Eigen::Matrix3d tangent = Eigen::Matrix3d::Identity() - normal;
@@ -392,46 +392,9 @@ double ContactForce::evaluate(const SimTK::State& state, Mode mode,
   return energy;
 }
 
-void ContactForce::addImplicitTerms(const SimTK::State& state, ImplicitTerms& terms) const {
+void ContactForce::addImplicitTerms(const SimTK::State&, ImplicitTerms& terms) const {
   assert(keep_linearization_);
-  if (linearization_.empty()) return;
-  const int nu = state.getNU();
-  body_jacobian_slot_.assign(matter_.getNumBodies(), -1);
-  int used = 0;
-  // The 6 x nu Jacobian of a body's origin (angular rows first), computed
-  // once per body per call.
-  auto getBodyJacobian = [&](SimTK::MobilizedBodyIndex body) -> const Eigen::Matrix<double, 6, Eigen::Dynamic>& {
-    int& slot = body_jacobian_slot_[body];
-    if (slot < 0) {
-      slot = used++;
-      if (static_cast<int>(body_jacobians_.size()) < used) body_jacobians_.emplace_back();
-      matter_.calcFrameJacobian(state, body, Vec3(0), frame_jacobian_);
-      Eigen::Matrix<double, 6, Eigen::Dynamic>& J = body_jacobians_[slot];
-      J.resize(6, nu);
-      for (int col = 0; col < nu; ++col)
-        for (int row = 0; row < 6; ++row) J(row, col) = frame_jacobian_(row, col);
-    }
-    return body_jacobians_[slot];
-  };
-  Eigen::Matrix<double, 3, Eigen::Dynamic> J(3, nu), CJ(3, nu);
-  for (const PointLinearization& p : linearization_) {
-    // Velocity of B's material point at p relative to A's: v_o - r x w.
-    J.setZero();
-    auto addPointJacobian = [&](SimTK::MobilizedBodyIndex body, double sign) {
-      if (body == SimTK::GroundIndex) return;
-      const Eigen::Matrix<double, 6, Eigen::Dynamic>& JB = getBodyJacobian(body);
-      const Vec3 r = p.point - matter_.getMobilizedBody(body).getBodyOriginLocation(state);
-      Eigen::Matrix3d r_cross;
-      r_cross << 0, -r[2], r[1], r[2], 0, -r[0], -r[1], r[0], 0;
-      J.noalias() += sign * (JB.bottomRows<3>() - r_cross * JB.topRows<3>());
-    };
-    addPointJacobian(p.body_b, 1);
-    addPointJacobian(p.body_a, -1);
-    CJ.noalias() = p.damping * J;
-    terms.damping.noalias() += J.transpose() * CJ;
-    CJ.noalias() = p.stiffness * J;
-    terms.stiffness.noalias() += J.transpose() * CJ;
-  }
+  terms.points.insert(terms.points.end(), linearization_.begin(), linearization_.end());
 }
 
 void ContactForce::calcForce(const SimTK::State& state, SimTK::Vector_<SpatialVec>& body_forces,

@@ -112,10 +112,9 @@ class ContactForce : public SimTK::Force::Custom::Implementation, public Implici
   // Whether force evaluations keep what addImplicitTerms needs (the
   // implicit_euler stepper asks for it; others need not pay for it).
   void setLinearizationKept(bool kept) { keep_linearization_ = kept; }
-  // Per contact point of the last force evaluation: J^T C J and J^T K J,
-  // with C and K the 3 x 3 damping and stiffness of the point's force law
-  // and J its relative velocity Jacobian. Sliding points are stiff only
-  // across the slip (their force is at the friction limit along it).
+  // The contact points of the last force evaluation, linearized. Sliding
+  // points are stiff only across the slip (their force is at the friction
+  // limit along it).
   void addImplicitTerms(const SimTK::State& state, ImplicitTerms& terms) const override;
 
  private:
@@ -123,14 +122,6 @@ class ContactForce : public SimTK::Force::Custom::Implementation, public Implici
     double k, c, mu_static, mu_dynamic, mu_viscous;
   };
   enum class Mode { Apply, Report, Energy };
-  // One contact point's force law linearized: the force on B changes by
-  // -damping v - stiffness x for a velocity v and displacement x of B's
-  // material point relative to A's (Ground frame).
-  struct PointLinearization {
-    SimTK::MobilizedBodyIndex body_a, body_b;
-    SimTK::Vec3 point{0};
-    Eigen::Matrix3d damping, stiffness;  // symmetric
-  };
   // Broad phase, narrow phase and force law; what happens to the result
   // depends on the mode (forces and anchors, reports, or energy).
   double evaluate(const SimTK::State& state, Mode mode,
@@ -191,13 +182,9 @@ class ContactForce : public SimTK::Force::Custom::Implementation, public Implici
   mutable std::vector<SimTK::Vec3> lo_, hi_;
   mutable std::vector<ContactPoint> manifold_;
 
-  // Linearization of the last Apply evaluation, if kept, and the scratch of
-  // addImplicitTerms (body Jacobians, once per body and call).
+  // Linearization of the last Apply evaluation, if kept.
   bool keep_linearization_ = false;
-  mutable std::vector<PointLinearization> linearization_;
-  mutable std::vector<Eigen::Matrix<double, 6, Eigen::Dynamic>> body_jacobians_;
-  mutable std::vector<int> body_jacobian_slot_;  // per MobilizedBodyIndex, -1: none yet
-  mutable SimTK::Matrix frame_jacobian_;
+  mutable std::vector<PointCoupling> linearization_;
 };
 
 }  // namespace scene_detail
