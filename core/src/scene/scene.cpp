@@ -226,7 +226,6 @@ struct Scene::Impl {
   std::vector<Articulation> articulations;
   std::vector<std::pair<int, int>> links;  // global id -> (articulation, local)
   int joint_count = 0;
-  scene_detail::VisualMeshCache visual_meshes;
   std::vector<VisualShape> visual_shapes;  // link ids global
 
   // Simbody. Declaration order is construction order.
@@ -360,7 +359,7 @@ int Scene::Impl::addArticulation(const std::string& xml,
   Articulation art;
   art.name = name;
   art.model = scene_detail::buildArticulationModel(xml, source, base_dir,
-                                                   settings.default_density, visual_meshes);
+                                                   settings.default_density);
   art.link_materials.assign(art.model.links.size(), settings.default_material);
   art.base_dir = base_dir;
   art.X_root = toTransform(root);

@@ -153,7 +153,6 @@ struct Builder {
   // a cylinder of the same radius and length.
   std::set<std::pair<std::string, int>> capsules;
   std::set<std::pair<std::string, int>> visual_capsules;  // same, for <visual>
-  VisualMeshCache& visual_meshes;
   ArticulationModel model;
   std::vector<std::pair<int, std::string>> mimics;  // (follower, leader name)
 
@@ -282,12 +281,8 @@ struct Builder {
     if (path.empty())
       fail(source, what + ": visual mesh '" + mesh.filename +
                        "' not found (relative paths start at '" + base_dir + "')");
-    const auto key = std::make_tuple(path, scale[0], scale[1], scale[2]);
-    const auto found = visual_meshes.find(key);
-    if (found != visual_meshes.end()) return found->second;
     try {
-      auto meshes = std::make_shared<const std::vector<VisualMesh>>(loadVisualMeshes(path, scale));
-      return visual_meshes.emplace(key, std::move(meshes)).first->second;
+      return loadVisualMeshes(path, scale);
     } catch (const std::exception& e) {
       fail(source, what + ": visual mesh '" + path + "': " + e.what());
     }
@@ -606,8 +601,7 @@ std::string findMeshFile(const std::string& filename, const std::string& base_di
 ArticulationModel buildArticulationModel(const std::string& urdf_xml,
                                          const std::string& source,
                                          const std::string& base_dir,
-                                         double default_density,
-                                         VisualMeshCache& visual_meshes) {
+                                         double default_density) {
   // TinyXML first: it says where malformed XML breaks, and it gives the
   // joints' file order, which urdfdom does not keep.
   TiXmlDocument doc;
@@ -654,7 +648,6 @@ ArticulationModel buildArticulationModel(const std::string& urdf_xml,
                   std::move(joint_file_order),
                   std::move(capsules),
                   std::move(visual_capsules),
-                  visual_meshes,
                   {},
                   {}};
   builder.model.source = source;

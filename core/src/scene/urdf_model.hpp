@@ -69,11 +69,6 @@ struct ArticulationModel {
   std::vector<std::string> unsimulated;
 };
 
-// Visual meshes loaded for one scene, by resolved path and scale: each
-// file is read once however many visuals use it.
-using VisualMeshCache = std::map<std::tuple<std::string, double, double, double>,
-                                 std::shared_ptr<const std::vector<VisualMesh>>>;
-
 // Parses `urdf_xml` and builds the description. `source` names the origin
 // in error messages; relative mesh paths start at `base_dir`. Collision
 // meshes become their convex hulls. `<capsule radius length>` (which
@@ -81,12 +76,12 @@ using VisualMeshCache = std::map<std::tuple<std::string, double, double, double>
 // length plus two hemispheres. Throws SceneError on malformed XML, URDF
 // errors, unreadable meshes, floating joints inside the tree, mimics of
 // unknown joints or invalid inertias.
-// Visual meshes are loaded through (and added to) `visual_meshes`.
+// Mesh files are read through the process-wide caches of
+// contact/convex_hull.hpp.
 ArticulationModel buildArticulationModel(const std::string& urdf_xml,
                                          const std::string& source,
                                          const std::string& base_dir,
-                                         double default_density,
-                                         VisualMeshCache& visual_meshes);
+                                         double default_density);
 
 // Where a URDF mesh filename points: an absolute path, file://,
 // package://NAME/rest (looked up in ROS_PACKAGE_PATH, then in an ancestor

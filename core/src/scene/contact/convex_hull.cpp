@@ -173,6 +173,45 @@ std::shared_ptr<const ConvexHull> calcConvexHull(const std::vector<SimTK::Vec3>&
 
 namespace {
 
+// What a mesh file gave, once per process (see the header). When it holds
+// more than kMaxEntries, entries nobody else holds are dropped.
+template <class T>
+class MeshFileCache {
+ public:
+  template <class Load>
+  std::shared_ptr<const T> findOrLoad(const std::string& path, const SimTK::Vec3& scale,
+                                      Load load) {
+    struct stat info {};
+    if (::stat(path.c_str(), &info) != 0) throw std::runtime_error("cannot open the file");
+    const Key key{path,
+                  scale[0],
+                  scale[1],
+                  scale[2],
+                  static_cast<long long>(info.st_size),
+                  static_cast<long long>(info.st_mtim.tv_sec),
+                  static_cast<long long>(info.st_mtim.tv_nsec)};
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      const auto found = entries_.find(key);
+      if (found != entries_.end()) return found->second;
+    }
+    // Loaded outside the lock; a concurrent duplicate just does the work
+    // twice and both results are identical.
+    std::shared_ptr<const T> loaded = load();
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (entries_.size() >= kMaxEntries)
+      for (auto it = entries_.begin(); it != entries_.end();)
+        it = it->second.use_count() == 1 ? entries_.erase(it) : std::next(it);
+    return entries_.emplace(key, std::move(loaded)).first->second;
+  }
+
+ private:
+  static constexpr std::size_t kMaxEntries = 1024;
+  using Key = std::tuple<std::string, double, double, double, long long, long long, long long>;
+  std::mutex mutex_;
+  std::map<Key, std::shared_ptr<const T>> entries_;
+};
+
 // One reading convention for collision and visual meshes: node transforms
 // baked in, Collada in its authored axes (as ROS tools load it).
 const aiScene* readMeshFile(Assimp::Importer& importer, const std::string& path,
@@ -201,7 +240,9 @@ std::vector<SimTK::Vec3> loadMeshVertices(const std::string& path, const SimTK::
   return points;
 }
 
-std::vector<VisualMesh> loadVisualMeshes(const std::string& path, const SimTK::Vec3& scale) {
+namespace {
+
+std::vector<VisualMesh> readVisualMeshes(const std::string& path, const SimTK::Vec3& scale) {
   Assimp::Importer importer;
   // Points and lines are dropped (a renderer draws surfaces); normals are
   // generated only where the file has none.
@@ -269,30 +310,21 @@ std::vector<VisualMesh> loadVisualMeshes(const std::string& path, const SimTK::V
   return meshes;
 }
 
+}  // namespace
+
+std::shared_ptr<const std::vector<VisualMesh>> loadVisualMeshes(const std::string& path,
+                                                                const SimTK::Vec3& scale) {
+  static MeshFileCache<std::vector<VisualMesh>> cache;
+  return cache.findOrLoad(path, scale, [&] {
+    return std::make_shared<const std::vector<VisualMesh>>(readVisualMeshes(path, scale));
+  });
+}
+
 std::shared_ptr<const ConvexHull> loadConvexHull(const std::string& path,
                                                  const SimTK::Vec3& scale) {
-  struct stat info {};
-  if (::stat(path.c_str(), &info) != 0) throw std::runtime_error("cannot open the file");
-  using Key = std::tuple<std::string, double, double, double, long long, long long, long long>;
-  const Key key{path,
-                scale[0],
-                scale[1],
-                scale[2],
-                static_cast<long long>(info.st_size),
-                static_cast<long long>(info.st_mtim.tv_sec),
-                static_cast<long long>(info.st_mtim.tv_nsec)};
-  static std::mutex mutex;
-  static std::map<Key, std::shared_ptr<const ConvexHull>> cache;
-  {
-    std::lock_guard<std::mutex> lock(mutex);
-    const auto found = cache.find(key);
-    if (found != cache.end()) return found->second;
-  }
-  // Computed outside the lock; a concurrent duplicate just does the work
-  // twice and both results are identical.
-  std::shared_ptr<const ConvexHull> hull = calcConvexHull(loadMeshVertices(path, scale));
-  std::lock_guard<std::mutex> lock(mutex);
-  return cache.emplace(key, std::move(hull)).first->second;
+  static MeshFileCache<ConvexHull> cache;
+  return cache.findOrLoad(path, scale,
+                          [&] { return calcConvexHull(loadMeshVertices(path, scale)); });
 }
 
 }  // namespace scene_detail

@@ -69,16 +69,20 @@ std::shared_ptr<const ConvexHull> calcConvexHull(const std::vector<SimTK::Vec3>&
 // tools do) and their <unit>. Throws std::runtime_error with assimp's reason.
 std::vector<SimTK::Vec3> loadMeshVertices(const std::string& path, const SimTK::Vec3& scale);
 
+// Both loaders below read a file once per process: results are cached by
+// path, scale, file size and modification time (episodes rebuild scenes
+// from the same files; assimp's reading was 80 % of a cabinet reset), and
+// a file changed on disk is read again.
+
 // Triangle lists of a mesh file for the renderer, one per sub-mesh, read
 // with the same conventions as loadMeshVertices: positions scaled, normals
 // (generated where the file has none) unit length, color and texture from
 // the sub-mesh's material. Throws std::runtime_error with assimp's reason
 // or if the file has no triangles.
-std::vector<VisualMesh> loadVisualMeshes(const std::string& path, const SimTK::Vec3& scale);
+std::shared_ptr<const std::vector<VisualMesh>> loadVisualMeshes(const std::string& path,
+                                                                const SimTK::Vec3& scale);
 
-// loadMeshVertices + calcConvexHull, cached for the process by path, scale,
-// file size and modification time (episodes rebuild scenes from the same
-// files).
+// loadMeshVertices + calcConvexHull.
 std::shared_ptr<const ConvexHull> loadConvexHull(const std::string& path, const SimTK::Vec3& scale);
 
 }  // namespace scene_detail
