@@ -1,6 +1,7 @@
 // One engine running one benchmark scene, as the timing loop sees it: env
 // steps, the scene's own checks, and what the table prints about it. The
-// scenes built from a bench::Model (model_run.hpp) implement it.
+// scenes built from a bench::Model (model_run.hpp) and the cabinet twin
+// (cabinet_twin.hpp) implement it.
 #pragma once
 
 #include <Eigen/Core>
@@ -29,6 +30,11 @@ struct RunOptions {
   double fixed_step = 0;   // > 0: overrides PhysicsSettings::fixed_step
   double mujoco_dt = 0.002;
   std::string mujoco_integrator;  // empty: the scene's
+  // The cabinet twin: object, seed and env steps per episode (0: the
+  // task's episode length).
+  std::string twin_object;
+  std::uint64_t twin_seed = 0;
+  int twin_episode_steps = 0;
 };
 
 class SceneRun {
@@ -56,6 +62,8 @@ class SceneRun {
   // steps it was spent on.
   virtual IntegratorStatistics getIntegratorStatistics() const { return {}; }
   long getEnvSteps() const { return env_steps_; }
+  // A line on what the checks saw (extremes), or "".
+  virtual std::string describeChecks() const { return {}; }
 
  protected:
   // One env step; throws std::runtime_error (or SimulationDiverged) if the

@@ -1,5 +1,7 @@
 #include "bench_scenes.hpp"
 
+#include "cabinet_twin.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -364,6 +366,7 @@ std::vector<BenchScene> makeScenes() {
   for (int n : {10, 100}) scenes.push_back(makeResting(false, n));
   // Not in the list: the box pile with box-box contact as well.
   scenes.push_back(makeResting(true, 100, 4));
+  scenes.push_back(makeCabinetTwinScene());
   return scenes;
 }
 

@@ -45,6 +45,12 @@ struct BenchScene {
   // a larger difference fails the scene, with 0 it is only reported.
   std::vector<std::pair<int, std::string>> compared_joints;
   double compare_tolerance = 0;
+  // Scenes that are not a bench::Model (the cabinet twin) build their two
+  // runs themselves; `model` is then unused.
+  std::function<SceneRuns(const RunOptions& options)> make_runs;
+  // Their documents for --write-models: (file name suffix, text) pairs.
+  std::function<std::vector<std::pair<std::string, std::string>>(const RunOptions& options)>
+      make_documents;
 };
 
 std::vector<BenchScene> makeScenes();

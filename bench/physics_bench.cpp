@@ -4,7 +4,8 @@
 // An environment step is 5 control ticks of 10 ms (ManiSkill's 20 Hz agent,
 // 100 Hz controller). Each scene is built from one bench::Model as URDF for
 // manibench::Scene and as MJCF for MuJoCo (timestep 2 ms by default, 5
-// mj_steps per tick). Per scene and engine: settle, warm up, then several
+// mj_steps per tick), except cabinet_random, the twin of the real
+// OpenCabinetDrawer-v0 environment (cabinet_twin.hpp). Per scene and engine: settle, warm up, then several
 // measurement windows, alternating between the engines so that both see
 // the same machine noise; the table gives the median, and manibench's
 // integrator work per env step (load-independent). Every scene is
@@ -40,6 +41,7 @@ struct Options {
   double seconds = 2.0;  // wall seconds per measurement window
   int repeats = 5;       // measurement windows per engine and scene
   RunOptions run;        // overrides of the scenes' own settings
+  bool quick = false;
   std::vector<std::string> scenes;  // name prefixes; empty: all
   bool verbose = false;
   bool list = false;
@@ -54,8 +56,9 @@ void printUsage(std::FILE* out) {
                "  --scene NAME[,NAME...]  run only scenes whose name starts with NAME\n"
                "                          (arm10, drawer, arm10_random, drawer_random,\n"
                "                          boxes10, boxes100, spheres10, spheres100,\n"
-               "                          stacks100; 'boxes' selects boxes10 and boxes100,\n"
-               "                          'drawer' drawer and drawer_random)\n"
+               "                          stacks100, cabinet_random; 'boxes' selects\n"
+               "                          boxes10 and boxes100, 'drawer' drawer and\n"
+               "                          drawer_random)\n"
                "  --seconds S             measurement window, wall seconds (default 2)\n"
                "  --warmup S              warm-up per engine, wall seconds (default 2)\n"
                "  --repeats N             windows per engine; the median is reported (default 5)\n"
@@ -65,6 +68,11 @@ void printUsage(std::FILE* out) {
                "  --accuracy A            Simbody integrator accuracy (default 1e-2)\n"
                "  --fixed-step H          Simbody semi_explicit_euler step (default 5e-4 s)\n"
                "  --mujoco-dt DT          MuJoCo timestep, must divide 10 ms (default 0.002)\n"
+               "  --twin-object ID        cabinet_random: the object (default: the first\n"
+               "                          train object, 2000_link_0)\n"
+               "  --twin-seed N           cabinet_random: the reset seed (default 0)\n"
+               "  --twin-steps N          cabinet_random: env steps per episode (default: the\n"
+               "                          task's 200; 10 with --quick)\n"
                "  --mujoco-integrator I   Euler or implicit for every scene (default: per scene)\n"
                "  --verbose               print every measurement window\n"
                "  --run-unsupported       run scenes needing contact manibench lacks anyway\n"
@@ -117,6 +125,15 @@ bool parseOptions(int argc, char** argv, Options& options) {
       options.warmup = 0;
       options.seconds = 0.2;
       options.repeats = 1;
+      options.quick = true;
+    } else if (arg == "--twin-object") {
+      if (!text(options.run.twin_object)) return false;
+    } else if (arg == "--twin-seed") {
+      if (!value(number, 0)) return false;
+      options.run.twin_seed = static_cast<std::uint64_t>(number);
+    } else if (arg == "--twin-steps") {
+      if (!value(number, 1)) return false;
+      options.run.twin_episode_steps = static_cast<int>(number);
     } else if (arg == "--integrator") {
       if (!text(options.run.integrator)) return false;
     } else if (arg == "--accuracy") {
@@ -149,6 +166,8 @@ bool parseOptions(int argc, char** argv, Options& options) {
       return false;
     }
   }
+  // A short twin episode keeps the smoke test within seconds.
+  if (options.quick && options.run.twin_episode_steps == 0) options.run.twin_episode_steps = 10;
   return true;
 }
 
@@ -271,7 +290,7 @@ std::string describeWork(const SceneRun& run) {
 Row runScene(const BenchScene& scene, const Options& options, bool box_box) {
   Row row;
   row.scene = scene.name;
-  row.integrator = describeIntegrator(makeModelSettings(scene, options.run));
+  if (!scene.make_runs) row.integrator = describeIntegrator(makeModelSettings(scene, options.run));
   if (scene.needs_box_box && !box_box && !options.run_unsupported) {
     row.status = "not supported yet";
     row.notes.push_back("needs box-box contact, which manibench's scene does not simulate yet");
@@ -281,7 +300,7 @@ Row runScene(const BenchScene& scene, const Options& options, bool box_box) {
 
   SceneRuns runs;
   try {
-    runs = makeModelRuns(scene, options.run);
+    runs = scene.make_runs ? scene.make_runs(options.run) : makeModelRuns(scene, options.run);
   } catch (const std::exception& e) {
     row.status = "FAIL";
     row.notes.push_back(std::string("cannot build the scene: ") + e.what());
@@ -331,6 +350,9 @@ Row runScene(const BenchScene& scene, const Options& options, bool box_box) {
     row.notes.push_back(comparison + limit);
     if (!within) row.status = "FAIL";
   }
+  for (int e = 0; e < 2; ++e)
+    if (const std::string seen = engines[e]->describeChecks(); !seen.empty())
+      row.notes.push_back(std::string(names[e]) + ": " + seen);
   const std::string work = describeWork(*engines[0]);
   if (!work.empty()) row.notes.push_back(work);
   return row;
@@ -365,6 +387,11 @@ bool writeFile(const std::string& path, const std::string& text) {
 
 bool writeModels(const BenchScene& scene, const Options& options) {
   const std::string base = options.write_models + "/" + scene.name;
+  if (scene.make_documents) {
+    for (const auto& [suffix, text] : scene.make_documents(options.run))
+      if (!writeFile(base + suffix, text)) return false;
+    return true;
+  }
   MjcfOptions mjcf;
   mjcf.timestep = options.run.mujoco_dt;
   mjcf.integrator = options.run.mujoco_integrator.empty() ? scene.mujoco_integrator
