@@ -27,12 +27,13 @@ const char* const kPartNames[2] = {"robot", "cabinet"};
 // Sanity limits (both engines). Speeds: commands reach 3.14 rad/s and
 // 0.5 m/s; a blow-up is orders of magnitude beyond. Limits and the floor:
 // manibench's stops and contacts are penalty springs, MuJoCo's soft
-// constraints. Under random commands manibench stays within 4 mm (mrad);
-// MuJoCo sinks a hand 7 mm into the floor and lets the light wrist (joint
-// 7, 12 Nm) pass its limit by up to 0.075 rad, whatever its limit's
-// stiffness (docs/performance.md).
+// constraints. Under random commands manibench stays within 6 mm (mrad);
+// MuJoCo sinks a finger 9 mm into the floor and lets the light wrist
+// (joint 7, 12 Nm, drive damping 100) pass its limit by up to 0.11 rad:
+// its implicit integrator at 2 ms divides the limit's impulse by
+// 1 + dt kd / I (docs/performance.md).
 constexpr double kMaxSpeed = 10;          // rad/s or m/s, any joint
-constexpr double kLimitTolerance = 0.1;   // rad beyond a revolute joint's limit
+constexpr double kLimitTolerance = 0.15;  // rad beyond a revolute joint's limit
 constexpr double kSlideLimitTolerance = 0.01;  // m beyond a prismatic joint's limit
 constexpr double kFloorTolerance = 0.02;  // m below the floor, any shape
 constexpr double kMaxBaseTravel = 3.0;    // m from where the episode started
