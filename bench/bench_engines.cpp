@@ -1,10 +1,10 @@
 #include "bench_engines.hpp"
 
-#include <mujoco/mujoco.h>
-
+#include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <stdexcept>
+
+#include "bench_mujoco.hpp"
 
 namespace manibench::bench {
 namespace {
@@ -73,6 +73,12 @@ class ManibenchEngine final : public Engine {
   double getJointPosition(int articulation, const std::string& joint) const override {
     return scene_.getJointPositions(articulation)[findJoint(articulation, joint)];
   }
+  double getJointVelocity(int articulation, const std::string& joint) const override {
+    return scene_.getJointVelocities(articulation)[findJoint(articulation, joint)];
+  }
+  IntegratorStatistics getIntegratorStatistics() const override {
+    return scene_.getIntegratorStatistics();
+  }
   Eigen::Vector3d getRootPosition(int articulation) const override {
     return scene_.getRootPose(articulation).position;
   }
@@ -100,22 +106,8 @@ class ManibenchEngine final : public Engine {
 
 class MujocoEngine final : public Engine {
  public:
-  MujocoEngine(const Model& model, const MujocoSettings& settings) : model_(model) {
-    const std::string xml = toMjcf(model, settings.mjcf);
-    // Load from a virtual file: no temporary files, no clashes between runs.
-    auto vfs = std::make_unique<mjVFS>();  // ~1 MB: not on the stack
-    mj_defaultVFS(vfs.get());
-    const char* file = "bench_model.xml";
-    if (mj_makeEmptyFileVFS(vfs.get(), file, static_cast<int>(xml.size())) != 0)
-      throw std::runtime_error("MuJoCo: cannot create the virtual model file");
-    std::memcpy(vfs->filedata[mj_findFileVFS(vfs.get(), file)], xml.data(), xml.size());
-    char error[1024] = "";
-    m_ = mj_loadXML(file, vfs.get(), error, sizeof error);
-    mj_deleteVFS(vfs.get());
-    if (m_ == nullptr) throw std::runtime_error(std::string("MuJoCo: cannot load the model: ") + error);
-    d_ = mj_makeData(m_);
-    if (d_ == nullptr) throw std::runtime_error("MuJoCo: mj_makeData failed");
-
+  MujocoEngine(const Model& model, const MujocoSettings& settings)
+      : model_(model), sim_(toMjcf(model, settings.mjcf)), m_(sim_.m), d_(sim_.d) {
     for (const Model::InitialJoint& init : model.initial_joints)
       d_->qpos[m_->jnt_qposadr[findJoint(init.articulation, init.joint)]] = init.position;
     mj_forward(m_, d_);
@@ -134,13 +126,6 @@ class MujocoEngine final : public Engine {
     initial_ctrl_.assign(d_->ctrl, d_->ctrl + m_->nu);
   }
 
-  ~MujocoEngine() override {
-    mj_deleteData(d_);
-    mj_deleteModel(m_);
-  }
-  MujocoEngine(const MujocoEngine&) = delete;
-  MujocoEngine& operator=(const MujocoEngine&) = delete;
-
   void setTargets(const std::vector<DriveTarget>& targets) override {
     for (std::size_t i = 0; i < model_.drives.size(); ++i) {
       const Drive& drive = model_.drives[i];
@@ -149,26 +134,12 @@ class MujocoEngine final : public Engine {
   }
 
   void tick() override {
-    for (int i = 0; i < substeps_; ++i) {
-      if (balanced_dofs_.empty()) {
-        mj_step(m_, d_);
-        continue;
-      }
-      // Passive-force balancing: qfrc_bias (gravity + Coriolis) at this
-      // state, applied on the balanced dofs before the forces are summed.
-      mj_step1(m_, d_);
-      for (int dof : balanced_dofs_) d_->qfrc_applied[dof] = d_->qfrc_bias[dof];
-      mj_step2(m_, d_);
-    }
-    for (int i = 0; i < m_->nq; ++i)
-      if (!std::isfinite(d_->qpos[i]))
-        throw std::runtime_error("MuJoCo: non-finite position at t=" + std::to_string(d_->time));
+    for (int i = 0; i < substeps_; ++i) sim_.step(balanced_dofs_);
+    sim_.checkFinite();
   }
 
   void reset() override {
-    // mj_resetData clears the warning counters: keep them.
-    for (int i = 0; i < mjNWARNING; ++i) warnings_[i] += d_->warning[i].number;
-    mj_resetData(m_, d_);
+    sim_.resetData();
     std::copy(initial_qpos_.begin(), initial_qpos_.end(), d_->qpos);
     std::copy(initial_ctrl_.begin(), initial_ctrl_.end(), d_->ctrl);
     mj_forward(m_, d_);
@@ -179,46 +150,32 @@ class MujocoEngine final : public Engine {
   double getJointPosition(int articulation, const std::string& joint) const override {
     return d_->qpos[m_->jnt_qposadr[findJoint(articulation, joint)]];
   }
+  double getJointVelocity(int articulation, const std::string& joint) const override {
+    return d_->qvel[m_->jnt_dofadr[findJoint(articulation, joint)]];
+  }
   Eigen::Vector3d getRootPosition(int articulation) const override {
     const Articulation& art = model_.articulations.at(articulation);
     if (art.fixed_base) return art.root_position;
-    const int joint = mj_name2id(m_, mjOBJ_JOINT, mjcfName(art, "root").c_str());
+    const int joint = sim_.findId(mjOBJ_JOINT, mjcfName(art, "root"));
     const mjtNum* q = d_->qpos + m_->jnt_qposadr[joint];
     return Eigen::Vector3d(q[0], q[1], q[2]);
   }
 
-  std::string getProblems() const override {
-    static const std::pair<int, const char*> kWarnings[] = {
-        {mjWARN_CONTACTFULL, "contact buffer full"},
-        {mjWARN_CNSTRFULL, "constraint buffer full"},
-        {mjWARN_BADQACC, "bad acceleration (data reset)"},
-        {mjWARN_BADQPOS, "bad position (data reset)"},
-        {mjWARN_BADQVEL, "bad velocity (data reset)"},
-        {mjWARN_BADCTRL, "bad control"},
-    };
-    std::string problems;
-    for (const auto& [id, text] : kWarnings)
-      if (const long n = warnings_[id] + d_->warning[id].number; n > 0)
-        problems += (problems.empty() ? "" : "; ") + std::string(text) + " x" + std::to_string(n);
-    return problems;
-  }
+  std::string getProblems() const override { return sim_.getProblems(); }
 
  private:
   int findJoint(int articulation, const std::string& joint) const {
-    const std::string name = mjcfName(model_.articulations.at(articulation), joint);
-    const int id = mj_name2id(m_, mjOBJ_JOINT, name.c_str());
-    if (id < 0) throw std::invalid_argument("bench: no joint '" + name + "' in the MuJoCo model");
-    return id;
+    return sim_.findId(mjOBJ_JOINT, mjcfName(model_.articulations.at(articulation), joint));
   }
 
   const Model& model_;
-  mjModel* m_ = nullptr;
-  mjData* d_ = nullptr;
+  MujocoSim sim_;
+  mjModel* m_;
+  mjData* d_;
   int substeps_ = 1;
   std::vector<int> balanced_dofs_;
   std::vector<mjtNum> initial_qpos_;
   std::vector<mjtNum> initial_ctrl_;
-  long warnings_[mjNWARNING] = {};  // counted before the last reset
 };
 
 }  // namespace

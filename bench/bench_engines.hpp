@@ -9,12 +9,10 @@
 #include <vector>
 
 #include "bench_model.hpp"
+#include "bench_run.hpp"
 #include "manibench/scene.hpp"
 
 namespace manibench::bench {
-
-constexpr double kControlDt = 0.01;  // one control tick (100 Hz)
-constexpr int kTicksPerEnvStep = 5;  // an environment step (20 Hz)
 
 class Engine {
  public:
@@ -29,10 +27,13 @@ class Engine {
 
   virtual double getTime() const = 0;
   virtual double getJointPosition(int articulation, const std::string& joint) const = 0;
+  virtual double getJointVelocity(int articulation, const std::string& joint) const = 0;
   virtual Eigen::Vector3d getRootPosition(int articulation) const = 0;
   // Empty if the engine reports nothing wrong so far (MuJoCo's warnings:
   // full contact buffers, bad accelerations and the resets they cause).
   virtual std::string getProblems() const { return {}; }
+  // manibench's integrator work so far; all zero for MuJoCo.
+  virtual IntegratorStatistics getIntegratorStatistics() const { return {}; }
 };
 
 std::unique_ptr<Engine> makeManibenchEngine(const Model& model, const PhysicsSettings& settings);

@@ -1,5 +1,7 @@
 #include "bench_scenes.hpp"
 
+#include "cabinet_twin.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -31,7 +33,7 @@ BenchScene makeArm() {
   scene.description =
       "10-DoF revolute arm (1 kg links, 12 cm), velocity drives (damping 100, target 0) "
       "+ gravity/Coriolis balancing, holding a bent pose";
-  scene.integrator = "cpodes";
+  scene.integrator = "implicit_euler";  // manibench's default
   scene.mujoco_integrator = "implicit";
   Model& model = scene.model;
   model.name = "arm10";
@@ -66,7 +68,7 @@ BenchScene makeArm() {
   }
   model.articulations.push_back(arm);
 
-  scene.policy = [](double, std::vector<DriveTarget>& targets) {
+  scene.policy = [](long, long, std::vector<DriveTarget>& targets) {
     for (DriveTarget& target : targets) target = DriveTarget{0, 0};  // velocity 0
   };
   std::vector<double> q0(initial, initial + kArmDof);
@@ -92,7 +94,7 @@ BenchScene makeDrawer() {
   scene.description =
       "fixed cabinet, 2 kg drawer on a slider (damping 5), box handle; a carriage with two "
       "box fingers (position drives 1000/100) squeezes the handle (20 N) and pulls at 15 cm/s";
-  scene.integrator = "cpodes";
+  scene.integrator = "implicit_euler";  // manibench's default
   scene.mujoco_integrator = "implicit";
   scene.needs_box_box = true;
   scene.episode_ticks = 250;  // 2.5 s: open, close, pull 22.5 cm, hold
@@ -178,7 +180,8 @@ BenchScene makeDrawer() {
   model.drives.push_back({1, "top", 1000, 100, true});
   model.drives.push_back({1, "bottom", 1000, 100, true});
 
-  scene.policy = [](double t, std::vector<DriveTarget>& targets) {
+  scene.policy = [](long, long tick, std::vector<DriveTarget>& targets) {
+    const double t = tick * kControlDt;
     const double finger = t < kCloseTime ? kFingerOpen : kFingerClosed;
     targets[0] = {0, t >= kPullStart && t < kPullEnd ? kPullSpeed : 0.0};
     targets[1] = {finger, 0};
@@ -193,6 +196,89 @@ BenchScene makeDrawer() {
                     opened, expected, pulled);
     return {};
   };
+  return scene;
+}
+
+// --- the same under random commands (a learning agent's exploration) -----------
+
+// "" if every listed joint is finite, within [lower - tolerance, upper +
+// tolerance] and slower than `max_speed`.
+struct JointBounds {
+  int articulation;
+  std::string joint;
+  double lower, upper, max_speed;
+};
+std::string checkBounds(const Engine& engine, const std::vector<JointBounds>& bounds,
+                        double tolerance) {
+  for (const JointBounds& b : bounds) {
+    const double q = engine.getJointPosition(b.articulation, b.joint);
+    const double v = engine.getJointVelocity(b.articulation, b.joint);
+    if (!(q >= b.lower - tolerance && q <= b.upper + tolerance))
+      return "joint '" + b.joint + "' at " + format("%.4g, outside [%.4g, %.4g]", q, b.lower, b.upper) +
+             format(" + %g", tolerance);
+    if (!(std::abs(v) <= b.max_speed))
+      return "joint '" + b.joint + "' moves at " + format("%.4g (limit %.4g)", v, b.max_speed);
+  }
+  return {};
+}
+
+constexpr double kArmRandomSpeed = 1.5;  // rad/s: targets in [-1.5, 1.5]
+constexpr double kCarriageRandomSpeed = 0.3;  // m/s
+
+// arm10 with a new random velocity target per joint every control tick, in
+// 2 s episodes from the bent pose. No contact: both engines integrate the
+// same equations, so their end states are compared too.
+BenchScene makeArmRandom() {
+  BenchScene scene = makeArm();
+  scene.name = "arm10_random";
+  scene.description =
+      "arm10 under random velocity targets (uniform in +-1.5 rad/s, new every 10 ms tick), "
+      "2 s episodes from the bent pose";
+  scene.episode_ticks = 200;
+  scene.settle_time = 0;
+  scene.policy = [](long episode, long tick, std::vector<DriveTarget>& targets) {
+    for (std::size_t i = 0; i < targets.size(); ++i)
+      targets[i] = {0, uniformAt(-kArmRandomSpeed, kArmRandomSpeed, 0, episode, tick, int(i))};
+  };
+  std::vector<JointBounds> bounds;
+  for (const Drive& drive : scene.model.drives) {
+    bounds.push_back({0, drive.joint, -1e9, 1e9, 4 * kArmRandomSpeed});
+    scene.compared_joints.emplace_back(0, drive.joint);
+  }
+  // Measured: 2 s of random commands end 0.005-0.006 rad apart (CPodes'
+  // accuracy 1e-2, MuJoCo's 2 ms step).
+  scene.compare_tolerance = 0.02;
+  scene.check = [bounds](const Engine& engine) { return checkBounds(engine, bounds, 0); };
+  return scene;
+}
+
+// drawer with random commands every control tick: the carriage a velocity
+// in +-0.3 m/s, each finger a position between closed (squeezing the
+// handle) and open. The fingers grab, slip and let go of the handle; the
+// drawer is pushed and pulled only through that contact.
+BenchScene makeDrawerRandom() {
+  BenchScene scene = makeDrawer();
+  scene.name = "drawer_random";
+  scene.description =
+      "drawer under random commands every 10 ms tick: carriage velocity in +-0.3 m/s, each "
+      "finger a position between closed (squeezing the handle) and open; 2.5 s episodes";
+  scene.policy = [](long episode, long tick, std::vector<DriveTarget>& targets) {
+    targets[0] = {0, uniformAt(-kCarriageRandomSpeed, kCarriageRandomSpeed, 0, episode, tick, 0)};
+    for (int i : {1, 2}) targets[i] = {uniformAt(kFingerClosed, kFingerOpen, 0, episode, tick, i), 0};
+  };
+  // Limits (+ 6 mm for the penalty stops and soft constraints: the
+  // carriage's drive, up to 500 N, can push the drawer into its stop, and
+  // manibench's stop gives 5 mm under it, 1e5 N/m); the carriage has none,
+  // but a sane one stays near the handle.
+  const std::vector<JointBounds> bounds = {
+      {0, "slide", 0, 0.35, 2.0},
+      {1, "pull", -0.5, 0.5, 2.0},
+      {1, "top", -0.02, 0.05, 5.0},
+      {1, "bottom", -0.02, 0.05, 5.0},
+  };
+  scene.check = [bounds](const Engine& engine) { return checkBounds(engine, bounds, 6e-3); };
+  for (const JointBounds& b : bounds) scene.compared_joints.emplace_back(b.articulation, b.joint);
+  scene.compare_tolerance = 0;  // contact: reported only
   return scene;
 }
 
@@ -211,15 +297,10 @@ BenchScene makeResting(bool boxes, int count, int stack = 1) {
                                  : std::string("on the floor")) +
                       ", 25 cm apart";
   scene.needs_box_box = boxes && stack > 1;
-  // CPodes' dense Newton iteration does not scale to many free bodies
-  // (100 of them: 7-10 env/s). Measured on the 2-core VM: fixed-step
-  // semi-explicit Euler suits many boxes (1.3x Runge-Kutta-Merson with 100
-  // on the floor, 2.4x with 100 in stacks), Runge-Kutta-Merson many spheres
-  // (3.5x the Euler's speed there). docs/performance.md has the numbers.
-  if (count <= 20)
-    scene.integrator = "cpodes";
-  else
-    scene.integrator = boxes ? "semi_explicit_euler" : "rk_merson";
+  // manibench's default, which solves each contact island on its own and so
+  // scales with the body count (CPodes' dense Newton iteration does not:
+  // 100 bodies ran at 7-10 env/s). docs/performance.md compares them all.
+  scene.integrator = "implicit_euler";
   scene.mujoco_integrator = "Euler";
   Model& model = scene.model;
   model.name = scene.name;
@@ -276,10 +357,13 @@ std::vector<BenchScene> makeScenes() {
   std::vector<BenchScene> scenes;
   scenes.push_back(makeArm());
   scenes.push_back(makeDrawer());
+  scenes.push_back(makeArmRandom());
+  scenes.push_back(makeDrawerRandom());
   for (int n : {10, 100}) scenes.push_back(makeResting(true, n));
   for (int n : {10, 100}) scenes.push_back(makeResting(false, n));
   // Not in the list: the box pile with box-box contact as well.
   scenes.push_back(makeResting(true, 100, 4));
+  scenes.push_back(makeCabinetTwinScene());
   return scenes;
 }
 

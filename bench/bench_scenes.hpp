@@ -9,6 +9,7 @@
 
 #include "bench_engines.hpp"
 #include "bench_model.hpp"
+#include "bench_run.hpp"
 
 namespace manibench::bench {
 
@@ -30,13 +31,26 @@ struct BenchScene {
   int episode_ticks = 0;
   // Simulated seconds before the first check and the first timing.
   double settle_time = 0.5;
-  // Drive targets for the control tick starting at episode time t (one per
-  // Model::drives entry); empty for scenes without drives.
-  std::function<void(double t, std::vector<DriveTarget>& targets)> policy;
+  // Drive targets for control tick `tick` (from 0) of episode `episode`
+  // (from 0; endless scenes have one), one per Model::drives entry; empty
+  // for scenes without drives. A function of its arguments only, so that
+  // both engines get the same commands.
+  std::function<void(long episode, long tick, std::vector<DriveTarget>& targets)> policy;
   // "" if the engine's state is physically sane. Resting scenes are checked
   // after settling and after every measurement window, episodic scenes at
   // the end of every episode.
   std::function<std::string(const Engine& engine)> check;
+  // Episodic scenes: joints (articulation, name) whose positions at the end
+  // of each episode are compared between the engines; with a tolerance > 0
+  // a larger difference fails the scene, with 0 it is only reported.
+  std::vector<std::pair<int, std::string>> compared_joints;
+  double compare_tolerance = 0;
+  // Scenes that are not a bench::Model (the cabinet twin) build their two
+  // runs themselves; `model` is then unused.
+  std::function<SceneRuns(const RunOptions& options)> make_runs;
+  // Their documents for --write-models: (file name suffix, text) pairs.
+  std::function<std::vector<std::pair<std::string, std::string>>(const RunOptions& options)>
+      make_documents;
 };
 
 std::vector<BenchScene> makeScenes();

@@ -4,9 +4,11 @@
 // An environment step is 5 control ticks of 10 ms (ManiSkill's 20 Hz agent,
 // 100 Hz controller). Each scene is built from one bench::Model as URDF for
 // manibench::Scene and as MJCF for MuJoCo (timestep 2 ms by default, 5
-// mj_steps per tick). Per scene and engine: settle, warm up, then several
+// mj_steps per tick), except cabinet_random, the twin of the real
+// OpenCabinetDrawer-v0 environment (cabinet_twin.hpp). Per scene and engine: settle, warm up, then several
 // measurement windows, alternating between the engines so that both see
-// the same machine noise; the table gives the median. Every scene is
+// the same machine noise; the table gives the median, and manibench's
+// integrator work per env step (load-independent). Every scene is
 // checked for physical sanity in both engines; a failed check makes the
 // exit status 1 (a benchmark of a broken scene measures nothing). Speed is
 // reported, never asserted.
@@ -26,27 +28,20 @@
 
 #include "bench_engines.hpp"
 #include "bench_model.hpp"
+#include "bench_run.hpp"
 #include "bench_scenes.hpp"
 #include "manibench/scene.hpp"
+#include "model_run.hpp"
 
 namespace manibench::bench {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 struct Options {
   double warmup = 2.0;   // wall seconds per engine and scene
   double seconds = 2.0;  // wall seconds per measurement window
   int repeats = 5;       // measurement windows per engine and scene
-  double mujoco_dt = 0.002;
-  std::string mujoco_integrator;  // overrides every scene's MuJoCo integrator
-  std::string integrator;  // overrides every scene's Simbody integrator
-  double accuracy = 0;     // overrides PhysicsSettings::accuracy if > 0
-  double fixed_step = 0;   // overrides PhysicsSettings::fixed_step if > 0
+  RunOptions run;        // overrides of the scenes' own settings
+  bool quick = false;
   std::vector<std::string> scenes;  // name prefixes; empty: all
   bool verbose = false;
   bool list = false;
@@ -59,9 +54,11 @@ void printUsage(std::FILE* out) {
   std::fprintf(out,
                "usage: manibench_physics_bench [options]\n"
                "  --scene NAME[,NAME...]  run only scenes whose name starts with NAME\n"
-               "                          (arm10, drawer, boxes10, boxes100, spheres10,\n"
-               "                          spheres100, stacks100; 'boxes' selects boxes10\n"
-               "                          and boxes100)\n"
+               "                          (arm10, drawer, arm10_random, drawer_random,\n"
+               "                          boxes10, boxes100, spheres10, spheres100,\n"
+               "                          stacks100, cabinet_random; 'boxes' selects\n"
+               "                          boxes10 and boxes100, 'drawer' drawer and\n"
+               "                          drawer_random)\n"
                "  --seconds S             measurement window, wall seconds (default 2)\n"
                "  --warmup S              warm-up per engine, wall seconds (default 2)\n"
                "  --repeats N             windows per engine; the median is reported (default 5)\n"
@@ -71,6 +68,11 @@ void printUsage(std::FILE* out) {
                "  --accuracy A            Simbody integrator accuracy (default 1e-2)\n"
                "  --fixed-step H          Simbody semi_explicit_euler step (default 5e-4 s)\n"
                "  --mujoco-dt DT          MuJoCo timestep, must divide 10 ms (default 0.002)\n"
+               "  --twin-object ID        cabinet_random: the object (default: the first\n"
+               "                          train object, 2000_link_0)\n"
+               "  --twin-seed N           cabinet_random: the reset seed (default 0)\n"
+               "  --twin-steps N          cabinet_random: env steps per episode (default: the\n"
+               "                          task's 200; 10 with --quick)\n"
                "  --mujoco-integrator I   Euler or implicit for every scene (default: per scene)\n"
                "  --verbose               print every measurement window\n"
                "  --run-unsupported       run scenes needing contact manibench lacks anyway\n"
@@ -123,16 +125,25 @@ bool parseOptions(int argc, char** argv, Options& options) {
       options.warmup = 0;
       options.seconds = 0.2;
       options.repeats = 1;
+      options.quick = true;
+    } else if (arg == "--twin-object") {
+      if (!text(options.run.twin_object)) return false;
+    } else if (arg == "--twin-seed") {
+      if (!value(number, 0)) return false;
+      options.run.twin_seed = static_cast<std::uint64_t>(number);
+    } else if (arg == "--twin-steps") {
+      if (!value(number, 1)) return false;
+      options.run.twin_episode_steps = static_cast<int>(number);
     } else if (arg == "--integrator") {
-      if (!text(options.integrator)) return false;
+      if (!text(options.run.integrator)) return false;
     } else if (arg == "--accuracy") {
-      if (!value(options.accuracy, 1e-12)) return false;
+      if (!value(options.run.accuracy, 1e-12)) return false;
     } else if (arg == "--fixed-step") {
-      if (!value(options.fixed_step, 1e-9)) return false;
+      if (!value(options.run.fixed_step, 1e-9)) return false;
     } else if (arg == "--mujoco-integrator") {
-      if (!text(options.mujoco_integrator)) return false;
+      if (!text(options.run.mujoco_integrator)) return false;
     } else if (arg == "--mujoco-dt") {
-      if (!value(options.mujoco_dt, 1e-6)) return false;
+      if (!value(options.run.mujoco_dt, 1e-6)) return false;
     } else if (arg == "--scene") {
       std::string list;
       if (!text(list)) return false;
@@ -155,6 +166,8 @@ bool parseOptions(int argc, char** argv, Options& options) {
       return false;
     }
   }
+  // A short twin episode keeps the smoke test within seconds.
+  if (options.quick && options.run.twin_episode_steps == 0) options.run.twin_episode_steps = 10;
   return true;
 }
 
@@ -163,28 +176,6 @@ bool isSelected(const Options& options, const std::string& name) {
   for (const std::string& prefix : options.scenes)
     if (name.compare(0, prefix.size(), prefix) == 0) return true;
   return false;
-}
-
-PhysicsSettings makeSettings(const BenchScene& scene, const Options& options) {
-  PhysicsSettings settings;
-  settings.integrator =
-      parseIntegrator(options.integrator.empty() ? scene.integrator : options.integrator);
-  if (options.accuracy > 0) settings.accuracy = options.accuracy;
-  if (options.fixed_step > 0) settings.fixed_step = options.fixed_step;
-  // MuJoCo has one friction coefficient: use it for both of Simbody's.
-  settings.default_material.static_friction = scene.model.friction;
-  settings.default_material.dynamic_friction = scene.model.friction;
-  return settings;
-}
-
-std::string describeIntegrator(const PhysicsSettings& settings) {
-  std::ostringstream s;
-  s << getIntegratorName(settings.integrator);
-  if (settings.integrator == Integrator::SemiExplicitEuler)
-    s << " h=" << settings.fixed_step;
-  else
-    s << " acc=" << settings.accuracy;
-  return s.str();
 }
 
 // Does manibench's scene make boxes touch boxes? A 10 cm box dropped 1 mm
@@ -216,98 +207,6 @@ bool probeBoxBoxContact() {
     return false;
   }
 }
-
-// One engine running one scene: the scripted episodes, the checks, timing.
-class Runner {
- public:
-  Runner(const BenchScene& scene, std::unique_ptr<Engine> engine)
-      : scene_(scene), engine_(std::move(engine)), targets_(scene.model.drives.size()) {}
-
-  // Untimed: simulate the scene's settling time and check the result.
-  void settle() {
-    while (ok() && ticks_ * kControlDt < scene_.settle_time - 1e-9) envStep();
-    if (scene_.episode_ticks == 0) check();
-  }
-
-  // Env steps per second over at least `seconds` of wall time (at least one
-  // step); NaN if the engine failed.
-  double measure(double seconds) {
-    if (!ok()) return std::nan("");
-    long steps = 0;
-    const Clock::time_point start = Clock::now();
-    double elapsed = 0;
-    do {
-      envStep();
-      ++steps;
-      elapsed = secondsSince(start);
-    } while (ok() && elapsed < seconds);
-    if (scene_.episode_ticks == 0) check();
-    return ok() ? steps / elapsed : std::nan("");
-  }
-
-  // Untimed: runs to the end of the current episode so that episodic scenes
-  // are checked at least once.
-  void finish() {
-    if (scene_.episode_ticks == 0) return;
-    const long target = episodes_ + 1;
-    while (ok() && episodes_ < target) envStep();
-  }
-
-  bool ok() const { return failure_.empty(); }
-  // "" if every check so far passed and the engine reported nothing wrong.
-  std::string getProblem() const {
-    std::string problem = failure_.empty() ? problem_ : failure_;
-    const std::string engine_problems = engine_->getProblems();
-    if (!engine_problems.empty()) problem += (problem.empty() ? "" : "; ") + engine_problems;
-    return problem;
-  }
-  long getEpisodes() const { return episodes_; }
-
- private:
-  void envStep() {
-    try {
-      for (int i = 0; i < kTicksPerEnvStep && ok(); ++i) tick();
-    } catch (const std::exception& e) {
-      failure_ = std::string("simulation failed: ") + e.what();
-    }
-  }
-
-  void tick() {
-    if (scene_.policy) {
-      scene_.policy(episode_tick_ * kControlDt, targets_);
-      engine_->setTargets(targets_);
-    }
-    engine_->tick();
-    ++ticks_;
-    if (scene_.episode_ticks > 0 && ++episode_tick_ == scene_.episode_ticks) {
-      check();
-      engine_->reset();
-      episode_tick_ = 0;
-      ++episodes_;
-    }
-  }
-
-  void check() {
-    if (!scene_.check || !problem_.empty()) return;
-    problem_ = scene_.check(*engine_);
-    if (!problem_.empty()) {
-      std::ostringstream where;
-      where << " (at t=" << engine_->getTime() << " s";
-      if (scene_.episode_ticks > 0) where << ", episode " << episodes_ + 1;
-      where << ")";
-      problem_ += where.str();
-    }
-  }
-
-  const BenchScene& scene_;
-  std::unique_ptr<Engine> engine_;
-  std::vector<DriveTarget> targets_;
-  long ticks_ = 0;
-  long episodes_ = 0;
-  int episode_tick_ = 0;
-  std::string problem_;
-  std::string failure_;
-};
 
 double median(std::vector<double> values) {
   values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }),
@@ -348,11 +247,50 @@ std::string formatRatio(const Row& row) {
   return buffer;
 }
 
+// "end of episodes 1-3, manibench vs MuJoCo: largest joint difference
+// 0.0012" over the episodes both engines completed; sets `worst` (NaN if
+// there were none).
+std::string compareEpisodeEnds(const SceneRun& a, const SceneRun& b, double& worst) {
+  const std::size_t n = std::min(a.getEpisodeEnds().size(), b.getEpisodeEnds().size());
+  worst = std::nan("");
+  if (n == 0) return {};
+  worst = 0;
+  for (std::size_t e = 0; e < n; ++e) {
+    const Eigen::VectorXd& x = a.getEpisodeEnds()[e];
+    const Eigen::VectorXd& y = b.getEpisodeEnds()[e];
+    if (x.size() == 0 || x.size() != y.size()) return {};
+    const double difference = (x - y).cwiseAbs().maxCoeff();
+    worst = std::isfinite(difference) ? std::max(worst, difference) : difference;
+  }
+  const std::string episodes = n == 1 ? "episode 1" : "episodes 1-" + std::to_string(n);
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.3g", worst);
+  return "end of " + episodes + ", manibench vs MuJoCo: largest joint difference " + buffer;
+}
+
+// manibench's integrator work per env step: load-independent, unlike the
+// timings.
+std::string describeWork(const SceneRun& run) {
+  const IntegratorStatistics s = run.getIntegratorStatistics();
+  const double n = static_cast<double>(run.getEnvSteps());
+  if (n <= 0 || s.realizations == 0) return {};
+  char buffer[200];
+  std::snprintf(buffer, sizeof buffer, "manibench per env step: %.1f integrator steps, ", s.steps / n);
+  std::string text = buffer;
+  if (s.jacobians > 0) {  // implicit integrators only
+    std::snprintf(buffer, sizeof buffer, "%.1f Newton iterations, %.2f Jacobians, ",
+                  s.iterations / n, s.jacobians / n);
+    text += buffer;
+  }
+  std::snprintf(buffer, sizeof buffer, "%.1f evaluations of the dynamics (%ld env steps)",
+                s.realizations / n, run.getEnvSteps());
+  return text + buffer;
+}
+
 Row runScene(const BenchScene& scene, const Options& options, bool box_box) {
   Row row;
   row.scene = scene.name;
-  const PhysicsSettings settings = makeSettings(scene, options);
-  row.integrator = describeIntegrator(settings);
+  if (!scene.make_runs) row.integrator = describeIntegrator(makeModelSettings(scene, options.run));
   if (scene.needs_box_box && !box_box && !options.run_unsupported) {
     row.status = "not supported yet";
     row.notes.push_back("needs box-box contact, which manibench's scene does not simulate yet");
@@ -360,22 +298,24 @@ Row runScene(const BenchScene& scene, const Options& options, bool box_box) {
   }
   std::fprintf(stderr, "manibench_physics_bench: %s ...\n", scene.name.c_str());
 
-  std::unique_ptr<Runner> engines[2];
-  const char* names[2] = {"manibench/Simbody", "MuJoCo"};
+  SceneRuns runs;
   try {
-    engines[0] = std::make_unique<Runner>(scene, makeManibenchEngine(scene.model, settings));
-    MujocoSettings mujoco;
-    mujoco.mjcf.timestep = options.mujoco_dt;
-    mujoco.mjcf.integrator =
-        options.mujoco_integrator.empty() ? scene.mujoco_integrator : options.mujoco_integrator;
-    engines[1] = std::make_unique<Runner>(scene, makeMujocoEngine(scene.model, mujoco));
+    runs = scene.make_runs ? scene.make_runs(options.run) : makeModelRuns(scene, options.run);
   } catch (const std::exception& e) {
     row.status = "FAIL";
     row.notes.push_back(std::string("cannot build the scene: ") + e.what());
     return row;
   }
+  row.integrator = runs.integrator;
+  row.notes = runs.notes;
+  if (!runs.problem.empty()) {
+    row.status = "FAIL";
+    row.notes.push_back(runs.problem);
+  }
+  SceneRun* engines[2] = {runs.manibench.get(), runs.mujoco.get()};
+  const char* names[2] = {"manibench/Simbody", "MuJoCo"};
 
-  for (auto& engine : engines) {
+  for (SceneRun* engine : engines) {
     engine->settle();
     engine->measure(options.warmup);
   }
@@ -394,20 +334,35 @@ Row runScene(const BenchScene& scene, const Options& options, bool box_box) {
       row.notes.push_back(std::string(names[e]) + ": " + problem);
     }
   }
-  if (scene.episode_ticks > 0) {
+  if (engines[0]->getEpisodes() > 0 || engines[1]->getEpisodes() > 0) {
     std::ostringstream note;
     note << "episodes checked: manibench " << engines[0]->getEpisodes() << ", MuJoCo "
          << engines[1]->getEpisodes();
     row.notes.push_back(note.str());
   }
+  double worst = 0;
+  const std::string comparison = compareEpisodeEnds(*engines[0], *engines[1], worst);
+  if (!comparison.empty()) {
+    const bool within = scene.compare_tolerance <= 0 || worst <= scene.compare_tolerance;
+    char limit[64] = "";
+    if (scene.compare_tolerance > 0)
+      std::snprintf(limit, sizeof limit, " (limit %g)", scene.compare_tolerance);
+    row.notes.push_back(comparison + limit);
+    if (!within) row.status = "FAIL";
+  }
+  for (int e = 0; e < 2; ++e)
+    if (const std::string seen = engines[e]->describeChecks(); !seen.empty())
+      row.notes.push_back(std::string(names[e]) + ": " + seen);
+  const std::string work = describeWork(*engines[0]);
+  if (!work.empty()) row.notes.push_back(work);
   return row;
 }
 
 void printTable(const std::vector<Row>& rows) {
-  std::printf("\n%-11s %-28s %-20s %-20s %-15s %s\n", "scene", "Simbody integrator", "Simbody env/s",
+  std::printf("\n%-15s %-28s %-20s %-20s %-15s %s\n", "scene", "Simbody integrator", "Simbody env/s",
               "MuJoCo env/s", "MuJoCo/Simbody", "sanity");
   for (const Row& row : rows)
-    std::printf("%-11s %-28s %-20s %-20s %-15s %s\n", row.scene.c_str(), row.integrator.c_str(),
+    std::printf("%-15s %-28s %-20s %-20s %-15s %s\n", row.scene.c_str(), row.integrator.c_str(),
                 formatRate(row.simbody).c_str(), formatRate(row.mujoco).c_str(),
                 formatRatio(row).c_str(), row.status.c_str());
   bool any_note = false;
@@ -431,11 +386,16 @@ bool writeFile(const std::string& path, const std::string& text) {
 }
 
 bool writeModels(const BenchScene& scene, const Options& options) {
-  MjcfOptions mjcf;
-  mjcf.timestep = options.mujoco_dt;
-  mjcf.integrator =
-      options.mujoco_integrator.empty() ? scene.mujoco_integrator : options.mujoco_integrator;
   const std::string base = options.write_models + "/" + scene.name;
+  if (scene.make_documents) {
+    for (const auto& [suffix, text] : scene.make_documents(options.run))
+      if (!writeFile(base + suffix, text)) return false;
+    return true;
+  }
+  MjcfOptions mjcf;
+  mjcf.timestep = options.run.mujoco_dt;
+  mjcf.integrator = options.run.mujoco_integrator.empty() ? scene.mujoco_integrator
+                                                          : options.run.mujoco_integrator;
   if (!writeFile(base + ".xml", toMjcf(scene.model, mjcf))) return false;
   // Free-body scenes repeat one URDF; write the first of each name pattern.
   for (std::size_t a = 0; a < scene.model.articulations.size() && a < 2; ++a) {
@@ -451,7 +411,7 @@ int run(int argc, char** argv) {
   std::vector<BenchScene> scenes = makeScenes();
   if (options.list) {
     for (const BenchScene& scene : scenes)
-      std::printf("%-11s %s\n", scene.name.c_str(), scene.description.c_str());
+      std::printf("%-15s %s\n", scene.name.c_str(), scene.description.c_str());
     return 0;
   }
   bool any = false;
@@ -471,7 +431,7 @@ int run(int argc, char** argv) {
   const bool box_box = probeBoxBoxContact();
   std::printf("manibench physics benchmark: env step = %d control ticks of %g ms; MuJoCo %s, "
               "timestep %g ms\n",
-              kTicksPerEnvStep, kControlDt * 1e3, mj_versionString(), options.mujoco_dt * 1e3);
+              kTicksPerEnvStep, kControlDt * 1e3, mj_versionString(), options.run.mujoco_dt * 1e3);
   std::printf("per scene and engine: settle, %g s warm-up, %d window(s) of %g s (median, "
               "[min-max]); manibench box-box contact: %s\n",
               options.warmup, options.repeats, options.seconds, box_box ? "yes" : "no");

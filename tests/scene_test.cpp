@@ -755,6 +755,24 @@ TEST(SceneTest, JointsAreDepthFirstInFileOrderAndCarryUrdfData) {
   EXPECT_EQ(scene.getArticulationName(r), "r");
 }
 
+TEST(SceneTest, ArticulationSourceIsWhatWasAdded) {
+  const std::string text = ballUrdf(0.1);
+  const std::string path = writeTempFile("ball.urdf", text);
+  Scene scene;
+  const int fixed = scene.addUrdfString(armUrdf(), "/some/dir", "arm", at(1, 2, 3), true);
+  const int file = scene.addUrdfFile(path, "ball", at(0, 0, 1), false);
+  const ArticulationSource& arm = scene.getArticulationSource(fixed);
+  EXPECT_EQ(arm.urdf, armUrdf());
+  EXPECT_EQ(arm.base_dir, "/some/dir");
+  EXPECT_EQ(arm.root.position, Eigen::Vector3d(1, 2, 3));
+  EXPECT_TRUE(arm.fixed_base);
+  const ArticulationSource& ball = scene.getArticulationSource(file);
+  EXPECT_EQ(ball.urdf, text);
+  EXPECT_EQ(ball.base_dir, path.substr(0, path.rfind('/')));
+  EXPECT_FALSE(ball.fixed_base);
+  EXPECT_THROW(scene.getArticulationSource(2), SceneError);
+}
+
 TEST(SceneTest, RevoluteJointWithoutAxisTurnsAboutX) {
   const std::string urdf = robot(
       "r", link("base") + joint("j", "revolute", "base", "l1", "0 0 0", "", kLimit) +

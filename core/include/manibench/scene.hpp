@@ -193,6 +193,16 @@ struct IntegratorStatistics {
   }
 };
 
+// How an articulation was added: its URDF text, the folder its relative
+// mesh paths start at, its root pose and whether that root is fixed. Read
+// by tools that rebuild the same scene in another engine (bench/).
+struct ArticulationSource {
+  std::string urdf;
+  std::string base_dir;
+  Pose root;
+  bool fixed_base = false;
+};
+
 // Bad input (malformed URDF, unknown name, wrong vector size, misuse of the
 // build/run phases). The message names the file, link or joint at fault.
 class SceneError : public std::runtime_error {
@@ -258,6 +268,7 @@ class Scene {
   // --- lookup: any time after the add ------------------------------------
   int getArticulationCount() const;
   const std::string& getArticulationName(int articulation) const;
+  const ArticulationSource& getArticulationSource(int articulation) const;
   int findArticulation(const std::string& name) const;  // -1 if none
   // Link ids are global in the scene; links merged by fixed joints keep ids.
   int findLink(int articulation, const std::string& link_name) const;  // -1

@@ -193,6 +193,7 @@ SceneState::~SceneState() = default;
 struct Scene::Impl {
   struct Articulation {
     std::string name;
+    ArticulationSource source;
     ArticulationModel model;
     std::string base_dir;  // for mesh files
     SimTK::Transform X_root;
@@ -358,6 +359,7 @@ int Scene::Impl::addArticulation(const std::string& xml,
 
   Articulation art;
   art.name = name;
+  art.source = {xml, base_dir, root, fixed_base};
   art.model = scene_detail::buildArticulationModel(xml, source, base_dir,
                                                    settings.default_density);
   art.link_materials.assign(art.model.links.size(), settings.default_material);
@@ -812,6 +814,10 @@ int Scene::getArticulationCount() const {
 
 const std::string& Scene::getArticulationName(int articulation) const {
   return impl_->getArticulation(articulation, "getArticulationName").name;
+}
+
+const ArticulationSource& Scene::getArticulationSource(int articulation) const {
+  return impl_->getArticulation(articulation, "getArticulationSource").source;
 }
 
 int Scene::findArticulation(const std::string& name) const {

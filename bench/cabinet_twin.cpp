@@ -1,0 +1,730 @@
+#include "cabinet_twin.hpp"
+
+#include <manibench/abi.h>
+#include <manibench/config.hpp>
+#include <manibench/environment.hpp>
+#include <manibench/plugin_registry.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+#include "bench_mujoco.hpp"
+#include "mobile_panda_law.hpp"
+#include "model_run.hpp"
+#include "urdf_twin.hpp"
+
+namespace manibench::bench {
+namespace {
+
+constexpr const char* kTask = "OpenCabinetDrawer-v0";
+enum Part { kRobot = 0, kCabinet = 1 };
+const char* const kPartNames[2] = {"robot", "cabinet"};
+
+// Sanity limits (both engines). Speeds: commands reach 3.14 rad/s and
+// 0.5 m/s, but a drive at its effort limit cannot hold its joint against
+// the base's yaw jerks (damping 1000, a new random yaw rate each tick):
+// manibench whips the shoulder to 8.7 rad/s in one bench episode, with
+// CPODES at 1e-4 and implicit Euler at 0.25 ms alike, and a light wrist to
+// 18; a blow-up is orders of magnitude beyond. Limits and the floor:
+// manibench's stops and contacts are penalty springs, MuJoCo's soft
+// constraints. Under random commands manibench stays within 6 mm (mrad);
+// MuJoCo sinks a finger 9 mm into the floor and lets the light wrist
+// (joint 7, 12 Nm, drive damping 100) pass its limit by up to 0.11 rad:
+// its implicit integrator at 2 ms divides the limit's impulse by
+// 1 + dt kd / I (docs/performance.md).
+constexpr double kMaxSpeed = 30;          // rad/s or m/s, any joint
+constexpr double kLimitTolerance = 0.15;  // rad beyond a revolute joint's limit
+constexpr double kSlideLimitTolerance = 0.01;  // m beyond a prismatic joint's limit
+constexpr double kFloorTolerance = 0.02;  // m below the floor, any shape
+constexpr double kMaxBaseTravel = 3.0;    // m from where the episode started
+
+// Cross-engine checks before timing.
+constexpr int kReplaySteps = 5;        // env steps of random actions
+constexpr int kHoldSteps = 20;         // 1 s of zero actions
+constexpr double kHoldTolerance = 1e-3;  // rad or m
+constexpr int kSagSteps = 10;          // 0.5 s without balancing
+constexpr double kSagTolerance = 0.05;  // of the sag
+constexpr int kOpenLoopSteps = 10;     // 0.5 s of one fixed action
+constexpr double kOpenLoopTolerance = 0.01;  // rad or m
+
+// --- what both engines share -------------------------------------------------
+
+// The cabinet's per-episode joint damping and friction. The task draws
+// them at each reset (open_cabinet_task.cpp: splitmix64 seeded with
+// seed ^ "open_cab", three draws for the robot's placement, then per
+// cabinet joint friction U(0.05, 0.15) and damping U(5, 20)), and the
+// scene keeps them where no public call reads them. The bench repeats
+// that draw and sets the values in both engines: the manibench scene is
+// then unchanged if the copy is right, and both engines agree even if it
+// is not (the heading check below says which).
+struct CabinetDynamics {
+  std::vector<double> damping, friction;
+  bool matches_task = false;
+};
+
+CabinetDynamics drawCabinetDynamics(std::uint64_t seed, std::size_t joints, double robot_yaw) {
+  std::uint64_t state = seed ^ 0x6f70656e5f636162ULL;
+  auto uniform = [&state](double lo, double hi) {
+    std::uint64_t z = (state += 0x9E3779B97F4A7C15ULL);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    z ^= z >> 31;
+    return lo + (hi - lo) * double(z >> 11) * 0x1.0p-53;
+  };
+  constexpr double kPi = 3.14159265358979323846;
+  uniform(1.6, 1.8);  // distance
+  const double around = uniform(0.9 * kPi, 1.1 * kPi);
+  const double heading = around + kPi + uniform(-0.05 * kPi, 0.05 * kPi);
+  CabinetDynamics out;
+  out.matches_task = std::abs(std::remainder(heading, 2 * kPi) - robot_yaw) < 1e-12;
+  for (std::size_t j = 0; j < joints; ++j) {
+    out.friction.push_back(uniform(0.05, 0.15));
+    out.damping.push_back(uniform(5.0, 20.0));
+  }
+  return out;
+}
+
+struct TwinFacts {
+  std::string object;
+  std::uint64_t seed = 0;
+  int episode_steps = 200;
+  int frame_skip = 5;
+  double control_dt = 0.01;
+  std::vector<TwinPlacement> placements;  // [kRobot], [kCabinet]
+  Eigen::VectorXd initial_q[2];           // manibench's joint order
+  Eigen::Isometry3d cabinet_root = Eigen::Isometry3d::Identity();
+  CabinetDynamics cabinet_dynamics;
+};
+
+// One engine's state as the checks read it.
+struct TwinSnapshot {
+  Eigen::VectorXd q[2], v[2];               // manibench's joint order
+  std::vector<Eigen::Isometry3d> links[2];  // per TwinArticulation link
+};
+
+// The worst the checks have seen, for the table's notes.
+struct Extremes {
+  double penetration = 0;  // deepest shape below the floor, m
+  double speed = 0;        // fastest joint, rad/s or m/s
+  double beyond_limit = 0;  // farthest past a joint limit, rad or m
+  std::string speed_joint, limit_joint, floor_link;
+  long checks = 0;
+};
+
+// "" if the snapshot is physically sane (see the limits above).
+std::string checkSnapshot(const TwinSnapshot& s, const TwinFacts& f, Extremes& seen) {
+  char buffer[256];
+  ++seen.checks;
+  for (int part : {kRobot, kCabinet}) {
+    const TwinPlacement& p = f.placements[part];
+    for (std::size_t j = 0; j < p.joints.size(); ++j) {
+      const JointDescription& joint = p.joints[j];
+      const double q = s.q[part][Eigen::Index(j)], v = s.v[part][Eigen::Index(j)];
+      if (!std::isfinite(q) || !std::isfinite(v))
+        return kPartNames[part] + std::string(" joint '") + joint.name + "' is not finite";
+      if (std::abs(v) > seen.speed) {
+        seen.speed = std::abs(v);
+        seen.speed_joint = joint.name;
+      }
+      if (std::max(joint.lower - q, q - joint.upper) > seen.beyond_limit) {
+        seen.beyond_limit = std::max(joint.lower - q, q - joint.upper);
+        seen.limit_joint = joint.name;
+      }
+      const double tolerance =
+          joint.type == JointType::Prismatic ? kSlideLimitTolerance : kLimitTolerance;
+      if (!(q >= joint.lower - tolerance && q <= joint.upper + tolerance)) {
+        std::snprintf(buffer, sizeof buffer, "%s joint '%s' at %.4g, beyond its limits [%g, %g]",
+                      kPartNames[part], joint.name.c_str(), q, joint.lower, joint.upper);
+        return buffer;
+      }
+      if (!(std::abs(v) <= kMaxSpeed)) {
+        std::snprintf(buffer, sizeof buffer, "%s joint '%s' moves at %.4g (limit %g)",
+                      kPartNames[part], joint.name.c_str(), v, kMaxSpeed);
+        return buffer;
+      }
+    }
+    const TwinArticulation& art = p.articulation;
+    for (std::size_t l = 0; l < art.links.size(); ++l)
+      for (const TwinGeom& geom : art.links[l].geoms) {
+        if (part == kCabinet && l == 0) continue;  // fixed to the floor
+        const double z = calcLowestZ(geom, s.links[part][l]);
+        if (-z > seen.penetration) {
+          seen.penetration = -z;
+          seen.floor_link = art.links[l].name;
+        }
+        if (!(z >= -kFloorTolerance)) {
+          std::snprintf(buffer, sizeof buffer, "%s link '%s' is %.4g m below the floor",
+                        kPartNames[part], art.links[l].name.c_str(), -z);
+          return buffer;
+        }
+      }
+  }
+  // The robot: its base on the floor and upright, not far from its start.
+  const TwinArticulation& robot = f.placements[kRobot].articulation;
+  const int base = robot.findLink("base_link"), body = robot.findLink("body_link");
+  const Eigen::Isometry3d& X_base = s.links[kRobot][std::size_t(base)];
+  const double tilt = X_base.linear().col(2).dot(Eigen::Vector3d::UnitZ());
+  const double travel = (X_base.translation().head<2>() - f.initial_q[kRobot].head<2>()).norm();
+  if (!(std::abs(X_base.translation().z()) < 1e-6) || !(tilt > 0.999999) ||
+      !(s.links[kRobot][std::size_t(body)].linear().col(2).z() > 0.999999))
+    return "the robot's base left the floor or tilted";
+  if (!(travel < kMaxBaseTravel)) {
+    std::snprintf(buffer, sizeof buffer, "the robot's base travelled %.3g m (limit %g)", travel,
+                  kMaxBaseTravel);
+    return buffer;
+  }
+  // The cabinet's body stays where it was placed.
+  if (!((s.links[kCabinet][0].translation() - f.cabinet_root.translation()).norm() < 1e-9))
+    return "the cabinet moved";
+  return {};
+}
+
+// --- the two engines ----------------------------------------------------------
+
+class TwinEngine {
+ public:
+  virtual ~TwinEngine() = default;
+  // Back to the episode's initial state (the task's reset).
+  virtual void reset() = 0;
+  // One env step (frame_skip control ticks); throws if the simulation broke.
+  virtual void step(const Eigen::VectorXd& action) = 0;
+  virtual TwinSnapshot snapshot() const = 0;
+  // Passive-force balancing on the robot's actuated joints (on by default,
+  // as mobile_panda asks; reset() does not change it).
+  virtual void setBalancing(bool on) = 0;
+  virtual std::string getProblems() const { return {}; }
+  virtual IntegratorStatistics getIntegratorStatistics() const { return {}; }
+  // What the engine counted of its contacts, or "".
+  virtual std::string describeContacts() const { return {}; }
+};
+
+// manibench: the real environment.
+class ManibenchTwin final : public TwinEngine {
+ public:
+  ManibenchTwin(std::shared_ptr<PluginRegistry> registry, std::unique_ptr<Environment> env,
+                std::shared_ptr<const TwinFacts> facts)
+      : registry_(std::move(registry)), env_(std::move(env)), facts_(std::move(facts)) {
+    const Scene& scene = env_->getScene();
+    const TaskDescription& task = env_->getTaskDescription();
+    robot_ = scene.findArticulation(task.robot_articulation);
+    cabinet_ = scene.findArticulation("cabinet");
+    for (const std::string& name : task.actuated_joints) actuated_.push_back(scene.findJoint(robot_, name));
+    const int ids[2] = {robot_, cabinet_};
+    for (int part : {kRobot, kCabinet})
+      for (const TwinLink& link : facts_->placements[part].articulation.links)
+        link_ids_[part].push_back(scene.findLink(ids[part], link.name));
+  }
+
+  void reset() override {
+    env_->reset(facts_->object, facts_->seed);
+    const CabinetDynamics& d = facts_->cabinet_dynamics;
+    for (std::size_t j = 0; j < d.damping.size(); ++j)
+      env_->updScene().setJointDynamics(cabinet_, int(j), d.damping[j], d.friction[j]);
+    // The reset restored the environment's balancing.
+    if (!balancing_) env_->updScene().setPassiveForceBalancing(robot_, actuated_, false);
+  }
+
+  void step(const Eigen::VectorXd& action) override { env_->step(action); }
+
+  void setBalancing(bool on) override {
+    balancing_ = on;
+    env_->updScene().setPassiveForceBalancing(robot_, actuated_, on);
+  }
+
+  // One env step as Environment::step takes it, but with the bench's copy
+  // of the drive law in place of the controller plugin.
+  void stepWithLaw(const Eigen::VectorXd& action, MobilePandaLaw& law) {
+    const Eigen::VectorXd clipped = action.cwiseMax(-1.0).cwiseMin(1.0);
+    Scene& scene = env_->updScene();
+    std::vector<DriveCommand> commands;
+    for (int k = 0; k < facts_->frame_skip; ++k) {
+      law.compute(clipped, scene.getJointPositions(robot_)[2], commands);
+      scene.setDriveCommands(robot_, actuated_, commands);
+      scene.advance(facts_->control_dt);
+    }
+  }
+
+  TwinSnapshot snapshot() const override {
+    const Scene& scene = env_->getScene();
+    TwinSnapshot s;
+    const int ids[2] = {robot_, cabinet_};
+    for (int part : {kRobot, kCabinet}) {
+      s.q[part] = scene.getJointPositions(ids[part]);
+      s.v[part] = scene.getJointVelocities(ids[part]);
+      for (int link : link_ids_[part]) {
+        const Pose pose = scene.getLinkPose(link);
+        Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+        X.linear() = pose.orientation.toRotationMatrix();
+        X.translation() = pose.position;
+        s.links[part].push_back(X);
+      }
+    }
+    return s;
+  }
+
+  IntegratorStatistics getIntegratorStatistics() const override {
+    return env_->getScene().getIntegratorStatistics();
+  }
+
+ private:
+  std::shared_ptr<PluginRegistry> registry_;  // the environment's plugins
+  std::unique_ptr<Environment> env_;
+  std::shared_ptr<const TwinFacts> facts_;
+  int robot_ = -1, cabinet_ = -1;
+  std::vector<int> actuated_;
+  bool balancing_ = true;
+  std::vector<int> link_ids_[2];
+};
+
+// MuJoCo: the converted scene, driven by the copied drive law.
+class MujocoTwin final : public TwinEngine {
+ public:
+  MujocoTwin(std::shared_ptr<const TwinFacts> facts, const std::string& mjcf)
+      : facts_(std::move(facts)), sim_(mjcf), law_(1.0 / facts_->control_dt) {
+    const mjModel* m = sim_.m;
+    substeps_ = static_cast<int>(std::lround(facts_->control_dt / m->opt.timestep));
+    if (substeps_ < 1 || std::abs(substeps_ * m->opt.timestep - facts_->control_dt) > 1e-12)
+      throw std::invalid_argument("MuJoCo: the timestep must divide the control tick");
+    for (int part : {kRobot, kCabinet}) {
+      const TwinPlacement& p = facts_->placements[part];
+      for (const JointDescription& joint : p.joints) {
+        const int id = sim_.findId(mjOBJ_JOINT, p.articulation.name + "/" + joint.name);
+        qpos_[part].push_back(m->jnt_qposadr[id]);
+        dof_[part].push_back(m->jnt_dofadr[id]);
+      }
+      for (const TwinLink& link : p.articulation.links)
+        bodies_[part].push_back(sim_.findId(mjOBJ_BODY, p.articulation.name + "/" + link.name));
+    }
+    // Actuators are the law's joints in its order; all are balanced, as
+    // mobile_panda asks of the host.
+    for (const std::string& name : MobilePandaLaw::getJointNames()) {
+      const int id = sim_.findId(mjOBJ_JOINT, "robot/" + name);
+      balanced_dofs_.push_back(m->jnt_dofadr[id]);
+      if (name == "root_yaw") yaw_qpos_ = m->jnt_qposadr[id];
+    }
+  }
+
+  void reset() override {
+    sim_.resetData();
+    for (int part : {kRobot, kCabinet})
+      for (std::size_t j = 0; j < qpos_[part].size(); ++j)
+        sim_.d->qpos[qpos_[part][j]] = facts_->initial_q[part][Eigen::Index(j)];
+    law_.reset();
+    for (int i = 0; i < sim_.m->nu; ++i) setDrive(sim_.m, sim_.d, i, DriveCommand{});
+    mj_forward(sim_.m, sim_.d);
+  }
+
+  void step(const Eigen::VectorXd& action) override {
+    const Eigen::VectorXd clipped = action.cwiseMax(-1.0).cwiseMin(1.0);
+    for (int k = 0; k < facts_->frame_skip; ++k) {
+      law_.compute(clipped, sim_.d->qpos[yaw_qpos_], commands_);
+      for (std::size_t i = 0; i < commands_.size(); ++i) setDrive(sim_.m, sim_.d, int(i), commands_[i]);
+      for (int s = 0; s < substeps_; ++s) {
+        sim_.step(balancing_ ? balanced_dofs_ : no_dofs_);
+        contacts_ += sim_.d->ncon;
+        most_contacts_ = std::max(most_contacts_, sim_.d->ncon);
+        ++steps_;
+      }
+    }
+    sim_.checkFinite();
+  }
+
+  void setBalancing(bool on) override { balancing_ = on; }
+
+  std::string describeContacts() const override {
+    char buffer[120];
+    std::snprintf(buffer, sizeof buffer, "; %.2f contacts per mj_step on average, at most %d",
+                  steps_ > 0 ? double(contacts_) / double(steps_) : 0.0, most_contacts_);
+    return buffer;
+  }
+
+  TwinSnapshot snapshot() const override {
+    mj_kinematics(sim_.m, sim_.d);  // link poses of the current positions
+    TwinSnapshot s;
+    for (int part : {kRobot, kCabinet}) {
+      const std::size_t n = qpos_[part].size();
+      s.q[part].resize(Eigen::Index(n));
+      s.v[part].resize(Eigen::Index(n));
+      for (std::size_t j = 0; j < n; ++j) {
+        s.q[part][Eigen::Index(j)] = sim_.d->qpos[qpos_[part][j]];
+        s.v[part][Eigen::Index(j)] = sim_.d->qvel[dof_[part][j]];
+      }
+      for (int body : bodies_[part]) {
+        const mjtNum* p = sim_.d->xpos + 3 * body;
+        const mjtNum* q = sim_.d->xquat + 4 * body;
+        Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+        X.linear() = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).toRotationMatrix();
+        X.translation() = Eigen::Vector3d(p[0], p[1], p[2]);
+        s.links[part].push_back(X);
+      }
+    }
+    return s;
+  }
+
+  std::string getProblems() const override { return sim_.getProblems(); }
+
+ private:
+  std::shared_ptr<const TwinFacts> facts_;
+  MujocoSim sim_;
+  MobilePandaLaw law_;
+  int substeps_ = 1;
+  int yaw_qpos_ = 0;
+  std::vector<int> qpos_[2], dof_[2], bodies_[2];
+  std::vector<int> balanced_dofs_, no_dofs_;
+  bool balancing_ = true;
+  std::vector<DriveCommand> commands_;
+  long contacts_ = 0, steps_ = 0;
+  int most_contacts_ = 0;
+};
+
+// --- the timed run --------------------------------------------------------------
+
+// Episodes of the random action sequence, each from the reset state, as a
+// learning agent explores: uniform actions in [-1, 1] per env step (the
+// `random` policy's distribution), the same sequence in both engines.
+class TwinRun final : public SceneRun {
+ public:
+  TwinRun(std::unique_ptr<TwinEngine> engine, std::shared_ptr<const TwinFacts> facts)
+      : engine_(std::move(engine)), facts_(std::move(facts)), action_(MobilePandaLaw::kActionDim) {}
+
+  void settle() override {
+    engine_->reset();
+    check();
+  }
+
+  void finish() override {
+    while (ok() && (step_ != 0 || episodes_ == 0)) envStep();
+  }
+
+  IntegratorStatistics getIntegratorStatistics() const override {
+    return engine_->getIntegratorStatistics();
+  }
+
+ protected:
+  std::string getEngineProblems() const override { return engine_->getProblems(); }
+  void runEnvStep() override {
+    for (Eigen::Index i = 0; i < action_.size(); ++i)
+      action_[i] = uniformAt(-1, 1, facts_->seed, episodes_, step_, int(i));
+    engine_->step(action_);
+    check();  // every env step: cheap beside the step (under 1 % in MuJoCo)
+    if (++step_ < facts_->episode_steps) return;
+    const TwinSnapshot s = engine_->snapshot();
+    Eigen::VectorXd end(s.q[kRobot].size() + s.q[kCabinet].size());
+    end << s.q[kRobot], s.q[kCabinet];
+    recordEpisodeEnd(end);
+    engine_->reset();
+    step_ = 0;
+    ++episodes_;
+  }
+
+  void endWindow() override { check(); }
+
+  std::string describeChecks() const override {
+    char buffer[320];
+    std::snprintf(buffer, sizeof buffer,
+                  "%ld checks (every env step): fastest joint %.3g (%s), deepest below the floor "
+                  "%.3g m (%s), farthest past a joint limit %.3g (%s)",
+                  seen_.checks, seen_.speed, seen_.speed_joint.c_str(), seen_.penetration,
+                  seen_.floor_link.empty() ? "-" : seen_.floor_link.c_str(), seen_.beyond_limit,
+                  seen_.limit_joint.empty() ? "-" : seen_.limit_joint.c_str());
+    return buffer + engine_->describeContacts();
+  }
+
+ private:
+  void check() {
+    if (!ok()) return;
+    const std::string problem = checkSnapshot(engine_->snapshot(), *facts_, seen_);
+    if (problem.empty() || !problem_.empty()) return;  // keep the first
+    problem_ = problem;
+    if (!problem_.empty())
+      problem_ += " (episode " + std::to_string(episodes_ + 1) + ", step " + std::to_string(step_) + ")";
+  }
+
+  std::unique_ptr<TwinEngine> engine_;
+  std::shared_ptr<const TwinFacts> facts_;
+  Eigen::VectorXd action_;
+  int step_ = 0;
+  Extremes seen_;
+};
+
+// --- building the twin ----------------------------------------------------------
+
+ContactMaterial findMaterial(const EnvironmentOptions& options, const std::string& articulation,
+                             const std::string& link) {
+  ContactMaterial material = options.physics.default_material;
+  for (const BodyContactMaterial& body : options.contact_materials)  // later entries win
+    if (body.articulation == articulation && (body.link.empty() || body.link == link))
+      material = body.material;
+  return material;
+}
+
+// MuJoCo has one friction coefficient per contact where manibench has a
+// static and a dynamic one; the twin uses the static one (MuJoCo's
+// friction cone bounds what a contact holds, as manibench's stiction
+// does). manibench combines two surfaces by the geometric mean, MuJoCo by
+// the maximum, or by the geom of higher priority. So: the articulation
+// whose links share one material (the cabinet) gets priority 0, the other
+// one's geoms priority 1 and the combined coefficient with it; the floor
+// touches only explicit pairs, each with its own combined coefficient.
+void assignFriction(const EnvironmentOptions& options, std::vector<TwinPlacement>& placements) {
+  const double ground =
+      options.ground_material.value_or(options.physics.default_material).static_friction;
+  std::vector<std::vector<double>> mu(placements.size());
+  for (std::size_t a = 0; a < placements.size(); ++a)
+    for (const TwinLink& link : placements[a].articulation.links)
+      mu[a].push_back(findMaterial(options, placements[a].articulation.name, link.name).static_friction);
+  auto uniform = [&](std::size_t a) {
+    return std::all_of(mu[a].begin(), mu[a].end(), [&](double x) { return x == mu[a][0]; });
+  };
+  const std::size_t low = uniform(kCabinet) ? kCabinet : kRobot, high = 1 - low;
+  if (!uniform(low))
+    throw std::invalid_argument(
+        "MuJoCo twin: neither articulation has one contact material on all its links; MuJoCo's "
+        "friction combination cannot reproduce manibench's geometric mean then");
+  for (std::size_t a = 0; a < placements.size(); ++a) {
+    TwinPlacement& p = placements[a];
+    for (std::size_t l = 0; l < mu[a].size(); ++l) {
+      p.link_friction.push_back(a == high ? std::sqrt(mu[a][l] * mu[low][0]) : mu[a][l]);
+      p.link_priority.push_back(a == high ? 1 : 0);
+      p.floor_friction.push_back(std::sqrt(mu[a][l] * ground));
+    }
+  }
+}
+
+struct TwinBuild {
+  std::shared_ptr<PluginRegistry> registry;
+  std::unique_ptr<Environment> env;
+  std::shared_ptr<TwinFacts> facts;
+  std::string mjcf;
+};
+
+TwinBuild buildTwin(const RunOptions& options) {
+  TwinBuild build;
+  build.registry = std::make_shared<PluginRegistry>();
+  build.registry->loadSearchPath();
+  ConfigSources sources;
+  if (!options.integrator.empty()) sources.overrides.push_back("physics.integrator=" + options.integrator);
+  if (options.accuracy > 0) sources.overrides.push_back("physics.accuracy=" + std::to_string(options.accuracy));
+  if (options.fixed_step > 0)
+    sources.overrides.push_back("physics.fixed_step=" + std::to_string(options.fixed_step));
+  EnvironmentOptions env_options = calcEnvironmentOptions(loadTaskConfig(*build.registry, kTask, sources));
+  env_options.stop_on_success = false;
+  for (const SelfCollisionSetting& setting : env_options.self_collision)
+    if (setting.enabled) throw std::invalid_argument("MuJoCo twin: self-collision is not converted");
+  if (env_options.physics.gravity_z != -9.81)
+    throw std::invalid_argument("MuJoCo twin: only gravity -9.81 m/s^2 is converted");
+  build.env = std::make_unique<Environment>(*build.registry, kTask, env_options);
+  Environment& env = *build.env;
+  const TaskDescription& task = env.getTaskDescription();
+  if (env.getControllerDescription().name != "mobile_panda" ||
+      !(env.getControllerDescription().flags & MB_CONTROLLER_BALANCE_PASSIVE_FORCES) ||
+      task.actuated_joints != MobilePandaLaw::getJointNames())
+    throw std::invalid_argument("MuJoCo twin: it copies the mobile_panda controller on the "
+                                "single-arm robot, which " + std::string(kTask) + " no longer uses");
+
+  auto facts = std::make_shared<TwinFacts>();
+  facts->object = options.twin_object.empty() ? env.listObjects("train").front() : options.twin_object;
+  facts->seed = options.twin_seed;
+  facts->episode_steps =
+      options.twin_episode_steps > 0 ? options.twin_episode_steps : int(task.max_episode_steps);
+  facts->frame_skip = int(task.frame_skip);
+  facts->control_dt = 1.0 / task.control_frequency;
+  env.reset(facts->object, facts->seed);
+  const Scene& scene = env.getScene();
+  const int ids[2] = {scene.findArticulation(task.robot_articulation), scene.findArticulation("cabinet")};
+  if (ids[kCabinet] < 0) throw std::invalid_argument("MuJoCo twin: the scene has no 'cabinet'");
+  for (int part : {kRobot, kCabinet}) {
+    const ArticulationSource& source = scene.getArticulationSource(ids[part]);
+    TwinPlacement p;
+    p.articulation = parseTwinArticulation(source.urdf, kPartNames[part],
+                                           std::string(kTask) + " " + kPartNames[part] + " URDF");
+    p.root.linear() = source.root.orientation.toRotationMatrix();
+    p.root.translation() = source.root.position;
+    p.fixed_base = source.fixed_base;
+    p.joints = scene.getJoints(ids[part]);
+    facts->initial_q[part] = scene.getJointPositions(ids[part]);
+    if (part == kCabinet) facts->cabinet_root = p.root;
+    facts->placements.push_back(std::move(p));
+  }
+  facts->cabinet_dynamics = drawCabinetDynamics(facts->seed, facts->placements[kCabinet].joints.size(),
+                                                facts->initial_q[kRobot][2]);
+  for (std::size_t j = 0; j < facts->placements[kCabinet].joints.size(); ++j) {
+    facts->placements[kCabinet].joints[j].damping = facts->cabinet_dynamics.damping[j];
+    facts->placements[kCabinet].joints[j].friction = facts->cabinet_dynamics.friction[j];
+  }
+  assignFriction(env_options, facts->placements);
+
+  const TwinArticulation& robot = facts->placements[kRobot].articulation;
+  if (robot.findLink("base_link") < 0 || robot.findLink("body_link") < 0)
+    throw std::invalid_argument("MuJoCo twin: the robot has no base_link or body_link to check");
+
+  TwinMjcfOptions mjcf;
+  mjcf.timestep = options.mujoco_dt;
+  mjcf.integrator = options.mujoco_integrator.empty() ? "implicit" : options.mujoco_integrator;
+  mjcf.floor = scene.hasGround();
+  for (const std::string& joint : MobilePandaLaw::getJointNames()) mjcf.actuated.emplace_back(kRobot, joint);
+  build.mjcf = toTwinMjcf(facts->placements, mjcf);
+  build.facts = facts;
+  return build;
+}
+
+// Largest |a - b| over both articulations' joint positions.
+double calcDifference(const TwinSnapshot& a, const TwinSnapshot& b) {
+  double worst = 0;
+  for (int part : {kRobot, kCabinet})
+    worst = std::max(worst, (a.q[part] - b.q[part]).cwiseAbs().maxCoeff());
+  return worst;
+}
+
+std::string formatNumber(const char* format, double value) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, format, value);
+  return buffer;
+}
+
+SceneRuns makeTwinRuns(const RunOptions& options) {
+  TwinBuild build = buildTwin(options);
+  const std::shared_ptr<const TwinFacts> facts = build.facts;
+  SceneRuns runs;
+  runs.integrator = describeIntegrator(build.env->getOptions().physics);
+  auto manibench = std::make_unique<ManibenchTwin>(build.registry, std::move(build.env), facts);
+  auto mujoco = std::make_unique<MujocoTwin>(facts, build.mjcf);
+  std::vector<std::string>& notes = runs.notes;
+  notes.push_back(std::string(kTask) + ", object " + facts->object + " (" +
+                  std::to_string(facts->placements[kCabinet].joints.size()) + " cabinet joints), seed " +
+                  std::to_string(facts->seed) + ", " + std::to_string(facts->episode_steps) +
+                  " env steps per episode");
+  if (!facts->cabinet_dynamics.matches_task)
+    notes.push_back("the task's draw of the cabinet's joint damping and friction could not be "
+                    "repeated (its reset changed?): both engines use the bench's values");
+  auto fail = [&runs](const std::string& problem) {
+    runs.problem += (runs.problem.empty() ? "" : "; ") + problem;
+  };
+
+  // 1. The copied drive law reproduces Environment::step.
+  MobilePandaLaw law(1.0 / facts->control_dt);
+  Eigen::VectorXd action(MobilePandaLaw::kActionDim);
+  auto randomAction = [&](int step) {
+    for (Eigen::Index i = 0; i < action.size(); ++i)
+      action[i] = uniformAt(-1, 1, facts->seed ^ 0xC0FFEEULL, 0, step, int(i));
+    return action;
+  };
+  manibench->reset();
+  for (int k = 0; k < kReplaySteps; ++k) manibench->step(randomAction(k));
+  const TwinSnapshot by_controller = manibench->snapshot();
+  manibench->reset();
+  for (int k = 0; k < kReplaySteps; ++k) manibench->stepWithLaw(randomAction(k), law);
+  const double replay = calcDifference(by_controller, manibench->snapshot());
+  if (replay == 0)
+    notes.push_back("drive law: the copy replayed on the manibench scene reproduces "
+                    "Environment::step bit for bit (" + std::to_string(kReplaySteps) +
+                    " random env steps)");
+  else
+    fail("the copy of mobile_panda's drive law differs from Environment::step by " +
+         formatNumber("%.3g", replay) + " after " + std::to_string(kReplaySteps) +
+         " random env steps: controllers/ changed, update bench/mobile_panda_law.cpp");
+
+  // 2. Zero actions: both hold the initial state.
+  TwinEngine* engines[2] = {manibench.get(), mujoco.get()};
+  auto runBoth = [&](int steps, const Eigen::VectorXd& a, TwinSnapshot out[2]) {
+    for (int e = 0; e < 2; ++e) {
+      engines[e]->reset();
+      for (int k = 0; k < steps; ++k) engines[e]->step(a);
+      out[e] = engines[e]->snapshot();
+    }
+  };
+  TwinSnapshot hold[2];
+  runBoth(kHoldSteps, Eigen::VectorXd::Zero(MobilePandaLaw::kActionDim), hold);
+  TwinSnapshot start;
+  for (int part : {kRobot, kCabinet}) start.q[part] = facts->initial_q[part];
+  const double moved[2] = {calcDifference(hold[0], start), calcDifference(hold[1], start)};
+  const double apart = calcDifference(hold[0], hold[1]);
+  notes.push_back("zero actions for " + formatNumber("%g", kHoldSteps * facts->frame_skip * facts->control_dt) +
+                  " s: manibench moved " + formatNumber("%.2g", moved[0]) + ", MuJoCo " +
+                  formatNumber("%.2g", moved[1]) + ", apart " + formatNumber("%.2g", apart) +
+                  " (rad or m; limit " + formatNumber("%g", kHoldTolerance) + ")");
+  if (!(std::max({moved[0], moved[1], apart}) <= kHoldTolerance))
+    fail("the twin does not hold still under zero actions");
+  // 3. Gravity alone: without balancing, zero actions let the arm sag
+  // against its damping drives; masses, inertias and frames decide how far.
+  for (TwinEngine* engine : engines) engine->setBalancing(false);
+  TwinSnapshot sag[2];
+  runBoth(kSagSteps, Eigen::VectorXd::Zero(MobilePandaLaw::kActionDim), sag);
+  for (TwinEngine* engine : engines) engine->setBalancing(true);
+  // Joints pushed onto a limit (the lift, by the column's weight) rest on
+  // the engines' different stops: reported apart.
+  double sagged[2] = {0, 0}, sag_apart = 0;
+  std::string on_stops;
+  const TwinPlacement& robot = facts->placements[kRobot];
+  for (std::size_t j = 0; j < robot.joints.size(); ++j) {
+    const JointDescription& joint = robot.joints[j];
+    const double q[2] = {sag[0].q[kRobot][Eigen::Index(j)], sag[1].q[kRobot][Eigen::Index(j)]};
+    const double q0 = facts->initial_q[kRobot][Eigen::Index(j)];
+    if (std::min(q[0], q[1]) < joint.lower || std::max(q[0], q[1]) > joint.upper) {
+      on_stops += "; " + joint.name + " on its stop: manibench " + formatNumber("%.3g", q[0] - q0) +
+                  ", MuJoCo " + formatNumber("%.3g", q[1] - q0);
+      continue;
+    }
+    for (int e = 0; e < 2; ++e) sagged[e] = std::max(sagged[e], std::abs(q[e] - q0));
+    sag_apart = std::max(sag_apart, std::abs(q[0] - q[1]));
+  }
+  notes.push_back("gravity without balancing, zero actions for " +
+                  formatNumber("%g", kSagSteps * facts->frame_skip * facts->control_dt) +
+                  " s: the robot's joints sag by up to " + formatNumber("%.4g", sagged[0]) +
+                  " (manibench) and " + formatNumber("%.4g", sagged[1]) + " (MuJoCo), " +
+                  formatNumber("%.2g", sag_apart) + " apart (rad or m; limit " +
+                  formatNumber("%g", kSagTolerance) + " of the sag)" + on_stops);
+  if (!(sag_apart <= kSagTolerance * std::max(sagged[0], sagged[1])) || !(sagged[0] > 0))
+    fail("the engines sag differently under gravity: masses, inertias or frames differ");
+
+  // 4. One fixed action in free space: both move alike.
+  Eigen::VectorXd pattern(MobilePandaLaw::kActionDim);
+  pattern << 0.3, -0.2, 0.2, 0.2, 0.3, -0.3, 0.3, -0.3, 0.3, -0.3, 0.3, -0.5;
+  TwinSnapshot open_loop[2];
+  runBoth(kOpenLoopSteps, pattern, open_loop);
+  const double differs = calcDifference(open_loop[0], open_loop[1]);
+  notes.push_back("one fixed action for " +
+                  formatNumber("%g", kOpenLoopSteps * facts->frame_skip * facts->control_dt) +
+                  " s (free space): the engines end " + formatNumber("%.2g", differs) +
+                  " apart (rad or m; limit " + formatNumber("%g", kOpenLoopTolerance) + ")");
+  if (!(differs <= kOpenLoopTolerance)) fail("the engines do not follow one fixed action alike");
+  for (int e = 0; e < 2; ++e) {
+    Extremes ignored;
+    const std::string problem = checkSnapshot(open_loop[e], *facts, ignored);
+    if (!problem.empty()) fail(std::string(e ? "MuJoCo" : "manibench") + " after the fixed action: " + problem);
+  }
+
+  runs.manibench = std::make_unique<TwinRun>(std::move(manibench), facts);
+  runs.mujoco = std::make_unique<TwinRun>(std::move(mujoco), facts);
+  return runs;
+}
+
+}  // namespace
+
+BenchScene makeCabinetTwinScene() {
+  BenchScene scene;
+  scene.name = "cabinet_random";
+  scene.description =
+      std::string("twin of ") + kTask +
+      ": the mobile Panda and one generated cabinet, manibench's real Environment::step against "
+      "the same scene in MuJoCo, uniform random actions in [-1, 1] every env step";
+  scene.make_runs = makeTwinRuns;
+  scene.make_documents = [](const RunOptions& options) {
+    const TwinBuild build = buildTwin(options);
+    const Scene& scene = build.env->getScene();
+    std::vector<std::pair<std::string, std::string>> documents = {{".xml", build.mjcf}};
+    for (int part : {kRobot, kCabinet})
+      documents.emplace_back(std::string(".") + kPartNames[part] + ".urdf",
+                             scene.getArticulationSource(scene.findArticulation(
+                                 part == kRobot ? build.env->getTaskDescription().robot_articulation
+                                                : "cabinet")).urdf);
+    return documents;
+  };
+  return scene;
+}
+
+}  // namespace manibench::bench
