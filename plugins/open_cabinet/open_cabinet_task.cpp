@@ -22,10 +22,10 @@ using manibench::sdk::Error;
 using manibench::sdk::Pose;
 using manibench::sdk::SceneView;
 using manibench::sdk::TaskSpec;
+using manibench::sdk::kPi;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // Finger pad centre in its finger's frame (the URDF's pad collision box).
 const Eigen::Vector3d kPadOffset(0.0, 0.0076, 0.045);
 

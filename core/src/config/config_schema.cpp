@@ -2,6 +2,7 @@
 // every key; validation, nearest-key suggestions, list-item defaults and
 // docs/configuration.md all follow it.
 #include <manibench/config.hpp>
+#include <manibench/sdk/numbers.hpp>
 
 #include <algorithm>
 #include <cassert>
@@ -12,8 +13,9 @@
 namespace manibench {
 namespace {
 
+using sdk::kPi;
+
 constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kPi = 3.14159265358979323846;
 
 // Fluent construction of the table's rows.
 struct Key {
