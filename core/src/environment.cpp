@@ -190,7 +190,7 @@ void Environment::buildScene(const std::string& object_id) {
   const bool balance =
       (controller_->getDescription().flags & MB_CONTROLLER_BALANCE_PASSIVE_FORCES) != 0;
   scene_->setPassiveForceBalancing(robot_, actuated_joints_, balance);
-  drives_.assign(actuated_joints_.size(), mb_drive_command{});
+  drives_.assign(actuated_joints_.size(), DriveCommand{});
 
   initial_state_ = scene_->saveState();
   object_id_ = object_id;
@@ -255,22 +255,13 @@ void Environment::resolveCameras() {
   }
 }
 
-namespace {
-Pose compose(const Pose& a, const Pose& b) {
-  Pose out;
-  out.position = a.position + a.orientation * b.position;
-  out.orientation = (a.orientation * b.orientation).normalized();
-  return out;
-}
-}  // namespace
-
 Pose Environment::calcCameraPose(std::size_t index) const {
   const CameraMount& camera = options_.cameras.at(index);
   const int link = camera_links_.at(index);
   if (link == -2) return camera.pose;
   const Pose mount = link >= 0 ? scene_->getLinkPose(link)
                                : scene_->getRootPose(camera_articulations_.at(index));
-  return compose(mount, camera.pose);
+  return composePoses(mount, camera.pose);
 }
 
 SceneRenderer& Environment::updRenderer() {
@@ -384,9 +375,8 @@ void Environment::reset(const std::string& object_id, uint64_t seed) {
     throw;
   }
   bridge_->setStateChangesAllowed(false);
-  drives_.assign(actuated_joints_.size(), mb_drive_command{});
-  scene_->setDriveCommands(robot_, actuated_joints_,
-                           std::vector<DriveCommand>(actuated_joints_.size()));
+  drives_.assign(actuated_joints_.size(), DriveCommand{});
+  scene_->setDriveCommands(robot_, actuated_joints_, drives_);
   task_->observe(*bridge_, observation_);
   if (options_.observation_mode != "state")
     observation_.conservativeResize(description_.agent_state_dim);
@@ -408,15 +398,10 @@ StepResult Environment::step(const Eigen::VectorXd& action) {
   clipped_action_ = action.cwiseMax(-1.0).cwiseMin(1.0);
 
   const double dt = 1.0 / task.control_frequency;
-  std::vector<DriveCommand> commands(drives_.size());
   try {
     for (uint32_t k = 0; k < task.frame_skip; ++k) {
       controller_->compute(*bridge_, clipped_action_, drives_);
-      for (std::size_t j = 0; j < drives_.size(); ++j) {
-        const mb_drive_command& d = drives_[j];
-        commands[j] = {d.position_target, d.velocity_target, d.stiffness, d.damping, d.force};
-      }
-      scene_->setDriveCommands(robot_, actuated_joints_, commands);
+      scene_->setDriveCommands(robot_, actuated_joints_, drives_);
       scene_->advance(dt);
     }
   } catch (const SimulationDiverged& e) {

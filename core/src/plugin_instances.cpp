@@ -195,7 +195,7 @@ void ControllerInstance::reset(SceneBridge& scene) {
 }
 
 void ControllerInstance::compute(SceneBridge& scene, const Eigen::VectorXd& action,
-                                 std::vector<mb_drive_command>& drives) {
+                                 std::vector<DriveCommand>& drives) {
   callPlugin("controller", description_.name, "compute", descriptor_->compute, handle_,
              SceneBridge::getApi(), scene.getHandle(), action.data(),
              static_cast<uint32_t>(action.size()), drives.data(),

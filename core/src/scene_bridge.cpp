@@ -76,23 +76,14 @@ void requirePointer(const void* p, const char* what) {
   if (p == nullptr) throw SceneError(std::string(what) + " is null");
 }
 
-Pose toPose(const mb_pose* p) {
+// A pose from a plugin, which must be there and have a unit quaternion.
+Pose toCheckedPose(const mb_pose* p) {
   requirePointer(p, "pose");
-  Pose out;
-  out.position = Eigen::Vector3d(p->position[0], p->position[1], p->position[2]);
-  out.orientation = Eigen::Quaterniond(p->quaternion[0], p->quaternion[1], p->quaternion[2],
-                                       p->quaternion[3]);
+  const Pose out = makePose(*p);
   const double norm = out.orientation.norm();
   if (!(std::abs(norm - 1.0) < 1e-6))
     throw SceneError("pose quaternion has norm " + std::to_string(norm) + ", expected 1");
   return out;
-}
-void fromPose(const Pose& p, mb_pose* out) {
-  for (int i = 0; i < 3; ++i) out->position[i] = p.position[i];
-  out->quaternion[0] = p.orientation.w();
-  out->quaternion[1] = p.orientation.x();
-  out->quaternion[2] = p.orientation.y();
-  out->quaternion[3] = p.orientation.z();
 }
 
 mb_status addGround(mb_scene* s, double height, mb_error* err) {
@@ -108,7 +99,7 @@ mb_status addUrdfFile(mb_scene* s, const char* path, const char* name, const mb_
     requirePointer(path, "path");
     requirePointer(name, "name");
     requirePointer(out, "output id");
-    *out = m.scene->addUrdfFile(path, name, toPose(root), fixed_base != 0);
+    *out = m.scene->addUrdfFile(path, name, toCheckedPose(root), fixed_base != 0);
   });
 }
 mb_status addUrdfString(mb_scene* s, const char* xml, const char* base_dir, const char* name,
@@ -118,7 +109,7 @@ mb_status addUrdfString(mb_scene* s, const char* xml, const char* base_dir, cons
     requirePointer(xml, "URDF text");
     requirePointer(name, "name");
     requirePointer(out, "output id");
-    *out = m.scene->addUrdfString(xml, base_dir ? base_dir : "", name, toPose(root),
+    *out = m.scene->addUrdfString(xml, base_dir ? base_dir : "", name, toCheckedPose(root),
                                   fixed_base != 0);
   });
 }
@@ -202,13 +193,13 @@ mb_status getJointVelocities(mb_scene* s, mb_id articulation, double* out, uint3
 mb_status getRootPose(mb_scene* s, mb_id articulation, mb_pose* out, mb_error* err) {
   return guarded(s, err, [&](mb_scene& m) {
     requirePointer(out, "output pose");
-    fromPose(m.scene->getRootPose(articulation), out);
+    *out = makeCPose(m.scene->getRootPose(articulation));
   });
 }
 mb_status getLinkPose(mb_scene* s, mb_id link, mb_pose* out, mb_error* err) {
   return guarded(s, err, [&](mb_scene& m) {
     requirePointer(out, "output pose");
-    fromPose(m.scene->getLinkPose(link), out);
+    *out = makeCPose(m.scene->getLinkPose(link));
   });
 }
 mb_status getLinkTwist(mb_scene* s, mb_id link, double out[6], mb_error* err) {
@@ -249,7 +240,7 @@ mb_status setJointVelocities(mb_scene* s, mb_id articulation, const double* v, u
 mb_status setRootPose(mb_scene* s, mb_id articulation, const mb_pose* pose, mb_error* err) {
   return guarded(s, err, [&](mb_scene& m) {
     requireStateChanges(m, "set_root_pose");
-    m.scene->setRootPose(articulation, toPose(pose));
+    m.scene->setRootPose(articulation, toCheckedPose(pose));
   });
 }
 mb_status setJointDynamics(mb_scene* s, mb_id articulation, uint32_t joint, double damping,

@@ -191,7 +191,7 @@ class Environment {
   std::optional<SceneState> initial_state_;
   int robot_ = -1;
   std::vector<int> actuated_joints_;
-  std::vector<mb_drive_command> drives_;
+  std::vector<DriveCommand> drives_;  // the controller writes, the scene reads
   std::string object_id_;
   bool scene_built_ = false;
   uint64_t seed_ = 0;

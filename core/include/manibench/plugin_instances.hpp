@@ -4,6 +4,7 @@
 #pragma once
 
 #include <manibench/abi.h>
+#include <manibench/geometry.hpp>
 #include <manibench/plugin_registry.hpp>
 #include <manibench/pointcloud.hpp>
 
@@ -123,7 +124,7 @@ class ControllerInstance {
   const ControllerDescription& getDescription() const { return description_; }
   void reset(SceneBridge& scene);
   void compute(SceneBridge& scene, const Eigen::VectorXd& action,
-               std::vector<mb_drive_command>& drives);
+               std::vector<DriveCommand>& drives);
 
  private:
   const mb_controller_descriptor* descriptor_;

@@ -93,17 +93,26 @@ typedef struct mb_joint_info {
   double effort_limit;   /* N m or N; 0 when unlimited */
 } mb_joint_info;
 
+/* In C++, fields of mb_drive_command start at 0 (a default member
+ * initializer changes neither the layout nor the C view), so that a command
+ * declared without an initializer is the passive "no drive" command. */
+#ifdef __cplusplus
+#define MB_ZERO_BY_DEFAULT = 0
+#else
+#define MB_ZERO_BY_DEFAULT
+#endif
+
 /* What a controller asks of one joint's drive for the next control step.
  * The host applies, at every physics evaluation,
  *   tau = stiffness (position_target - q) + damping (velocity_target - qdot)
  *         + force
  * clamped to the joint's effort limit when one is set. */
 typedef struct mb_drive_command {
-  double position_target;
-  double velocity_target;
-  double stiffness;
-  double damping;
-  double force;
+  double position_target MB_ZERO_BY_DEFAULT;
+  double velocity_target MB_ZERO_BY_DEFAULT;
+  double stiffness MB_ZERO_BY_DEFAULT;
+  double damping MB_ZERO_BY_DEFAULT;
+  double force MB_ZERO_BY_DEFAULT;
 } mb_drive_command;
 
 /* ---- host scene API (the host implements it, plugins call it) --------- */
