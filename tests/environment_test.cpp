@@ -16,7 +16,7 @@ namespace {
 using testing::getBuildTreeRegistry;
 
 PolicyInstance makePolicy(Environment& env, const std::string& name) {
-  return PolicyInstance(getBuildTreeRegistry(), name, "", env.calcPolicyLayout("state"));
+  return PolicyInstance(getBuildTreeRegistry(), name, "", env.calcPolicyLayout(ObservationMode::State));
 }
 
 TEST(Environment, ExpertSolvesEveryTestObject) {

@@ -261,7 +261,7 @@ TEST(OpenCabinet, ExpertRefusesOtherControllers) {
   const auto env = makeEnv("OpenCabinetDrawer-v0");  // default controller mobile_panda
   try {
     mb::PolicyInstance policy(mb::testing::getBuildTreeRegistry(), "open_cabinet_expert", "",
-                              env->calcPolicyLayout("state"));
+                              env->calcPolicyLayout(mb::ObservationMode::State));
     FAIL() << "expected a refusal";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("mobile_panda_ee"), std::string::npos) << e.what();
@@ -374,7 +374,7 @@ TEST(OpenCabinet, Trace) {
   if (const char* extra = std::getenv("OPEN_CABINET_TRACE_SET")) overrides.push_back(extra);  // KEY=VALUE
   const auto env = makeEnv(task, overrides);
   mb::PolicyInstance policy(mb::testing::getBuildTreeRegistry(), "open_cabinet_expert", "",
-                            env->calcPolicyLayout("state"));
+                            env->calcPolicyLayout(mb::ObservationMode::State));
   env->reset(object, seed);
   policy.reset(seed);
   Eigen::VectorXd action;

@@ -171,12 +171,10 @@ int commandEval(int argc, char** argv) {
   ConfigSources sources = getConfigSources(args);
   if (args.options.count("obs")) {
     const std::string obs = args.options.at("obs");
-    const std::vector<std::string>& modes = getObservationModes();
-    if (std::find(modes.begin(), modes.end(), obs) == modes.end())
+    if (!findObservationMode(obs))
       throw UsageError("--obs must be state, pointcloud or rgbd, got '" + obs + "'", kEvalUsage);
     sources.overrides.push_back("observation.mode=" + obs);
   }
-  options.observation_mode = valueOr(args, "obs", "");
   for (const std::string& file : sources.files) options.config_notes.push_back("--config " + file);
   for (const std::string& set : sources.overrides) options.config_notes.push_back("--set " + set);
   if (args.options.count("policy-config")) {
@@ -242,7 +240,7 @@ int commandEval(int argc, char** argv) {
 
   std::cout << "policy " << options.policy << " (" << result.policy_library << ", version "
             << result.policy_library_version << "), controller " << result.task.controller
-            << ", observation " << result.task.observation_mode << "\n\n";
+            << ", observation " << toString(result.task.observation_mode) << "\n\n";
   printEvaluationTable(std::cout, result);
   std::cout << "\n"
             << result.episodes.size() << " of " << result.planned.size() << " episodes in "

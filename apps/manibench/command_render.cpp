@@ -71,7 +71,7 @@ void writeCamera(const std::filesystem::path& dir, const CameraImages& image, co
   for (std::size_t m = 0; m < masks.size(); ++m) {
     std::vector<std::uint8_t> mask(pixels);
     for (std::size_t p = 0; p < pixels; ++p)
-      mask[p] = ((env.calcPixelMasks(image, p) >> m) & 1u) ? 255 : 0;
+      mask[p] = ((env.getObserver().getMasks().calcPixelMasks(image, p) >> m) & 1u) ? 255 : 0;
     writePng8(base + "_mask_" + fileName(masks[m]) + ".png", image.width, image.height, 1, mask);
   }
 }
@@ -151,13 +151,12 @@ void recordVideo(PluginRegistry& registry, Environment& env, const std::string& 
   CameraImages frame;
   Eigen::VectorXd action;
   for (;;) {
-    env.updRenderer().render(camera, pose, frame);
+    env.updObserver().updRenderer().render(camera, pose, frame);
     video.write(frame);
-    policy.act(env.getObservation(), env.getElapsedSteps(), action,
-               env.getObservationMode() == "state" ? nullptr : &env.getVisualObservation());
+    policy.act(env.getObservation(), env.getElapsedSteps(), action, env.getVisualObservation());
     if (env.step(action).done) break;
   }
-  env.updRenderer().render(camera, pose, frame);
+  env.updObserver().updRenderer().render(camera, pose, frame);
   video.write(frame);
   video.close();
   std::cout << "wrote " << path << ": " << video.getFrameCount() << " frames, "
@@ -217,20 +216,21 @@ int commandRender(int argc, char** argv) {
   if (error) throw std::runtime_error("cannot create " + dir.string() + ": " + error.message());
   // The observation already rendered every camera; this renders them again
   // at the same state (same images) and hands them out.
-  const std::vector<CameraImages>& images = env->renderCameras();
+  VisualObserver& observer = env->updObserver();
+  const std::vector<CameraImages>& images = observer.renderCameras();
   for (const CameraImages& image : images) writeCamera(dir, image, *env);
   PointCloud full;
-  env->fusePointCloud(images, images.size(), full);
+  observer.fusePointCloud(images, images.size(), full);
   const std::vector<std::string>& masks = env->getTaskDescription().masks;
   writePly((dir / "pointcloud_full.ply").string(), full, masks);
   const PointCloud sample = obs == "pointcloud" ? env->getVisualObservation().points
-                                                : samplePointCloud(full, env->getOptions().pointcloud, seed);
+                                                : samplePointCloud(full, env->getOptions().observation.pointcloud, seed);
   writePly((dir / "pointcloud.ply").string(), sample, masks);
   std::cout << "task " << args.positional[0] << ", object " << object << ", seed " << seed << ": "
             << images.size() << " camera" << (images.size() == 1 ? "" : "s") << ", "
             << full.size() << " points (" << sample.size() << " sampled), "
-            << env->updRenderer().getTriangleCount() << " triangles; "
-            << env->updRenderer().getDeviceInfo().gl_renderer << "\nwrote " << dir.string() << "\n";
+            << observer.updRenderer().getTriangleCount() << " triangles; "
+            << observer.updRenderer().getDeviceInfo().gl_renderer << "\nwrote " << dir.string() << "\n";
   if (!video.empty())
     recordVideo(registry, *env, args.options.at("policy"), object, seed, video, video_width,
                 video_height);

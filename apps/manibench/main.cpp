@@ -235,8 +235,9 @@ int commandInfo(int argc, char** argv) {
             << env.getScene().calcVisualTriangleCount()
             << " mesh triangles (the renderer adds tessellated primitives)\n";
   std::cout << "cameras:";
-  if (env.getCameras().empty()) std::cout << " (none)";
-  for (const mb::CameraMount& c : env.getCameras())
+  const std::vector<mb::CameraMount>& cameras = env.getOptions().observation.cameras;
+  if (cameras.empty()) std::cout << " (none)";
+  for (const mb::CameraMount& c : cameras)
     std::cout << " " << c.spec.name << " (" << c.spec.width << "x" << c.spec.height << ", "
               << (c.articulation.empty() ? std::string("world")
                                          : c.articulation + (c.link.empty() ? "" : ":" + c.link))
@@ -366,8 +367,7 @@ int commandBench(int argc, char** argv) {
     while (!done && steps < target_steps) {
       const mb::IntegratorStatistics before = env->getScene().getIntegratorStatistics();
       const auto start = Clock::now();
-      policy.act(env->getObservation(), env->getElapsedSteps(), action,
-                 env->getObservationMode() == "state" ? nullptr : &env->getVisualObservation());
+      policy.act(env->getObservation(), env->getElapsedSteps(), action, env->getVisualObservation());
       const mb::StepResult result = env->step(action);
       step_time += Clock::now() - start;
       physics += env->getScene().getIntegratorStatistics();
@@ -378,7 +378,7 @@ int commandBench(int argc, char** argv) {
     }
     ++episodes;
   }
-  std::cout << "task " << args.positional[0] << ", obs " << env->getObservationMode() << ", policy " << policy_name
+  std::cout << "task " << args.positional[0] << ", obs " << mb::toString(env->getObservationMode()) << ", policy " << policy_name
             << ", controller " << env->getControllerDescription().name << "\n"
             << steps << " env steps in " << episodes << " episodes (" << successes
             << " successful), " << std::fixed << std::setprecision(1)

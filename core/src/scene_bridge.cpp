@@ -1,7 +1,7 @@
 // The host's mb_scene_api: C trampolines over Scene. Nothing thrown here may
 // reach the plugin; every exception becomes a status and a message.
-#include <manibench/plugin_instances.hpp>
-#include <manibench/scene.hpp>
+#include <manibench/scene_bridge.hpp>
+#include <manibench/visual_observer.hpp>
 
 #include <cstdint>
 #include <cstring>
@@ -16,11 +16,8 @@ struct mb_scene {
   // Names handed to plugins must outlive any later add_*; a std::set's nodes
   // never move.
   std::set<std::string> interned;
-  // Segmentation masks (ABI 1.1 add_to_mask): the task's mask names and,
-  // per visual of Scene::getVisualShapes(), bit m set when the visual
-  // belongs to mask m.
-  std::vector<std::string> mask_names;
-  std::vector<std::uint64_t> visual_masks;
+  // Where add_to_mask (ABI 1.1) records the task's segmentation masks.
+  manibench::SegmentationMasks* masks = nullptr;
 };
 
 namespace manibench {
@@ -147,13 +144,7 @@ mb_status getJointInfo(mb_scene* s, mb_id articulation, uint32_t index, mb_joint
                        m.scene->getArticulationName(articulation) + "' has " +
                        std::to_string(joints.size()) + " joints");
     const JointDescription& j = joints[index];
-    out->name = m.interned.insert(j.name).first->c_str();
-    out->type = static_cast<uint32_t>(j.type);
-    out->index = static_cast<uint32_t>(j.index);
-    out->lower = j.lower;
-    out->upper = j.upper;
-    out->velocity_limit = j.velocity_limit;
-    out->effort_limit = j.effort_limit;
+    *out = makeJointInfo(j, m.interned.insert(j.name).first->c_str());
   });
 }
 mb_status findJoint(mb_scene* s, mb_id articulation, const char* name, uint32_t* out,
@@ -267,50 +258,15 @@ mb_status calcLinkJacobian(mb_scene* s, mb_id articulation, mb_id link,
   });
 }
 
-// "mask 'robot' (index 0)" or, past the end, the task's mask list.
-std::string describeMasks(const std::vector<std::string>& names) {
-  std::string list;
-  for (const std::string& n : names) list += (list.empty() ? "'" : ", '") + n + "'";
-  return std::to_string(names.size()) + " mask" + (names.size() == 1 ? "" : "s") +
-         (list.empty() ? "" : " (" + list + ")");
-}
-
 mb_status addToMask(mb_scene* s, uint32_t mask_index, mb_id articulation, mb_id link,
                     const char* visual_name_part, mb_error* err) {
   return guarded(s, err, [&](mb_scene& m) {
     requireBuilding(m, "add_to_mask");
-    if (mask_index >= m.mask_names.size())
-      throw SceneError("add_to_mask: mask index " + std::to_string(mask_index) +
-                       " out of range: the task declares " + describeMasks(m.mask_names));
-    const Scene& scene = *m.scene;
-    if (articulation < 0 || articulation >= scene.getArticulationCount())
-      throw SceneError("add_to_mask: no articulation with id " + std::to_string(articulation));
-    const std::string& articulation_name = scene.getArticulationName(articulation);
-    // Link ids are global; a link belongs to `articulation` when its name
-    // finds it there.
-    auto belongs = [&](int l) { return scene.findLink(articulation, scene.getLinkName(l)) == l; };
-    if (link >= 0 && !belongs(link))
-      throw SceneError("add_to_mask: link id " + std::to_string(link) +
-                       " is not a link of articulation '" + articulation_name + "'");
-    const std::string part = visual_name_part ? visual_name_part : "";
-    const std::vector<VisualShape>& visuals = scene.getVisualShapes();
-    m.visual_masks.resize(visuals.size(), 0);
-    std::size_t matched = 0;
-    for (std::size_t v = 0; v < visuals.size(); ++v) {
-      const VisualShape& shape = visuals[v];
-      if (shape.link < 0) continue;
-      if (link >= 0 ? shape.link != link : !belongs(shape.link)) continue;
-      if (!part.empty() && shape.name.find(part) == std::string::npos) continue;
-      m.visual_masks[v] |= std::uint64_t(1) << mask_index;
-      ++matched;
-    }
-    if (matched == 0)
-      throw SceneError(
-          "add_to_mask: mask '" + m.mask_names[mask_index] + "': " +
-          (link >= 0 ? "link '" + scene.getLinkName(link) + "' of articulation '" +
-                           articulation_name + "' has no visual" +
-                           (part.empty() ? "" : " whose name contains '" + part + "'")
-                     : "articulation '" + articulation_name + "' has no visuals"));
+    // Without masks to collect into, every index is out of range.
+    SegmentationMasks none;
+    (m.masks ? *m.masks : none)
+        .addVisuals(*m.scene, mask_index, articulation, link,
+                    visual_name_part ? visual_name_part : "");
   });
 }
 
@@ -345,24 +301,26 @@ const mb_scene_api kSceneApi = [] {
 
 }  // namespace
 
-SceneBridge::SceneBridge(Scene& scene) : handle_(new mb_scene) { handle_->scene = &scene; }
+SceneBridge::SceneBridge(Scene& scene, SegmentationMasks* masks) : handle_(new mb_scene) {
+  handle_->scene = &scene;
+  handle_->masks = masks;
+}
 SceneBridge::~SceneBridge() { delete handle_; }
 const mb_scene_api* SceneBridge::getApi() { return &kSceneApi; }
 mb_scene* SceneBridge::getHandle() { return handle_; }
 void SceneBridge::setBuilding(bool building) { handle_->building = building; }
 void SceneBridge::setStateChangesAllowed(bool allowed) { handle_->state_changes_allowed = allowed; }
-void SceneBridge::setMaskNames(const std::vector<std::string>& names) {
-  if (names.size() > kMaxMasks)
-    throw SceneError("a task may declare at most " + std::to_string(kMaxMasks) +
-                     " segmentation masks, this one declares " + std::to_string(names.size()));
-  handle_->mask_names = names;
-  handle_->visual_masks.clear();
-}
-const std::vector<std::string>& SceneBridge::getMaskNames() const { return handle_->mask_names; }
-std::vector<std::uint64_t> SceneBridge::calcVisualMasks() const {
-  std::vector<std::uint64_t> masks = handle_->visual_masks;
-  masks.resize(handle_->scene->getVisualShapes().size(), 0);
-  return masks;
+
+mb_joint_info makeJointInfo(const JointDescription& joint, const char* name) {
+  mb_joint_info info{};
+  info.name = name;
+  info.type = static_cast<uint32_t>(joint.type);
+  info.index = static_cast<uint32_t>(joint.index);
+  info.lower = joint.lower;
+  info.upper = joint.upper;
+  info.velocity_limit = joint.velocity_limit;
+  info.effort_limit = joint.effort_limit;
+  return info;
 }
 
 }  // namespace manibench

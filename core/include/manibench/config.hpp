@@ -11,7 +11,8 @@
 // from. docs/configuration.md lists every key.
 #pragma once
 
-#include <manibench/environment.hpp>
+#include <manibench/environment_options.hpp>
+#include <manibench/plugin_instances.hpp>
 #include <manibench/plugin_registry.hpp>
 
 #include <cstdint>

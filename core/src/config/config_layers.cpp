@@ -147,7 +147,7 @@ Eigen::Vector3d calcVector3(const ConfigNode& node) {
 }
 
 // Cameras and lights, for the renderer of the visual observation modes.
-void calcRenderOptions(const ConfigNode& config, EnvironmentOptions& options) {
+void calcRenderOptions(const ConfigNode& config, ObservationOptions& options) {
   LightingSpec& lighting = options.lighting;
   lighting.ambient = calcVector3(getPath(config, "lights.ambient")).cast<float>();
   lighting.directional.clear();
@@ -353,11 +353,12 @@ EnvironmentOptions calcEnvironmentOptions(const ConfigNode& config) {
   const ConfigNode* task = config.find("task");
   if (task != nullptr && task->isMap() && !task->entries.empty())
     options.task_config = formatConfig(*task);
-  calcRenderOptions(config, options);
+  calcRenderOptions(config, options.observation);
 
   // -- observation ------------------------------------------------------------
-  options.observation_mode = getPath(config, "observation.mode").scalar;
-  PointCloudSampling& sampling = options.pointcloud;
+  // The schema allows only the modes' names.
+  options.observation.mode = *findObservationMode(getPath(config, "observation.mode").scalar);
+  PointCloudSampling& sampling = options.observation.pointcloud;
   sampling.per_mask = uint32_t(*calcInt(getPath(config, "observation.pointcloud.per_mask")));
   sampling.masked_total = uint32_t(*calcInt(getPath(config, "observation.pointcloud.masked_total")));
   sampling.total = uint32_t(*calcInt(getPath(config, "observation.pointcloud.total")));

@@ -121,7 +121,7 @@ std::vector<ConfigKey> makeSchema() {
   k.push_back(Key("observation.mode", T::Enum,
                   "state: the task's vector; pointcloud and rgbd add the cameras' points or "
                   "images (and render)")
-                  .oneOf({"state", "pointcloud", "rgbd"}));
+                  .oneOf(getObservationModeNames()));
   k.push_back(Key("observation.pointcloud", T::Map,
                   "subsampling of the fused point cloud (supplement D.1)"));
   k.push_back(Key("observation.pointcloud.per_mask", T::Int,

@@ -263,7 +263,6 @@ After runWorkerEpisode(Environment& env, PolicyInstance& policy, Slot& slot,
   const auto start = getMonotonicNs();
   const std::size_t conditions = env.getTaskDescription().success_conditions.size();
   record.flags.assign(conditions, 0);
-  const bool visual = env.getObservationMode() != "state";
   After after = After::kGoOn;
   try {
     slot.step.store(0);
@@ -276,8 +275,7 @@ After runWorkerEpisode(Environment& env, PolicyInstance& policy, Slot& slot,
     for (;;) {
       slot.step.store(env.getElapsedSteps());
       enterPhase(slot, kPolicyAct);
-      policy.act(env.getObservation(), env.getElapsedSteps(), action,
-                 visual ? &env.getVisualObservation() : nullptr);
+      policy.act(env.getObservation(), env.getElapsedSteps(), action, env.getVisualObservation());
       enterPhase(slot, kEnvStep);
       const StepResult step = env.step(action);
       record.total_reward += step.reward;
@@ -335,7 +333,8 @@ std::unique_ptr<PolicyInstance> makePolicy(const WorkerContext& context, const E
       env = (*context.make_environment)();
       policy = makePolicy(context, *env);
       const TaskDescription& task = env->getTaskDescription();
-      w.u8(kReady).str(env->getObservationMode()).str(env->getControllerDescription().name);
+      w.u8(kReady).u8(static_cast<uint8_t>(env->getObservationMode()));
+      w.str(env->getControllerDescription().name);
       w.strings(task.success_conditions);
       w.strings(env->listObjects(context.options->split));
       w.u32(task.max_episode_steps).u32(env->getControllerDescription().action_dim);
@@ -607,7 +606,7 @@ EvaluationResult evaluatePolicy(const PluginRegistry& registry, const Evaluation
           const uint8_t type = in.u8();
           if (type == kReady) {
             EvaluationTaskInfo info;
-            info.observation_mode = in.str();
+            info.observation_mode = static_cast<ObservationMode>(in.u8());
             info.controller = in.str();
             info.condition_names = in.strings();
             info.split_objects = in.strings();
