@@ -2,6 +2,7 @@
 // real Simbody physics: the example task Reach-v0, its expert, the baseline
 // policies and both joint controllers.
 #include <manibench/environment.hpp>
+#include <manibench/episode.hpp>
 
 #include <gtest/gtest.h>
 

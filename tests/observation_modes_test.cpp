@@ -3,6 +3,7 @@
 // three head cameras and one mask, "robot"), rendered for real with EGL.
 #include <manibench/config.hpp>
 #include <manibench/environment.hpp>
+#include <manibench/episode.hpp>
 #include <manibench/plugin_instances.hpp>
 #include <manibench/renderer.hpp>
 #include <manibench/scene.hpp>

@@ -6,6 +6,7 @@
 
 #include <manibench/config.hpp>
 #include <manibench/environment.hpp>
+#include <manibench/episode.hpp>
 
 #include "test_support.hpp"
 

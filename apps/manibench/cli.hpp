@@ -5,6 +5,7 @@
 
 #include <manibench/config.hpp>
 #include <manibench/environment.hpp>
+#include <manibench/episode.hpp>
 #include <manibench/plugin_registry.hpp>
 
 #include <cstdint>

@@ -1,6 +1,7 @@
 // manibench render: the cameras' images, masks and point clouds of a task
 // after a reset, as files; optionally an episode as a video.
 #include <manibench/environment.hpp>
+#include <manibench/episode.hpp>
 #include <manibench/pointcloud.hpp>
 #include <manibench/renderer.hpp>
 
@@ -131,33 +132,37 @@ void recordVideo(PluginRegistry& registry, Environment& env, const std::string& 
                  int height) {
   const std::string policy_name = resolvePolicy(registry, policy_arg);
   PolicyInstance policy(registry, policy_name, "", env.calcPolicyLayout());
-  env.reset(object, seed);
-  policy.reset(seed);
-  // Third person: from the front-right, above, looking at the robot's root.
   const TaskDescription& task = env.getTaskDescription();
-  const Scene& scene = env.getScene();
-  const int robot = scene.findArticulation(task.robot_articulation);
-  const Eigen::Vector3d target =
-      (robot >= 0 ? scene.getRootPose(robot).position : Eigen::Vector3d::Zero()) +
-      Eigen::Vector3d(0, 0, 0.6);
   CameraSpec camera;
   camera.name = "third_person";
   camera.width = width;
   camera.height = height;
   camera.fovy = 1.0;
   camera.far = 20;
-  const Pose pose = calcLookAtPose(target + Eigen::Vector3d(2.5, -2.5, 1.6), target);
+  Pose pose;
   VideoWriter video(path, width, height, task.control_frequency / task.frame_skip);
   CameraImages frame;
-  Eigen::VectorXd action;
-  for (;;) {
+  auto record = [&] {
     env.updObserver().updRenderer().render(camera, pose, frame);
     video.write(frame);
-    policy.act(env.getObservation(), env.getElapsedSteps(), action, env.getVisualObservation());
-    if (env.step(action).done) break;
-  }
-  env.updObserver().updRenderer().render(camera, pose, frame);
-  video.write(frame);
+  };
+  // A frame of every state a policy sees, then of the last one.
+  EpisodeHooks hooks;
+  hooks.on_phase = [&](EpisodePhase phase, uint32_t step) {
+    if (phase == EpisodePhase::PolicyReset) {
+      // Third person: from the front-right, above, looking at the robot's
+      // root where the reset put it.
+      const Scene& scene = env.getScene();
+      const int robot = scene.findArticulation(task.robot_articulation);
+      const Eigen::Vector3d target =
+          (robot >= 0 ? scene.getRootPose(robot).position : Eigen::Vector3d::Zero()) +
+          Eigen::Vector3d(0, 0, 0.6);
+      pose = calcLookAtPose(target + Eigen::Vector3d(2.5, -2.5, 1.6), target);
+    }
+    if (phase == EpisodePhase::PolicyAct) record();
+  };
+  runEpisode(env, policy, object, seed, hooks);
+  record();
   video.close();
   std::cout << "wrote " << path << ": " << video.getFrameCount() << " frames, "
             << env.getElapsedSteps() << " steps of policy " << policy_name << "\n";

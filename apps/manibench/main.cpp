@@ -3,6 +3,7 @@
 // Exit codes: 0 success, 1 failure (reported on stderr), 2 usage error.
 #include <manibench/config.hpp>
 #include <manibench/environment.hpp>
+#include <manibench/episode.hpp>
 #include <manibench/plugin_registry.hpp>
 #include <manibench/task_name.hpp>
 
@@ -260,8 +261,22 @@ int runOne(mb::PluginRegistry& registry, const std::string& task_name, const std
   mb::PolicyInstance policy(registry, policy_name, "", env.calcPolicyLayout());
   std::cout << "task " << task_name << ", policy " << policy_name << ", controller "
             << env.getControllerDescription().name << "\n";
-  const mb::EpisodeResult result = mb::runEpisode(env, policy, object, seed);
-  printEpisode(result);
+  // A policy's failure is named by where it happened, as the environment's
+  // own errors are.
+  mb::EpisodeHooks hooks;
+  bool acting = false;
+  hooks.on_phase = [&acting](mb::EpisodePhase phase, uint32_t) {
+    acting = phase == mb::EpisodePhase::PolicyAct;
+  };
+  try {
+    printEpisode(mb::runEpisode(env, policy, object, seed, hooks));
+  } catch (const mb::PluginCallError& e) {
+    if (!acting) throw;
+    throw mb::PluginCallError("task '" + env.getTaskDescription().name + "', object '" + object +
+                                  "', seed " + std::to_string(seed) + ", step " +
+                                  std::to_string(env.getElapsedSteps()) + ": " + e.what(),
+                              e.status());
+  }
   return 0;
 }
 
@@ -355,27 +370,28 @@ int commandBench(int argc, char** argv) {
   std::chrono::duration<double> step_time{0}, reset_time{0};
   uint64_t steps = 0, episodes = 0, successes = 0;
   // Integrator work during env steps only (resets rebuild scenes).
-  mb::IntegratorStatistics physics;
-  Eigen::VectorXd action;
+  mb::IntegratorStatistics physics, before;
+  Clock::time_point start;
+  // Resets (environment and policy) from entering the first to the first
+  // act; env steps from each act to the end of its step.
+  mb::EpisodeHooks hooks;
+  hooks.on_phase = [&](mb::EpisodePhase phase, uint32_t step) {
+    if (phase == mb::EpisodePhase::EnvReset) start = Clock::now();
+    if (phase != mb::EpisodePhase::PolicyAct) return;
+    if (step == 0) reset_time += Clock::now() - start;
+    before = env->getScene().getIntegratorStatistics();
+    start = Clock::now();
+  };
+  hooks.on_step = [&](const mb::StepResult& result, const mb::EpisodeResult&) {
+    step_time += Clock::now() - start;
+    physics += env->getScene().getIntegratorStatistics();
+    physics -= before;
+    ++steps;
+    if (result.done && result.success) ++successes;
+    return steps < target_steps;
+  };
   while (steps < target_steps) {
-    const std::string& object = objects[episodes % objects.size()];
-    const auto reset_start = Clock::now();
-    env->reset(object, episodes);
-    policy.reset(episodes);
-    reset_time += Clock::now() - reset_start;
-    bool done = false;
-    while (!done && steps < target_steps) {
-      const mb::IntegratorStatistics before = env->getScene().getIntegratorStatistics();
-      const auto start = Clock::now();
-      policy.act(env->getObservation(), env->getElapsedSteps(), action, env->getVisualObservation());
-      const mb::StepResult result = env->step(action);
-      step_time += Clock::now() - start;
-      physics += env->getScene().getIntegratorStatistics();
-      physics -= before;
-      ++steps;
-      done = result.done;
-      if (done && result.success) ++successes;
-    }
+    mb::runEpisode(*env, policy, objects[episodes % objects.size()], episodes, hooks);
     ++episodes;
   }
   std::cout << "task " << args.positional[0] << ", obs " << mb::toString(env->getObservationMode()) << ", policy " << policy_name

@@ -258,33 +258,4 @@ StepResult Environment::step(const Eigen::VectorXd& action) {
   return result;
 }
 
-EpisodeResult runEpisode(Environment& env, PolicyInstance& policy, const std::string& object_id,
-                         uint64_t seed) {
-  env.reset(object_id, seed);
-  policy.reset(seed);
-  EpisodeResult result;
-  result.object_id = object_id;
-  result.seed = seed;
-  result.condition_names = env.getTaskDescription().success_conditions;
-  Eigen::VectorXd action;
-  for (;;) {
-    try {
-      policy.act(env.getObservation(), env.getElapsedSteps(), action, env.getVisualObservation());
-    } catch (const PluginCallError& e) {
-      throw PluginCallError("task '" + env.getTaskDescription().name + "', object '" + object_id +
-                                "', seed " + std::to_string(seed) + ", step " +
-                                std::to_string(env.getElapsedSteps()) + ": " + e.what(),
-                            e.status());
-    }
-    const StepResult step = env.step(action);
-    result.total_reward += step.reward;
-    result.final_flags = step.flags;
-    result.final_values = step.values;
-    result.success = step.success;
-    if (step.done) break;
-  }
-  result.steps = env.getElapsedSteps();
-  return result;
-}
-
 }  // namespace manibench

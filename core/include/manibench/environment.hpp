@@ -127,19 +127,4 @@ class Environment {
   VisualObservation visual_;
 };
 
-// One whole episode of a policy in an environment.
-struct EpisodeResult {
-  std::string object_id;
-  uint64_t seed = 0;
-  uint32_t steps = 0;
-  double total_reward = 0;
-  bool success = false;
-  std::vector<std::string> condition_names;
-  std::vector<uint8_t> final_flags;
-  std::vector<double> final_values;
-};
-
-EpisodeResult runEpisode(Environment& env, PolicyInstance& policy,
-                         const std::string& object_id, uint64_t seed);
-
 }  // namespace manibench

@@ -25,6 +25,7 @@
 #include <cstdio>
 #include <cstring>
 #include <iostream>
+#include <manibench/episode.hpp>
 #include <manibench/evaluation.hpp>
 #include <manibench/plugin_instances.hpp>
 #include <map>
@@ -256,37 +257,47 @@ void readRecord(Reader& in, EpisodeRecord& r) {
 // What a worker does after an episode.
 enum class After { kGoOn, kNewPolicy, kLeave };
 
+Phase toWorkerPhase(EpisodePhase phase) {
+  switch (phase) {
+    case EpisodePhase::EnvReset:
+      return kEnvReset;
+    case EpisodePhase::PolicyReset:
+      return kPolicyReset;
+    case EpisodePhase::PolicyAct:
+      return kPolicyAct;
+    case EpisodePhase::EnvStep:
+      return kEnvStep;
+  }
+  return kIdle;
+}
+
 // Runs one episode; failures of the policy or the environment are recorded,
-// never thrown.
+// never thrown. The slot follows the episode's phases (the coordinator's
+// view of a worker that hangs or dies).
 After runWorkerEpisode(Environment& env, PolicyInstance& policy, Slot& slot,
                        EpisodeRecord& record) {
   const auto start = getMonotonicNs();
   const std::size_t conditions = env.getTaskDescription().success_conditions.size();
   record.flags.assign(conditions, 0);
   After after = After::kGoOn;
+  EpisodeHooks hooks;
+  hooks.on_phase = [&slot](EpisodePhase phase, uint32_t step) {
+    slot.step.store(step);
+    enterPhase(slot, toWorkerPhase(phase));
+  };
+  hooks.on_step = [&slot, &record](const StepResult&, const EpisodeResult& so_far) {
+    record.total_reward = so_far.total_reward;
+    slot.total_reward.store(record.total_reward);
+    return true;
+  };
   try {
     slot.step.store(0);
     slot.total_reward.store(0);
-    enterPhase(slot, kEnvReset);
-    env.reset(record.spec.object_id, record.spec.seed);
-    enterPhase(slot, kPolicyReset);
-    policy.reset(record.spec.seed);
-    Eigen::VectorXd action;
-    for (;;) {
-      slot.step.store(env.getElapsedSteps());
-      enterPhase(slot, kPolicyAct);
-      policy.act(env.getObservation(), env.getElapsedSteps(), action, env.getVisualObservation());
-      enterPhase(slot, kEnvStep);
-      const StepResult step = env.step(action);
-      record.total_reward += step.reward;
-      slot.total_reward.store(record.total_reward);
-      if (step.done) {
-        record.success = step.success;
-        record.flags = step.flags;
-        record.flags.resize(conditions, 0);
-        break;
-      }
-    }
+    const EpisodeResult result =
+        runEpisode(env, policy, record.spec.object_id, record.spec.seed, hooks);
+    record.success = result.success;
+    record.flags = result.final_flags;
+    record.flags.resize(conditions, 0);
   } catch (const std::exception& e) {
     const uint32_t phase = slot.phase.load();
     record.failure_step = slot.step.load();
