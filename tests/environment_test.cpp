@@ -36,6 +36,44 @@ TEST(Environment, ExpertSolvesEveryTestObject) {
   }
 }
 
+TEST(Environment, StepBeforeResetIsRefused) {
+  Environment env(getBuildTreeRegistry(), "Reach-v0");
+  EXPECT_THROW(env.step(Eigen::VectorXd::Zero(2)), std::logic_error);
+  env.reset("0", 1);
+  EXPECT_NO_THROW(env.step(Eigen::VectorXd::Zero(2)));
+}
+
+// TaskSpec::success_hold_steps: `success` holds once the task's condition
+// has held at hold_steps consecutive steps; its value is the count, which
+// every reset starts again.
+TEST(Environment, SuccessCountsTheStepsTheTaskConditionHeldInARow) {
+  EnvironmentOptions options;
+  options.task_config = "hold_steps: 4";
+  options.stop_on_success = false;
+  Environment env(getBuildTreeRegistry(), "Reach-v0", options);
+  PolicyInstance expert = makePolicy(env, "reach_expert");
+  double previous = 0;
+  int held_steps = 0;
+  EpisodeHooks hooks;
+  hooks.on_step = [&](const StepResult& step, const EpisodeResult&) {
+    const bool holds = step.flags[0] && step.flags[1];  // reached and static
+    const double count = step.values.back();
+    EXPECT_EQ(count, holds ? previous + 1 : 0);
+    EXPECT_EQ(step.success, count >= 4);
+    held_steps += holds;
+    previous = count;
+    return true;
+  };
+  for (uint64_t seed : {0, 1}) {
+    previous = 0;
+    const EpisodeResult r = runEpisode(env, expert, "0", seed, hooks);
+    EXPECT_TRUE(r.success);
+    EXPECT_EQ(r.steps, env.getTaskDescription().max_episode_steps);
+    EXPECT_GT(previous, 4) << "the expert stays at the target";
+  }
+  EXPECT_GT(held_steps, 8);
+}
+
 TEST(Environment, RandomPolicyFails) {
   Environment env(getBuildTreeRegistry(), "Reach-v0");
   env.reset("0", 0);

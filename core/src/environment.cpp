@@ -96,6 +96,7 @@ void Environment::buildScene(const std::string& object_id) {
   observer_.reset();
   controller_.reset();
   bridge_.reset();
+  episode_started_ = false;
   scene_ = std::make_unique<Scene>(options_.physics);
   masks_ = std::make_unique<SegmentationMasks>(task.masks);
   bridge_ = std::make_unique<SceneBridge>(*scene_, masks_.get());
@@ -200,6 +201,7 @@ void Environment::reset(const std::string& object_id, uint64_t seed) {
                                 objects + "; it cannot reset on object '" + object_id +
                                 "' (use " + getTaskDescription().name + " for any object)");
   }
+  episode_started_ = false;
   if (!scene_built_ || object_id != object_id_) buildScene(object_id);
   // Every episode starts from the freshly built state, so its trajectory
   // depends only on (object, seed, actions), never on earlier episodes.
@@ -218,10 +220,12 @@ void Environment::reset(const std::string& object_id, uint64_t seed) {
   drives_.assign(actuated_joints_.size(), DriveCommand{});
   scene_->setDriveCommands(robot_, actuated_joints_, drives_);
   observe();
+  episode_started_ = true;
 }
 
 StepResult Environment::step(const Eigen::VectorXd& action) {
-  if (!scene_built_) throw std::logic_error("Environment::step() before reset()");
+  // The per-step contract (abi.h): the task and controller were reset.
+  if (!episode_started_) throw std::logic_error("Environment::step() before reset()");
   const TaskDescription& task = description_;
   const uint32_t action_dim = controller_->getDescription().action_dim;
   if (action.size() != Eigen::Index(action_dim))
@@ -248,13 +252,13 @@ StepResult Environment::step(const Eigen::VectorXd& action) {
 
   StepResult result;
   result.reward = task_->computeReward(*bridge_, clipped_action_);
+  if (!std::isfinite(result.reward))
+    throw EpisodeFailure(describeEpisode() + ": task reward is not finite");
   task_->evaluateSuccess(*bridge_, result.flags, result.values);
   result.success = result.flags.back() != 0;
   result.done = elapsed_steps_ >= task.max_episode_steps ||
                 (options_.stop_on_success && result.success);
   observe();
-  if (!std::isfinite(result.reward))
-    throw EpisodeFailure(describeEpisode() + ": task reward is not finite");
   return result;
 }
 

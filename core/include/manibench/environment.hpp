@@ -73,7 +73,8 @@ class Environment {
   // identical episodes, whatever ran before.
   void reset(const std::string& object_id, uint64_t seed);
   // Validates (size, finite), clips to [-1, 1], runs frame_skip control
-  // steps, then computes reward, success and the next observation.
+  // steps, then computes reward, success and the next observation: the
+  // per-step contract of abi.h. Throws std::logic_error before reset().
   StepResult step(const Eigen::VectorXd& action);
 
   const Eigen::VectorXd& getObservation() const { return observation_; }
@@ -116,6 +117,7 @@ class Environment {
   std::vector<DriveCommand> drives_;  // the controller writes, the scene reads
   std::string object_id_;
   bool scene_built_ = false;
+  bool episode_started_ = false;  // reset() succeeded on the current scene
   uint64_t seed_ = 0;
   uint32_t elapsed_steps_ = 0;
   Eigen::VectorXd observation_;
