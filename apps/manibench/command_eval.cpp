@@ -142,9 +142,7 @@ int commandEval(int argc, char** argv) {
 
   EvaluationOptions options;
   options.task = task;
-  options.split = valueOr(args, "split", "test");
-  if (options.split != "train" && options.split != "test")
-    throw UsageError("--split must be train or test", kEvalUsage);
+  options.split = parseSplit(args, "test", kEvalUsage);
   options.seed = parseSeed(valueOr(args, "seed", "0"), kEvalUsage);
   const uint64_t workers = parseSeed(valueOr(args, "workers", "1"), kEvalUsage, "--workers");
   if (workers < 1 || workers > 256) throw UsageError("--workers must be 1 to 256", kEvalUsage);
@@ -168,13 +166,7 @@ int commandEval(int argc, char** argv) {
     throw UsageError(e.what(), kEvalUsage);
   }
 
-  ConfigSources sources = getConfigSources(args);
-  if (args.options.count("obs")) {
-    const std::string obs = args.options.at("obs");
-    if (!findObservationMode(obs))
-      throw UsageError("--obs must be state, pointcloud or rgbd, got '" + obs + "'", kEvalUsage);
-    sources.overrides.push_back("observation.mode=" + obs);
-  }
+  const ConfigSources sources = getConfigSources(args, parseObservationMode(args, kEvalUsage));
   for (const std::string& file : sources.files) options.config_notes.push_back("--config " + file);
   for (const std::string& set : sources.overrides) options.config_notes.push_back("--set " + set);
   if (args.options.count("policy-config")) {

@@ -181,12 +181,10 @@ int commandRender(int argc, char** argv) {
   }
   if (args.positional.size() != 1) throw UsageError("render needs exactly one TASK", kRenderUsage);
   if (!args.options.count("out")) throw UsageError("render needs --out DIR", kRenderUsage);
-  const std::string obs = valueOr(args, "obs", "rgbd");
-  if (obs != "rgbd" && obs != "pointcloud")
-    throw UsageError("--obs must be pointcloud or rgbd", kRenderUsage);
-  const std::string split = valueOr(args, "split", "train");
-  if (split != "train" && split != "test")
-    throw UsageError("--split must be train or test", kRenderUsage);
+  const ObservationMode mode =
+      parseObservationMode(args, kRenderUsage, {ObservationMode::PointCloud, ObservationMode::Rgbd})
+          .value_or(ObservationMode::Rgbd);
+  const std::string split = parseSplit(args, "train", kRenderUsage);
   const uint64_t seed = parseSeed(valueOr(args, "seed", "0"), kRenderUsage);
   const std::string video = valueOr(args, "video", "");
   if (!video.empty() && !args.options.count("policy"))
@@ -206,8 +204,7 @@ int commandRender(int argc, char** argv) {
 
   PluginRegistry registry;
   loadPlugins(registry);
-  ConfigSources sources = getConfigSources(args);
-  sources.overrides.push_back("observation.mode=" + obs);
+  const ConfigSources sources = getConfigSources(args, mode);
   const std::unique_ptr<Environment> env =
       makeEnvironment(registry, args.positional[0], sources, /*stop_on_success=*/true);
   const std::string object = args.options.count("object")
@@ -228,7 +225,7 @@ int commandRender(int argc, char** argv) {
   observer.fusePointCloud(images, images.size(), full);
   const std::vector<std::string>& masks = env->getTaskDescription().masks;
   writePly((dir / "pointcloud_full.ply").string(), full, masks);
-  const PointCloud sample = obs == "pointcloud" ? env->getVisualObservation().points
+  const PointCloud sample = mode == ObservationMode::PointCloud ? env->getVisualObservation().points
                                                 : samplePointCloud(full, env->getOptions().observation.pointcloud, seed);
   writePly((dir / "pointcloud.ply").string(), sample, masks);
   std::cout << "task " << args.positional[0] << ", object " << object << ", seed " << seed << ": "
