@@ -397,6 +397,27 @@ TEST(Config, BuiltinDefaultsMatchPhysicsSettingsAndCoverTheSchema) {
   }
 }
 
+// The observation keys' built-in values are ObservationOptions' defaults, so
+// that an environment built from EnvironmentOptions{} observes as one built
+// from an empty configuration.
+TEST(Config, BuiltinDefaultsMatchObservationOptions) {
+  const EnvironmentOptions options = calcEnvironmentOptions(calcConfig(nullptr, {}));
+  const ObservationOptions expected;
+  EXPECT_EQ(options.observation.mode, expected.mode);
+  EXPECT_EQ(options.observation.cameras.size(), expected.cameras.size());
+  const PointCloudSampling& sampling = options.observation.pointcloud;
+  EXPECT_EQ(sampling.per_mask, expected.pointcloud.per_mask);
+  EXPECT_EQ(sampling.masked_total, expected.pointcloud.masked_total);
+  EXPECT_EQ(sampling.total, expected.pointcloud.total);
+  EXPECT_EQ(sampling.ground_height, expected.pointcloud.ground_height);
+  EXPECT_EQ(sampling.pad, expected.pointcloud.pad);
+  // Lights: the ambient term and the point lights agree; the directional
+  // ones do not (the built-in layer has one sun, LightingSpec ManiSkill's
+  // two lights), which only a hand-built environment in a visual mode sees.
+  EXPECT_EQ(options.observation.lighting.ambient, expected.lighting.ambient);
+  EXPECT_EQ(options.observation.lighting.point.size(), expected.lighting.point.size());
+}
+
 TEST(Config, DocsDescribeEveryKey) {
   std::ifstream in(std::string(MANIBENCH_TEST_SOURCE_DIR) + "/docs/configuration.md");
   ASSERT_TRUE(in) << "docs/configuration.md is missing";

@@ -10,9 +10,10 @@
 namespace manibench {
 namespace {
 
-// The lowest layer. It mirrors PhysicsSettings' defaults (a test holds the
-// two together) and names every key that is not inside a list item or a
-// free-form map; docs/configuration.md explains each.
+// The lowest layer. It mirrors the defaults of PhysicsSettings and
+// ObservationOptions (config tests hold them together; the directional
+// lights are the exception they name) and names every key that is not
+// inside a list item or a free-form map; docs/configuration.md explains each.
 const char* const kBuiltinConfig = R"(# manibench built-in defaults (the lowest configuration layer)
 control:
   frequency: null          # Hz; null: the task's
