@@ -14,7 +14,7 @@
 #include <set>
 #include <sstream>
 
-#include "../plugins/open_cabinet/cabinet_generator.cpp"
+#include "../cabinet_generator.cpp"
 #include "test_support.hpp"
 
 namespace {
