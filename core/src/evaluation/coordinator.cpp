@@ -259,7 +259,7 @@ void Coordinator::dispatch(std::size_t i) {
   const EpisodeSpec& spec = result_.planned[next_++];
   w.episode = static_cast<int64_t>(spec.index);
   Writer m;
-  writeRun(m.u8(kRun), spec);
+  transferRun(m.u8(kRun), spec);
   sendMessage(w.fd, m);  // a dead worker is noticed by poll
 }
 
@@ -274,7 +274,8 @@ bool Coordinator::handleMessage(std::size_t i, const std::string& payload) {
   Reader in(payload);
   const uint8_t type = in.u8();
   if (type == kReady) {
-    EvaluationTaskInfo info = readReady(in);
+    EvaluationTaskInfo info;
+    transferReady(in, info);
     w.ready = true;
     if (!planned_) plan(std::move(info));
   } else if (type == kSetupError) {
@@ -284,7 +285,8 @@ bool Coordinator::handleMessage(std::size_t i, const std::string& payload) {
     return false;
   } else if (type == kResult) {
     EpisodeRecord r;
-    const uint64_t index = readResult(in, r);
+    transferResult(in, r);
+    const std::size_t index = r.spec.index;
     if (w.episode < 0 || uint64_t(w.episode) != index)
       throw EvaluationError("worker reported episode " + std::to_string(index) +
                             " it was not running");

@@ -9,10 +9,13 @@
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace manibench::evaluation_detail {
 
+// Writer and Reader share one vocabulary, field(x), so that the layout of a
+// message is written once (the transfer* functions below) for both ends.
 class Writer {
  public:
   Writer& u8(uint8_t v) { return raw(&v, 1); }
@@ -29,6 +32,22 @@ class Writer {
     u32(static_cast<uint32_t>(list.size()));
     for (const std::string& s : list) str(s);
     return *this;
+  }
+  // Numbers, flags and enums as their bytes.
+  template <class T>
+  void field(const T& v) {
+    static_assert(std::is_arithmetic_v<T> || std::is_enum_v<T>, "no layout for this type");
+    raw(&v, sizeof(T));
+  }
+  void field(const std::string& v) { str(v); }
+  void field(const std::vector<std::string>& v) { strings(v); }
+  void field(const std::vector<uint8_t>& v) {
+    u32(static_cast<uint32_t>(v.size()));
+    for (uint8_t b : v) u8(b);
+  }
+  template <class... T>
+  void fields(const T&... v) {
+    (field(v), ...);
   }
   const std::string& data() const { return data_; }
 
@@ -61,6 +80,20 @@ class Reader {
     std::vector<std::string> list(u32());
     for (std::string& s : list) s = str();
     return list;
+  }
+  template <class T>
+  void field(T& v) {
+    v = get<T>();
+  }
+  void field(std::string& v) { v = str(); }
+  void field(std::vector<std::string>& v) { v = strings(); }
+  void field(std::vector<uint8_t>& v) {
+    v.resize(u32());
+    for (uint8_t& b : v) b = u8();
+  }
+  template <class... T>
+  void fields(T&... v) {
+    (field(v), ...);
   }
 
  private:
@@ -95,13 +128,28 @@ bool receiveMessage(int fd, std::string& payload);
 // coordinator's side) into `payload`; false while none is complete.
 bool takeMessage(std::string& buffer, std::string& payload);
 
-// The payloads after their Message byte.
-void writeReady(Writer& w, const EvaluationTaskInfo& info);
-EvaluationTaskInfo readReady(Reader& in);
-void writeRun(Writer& w, const EpisodeSpec& spec);
-EpisodeSpec readRun(Reader& in);
-// Everything but the spec, which the coordinator has; returns its index.
-void writeResult(Writer& w, const EpisodeRecord& record);
-uint64_t readResult(Reader& in, EpisodeRecord& record);
+// The payloads after their Message byte, written (Stream = Writer, const
+// records) or read (Stream = Reader) field by field.
+
+// kReady: the task as the worker's environment configures it.
+template <class Stream, class Info>
+void transferReady(Stream& s, Info& info) {
+  s.fields(info.observation_mode, info.controller, info.condition_names, info.split_objects,
+           info.max_episode_steps, info.action_dim, info.observation_dim);
+}
+
+// kRun: the episode to run.
+template <class Stream, class Spec>
+void transferRun(Stream& s, Spec& spec) {
+  s.fields(spec.index, spec.object_id, spec.level, spec.seed);
+}
+
+// kResult: the episode's index (of its spec, which the coordinator has
+// whole), then its outcome.
+template <class Stream, class Record>
+void transferResult(Stream& s, Record& r) {
+  s.fields(r.spec.index, r.steps, r.total_reward, r.success, r.flags, r.failure, r.failure_step,
+           r.message, r.seconds);
+}
 
 }  // namespace manibench::evaluation_detail

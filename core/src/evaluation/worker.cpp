@@ -146,7 +146,8 @@ void runWorker(int fd, Slot& slot, const WorkerContext& context) {
     try {
       env = (*context.make_environment)();
       policy = makePolicy(context, *env);
-      writeReady(w.u8(kReady), describeTask(*env, context.options->split));
+      const EvaluationTaskInfo info = describeTask(*env, context.options->split);
+      transferReady(w.u8(kReady), info);
     } catch (const std::exception& e) {
       w = Writer();
       w.u8(kSetupError).str(e.what());
@@ -164,10 +165,10 @@ void runWorker(int fd, Slot& slot, const WorkerContext& context) {
       Reader in(payload);
       if (in.u8() != kRun) break;
       EpisodeRecord record;
-      record.spec = readRun(in);
+      transferRun(in, record.spec);
       const After after = runWorkerEpisode(*env, *policy, slot, record);
       Writer w;
-      writeResult(w.u8(kResult), record);
+      transferResult(w.u8(kResult), record);
       if (!sendMessage(fd, w) || after == After::kLeave) break;
       if (after == After::kNewPolicy) {
         enterPhase(slot, kSetup);

@@ -6,29 +6,23 @@
 
 namespace manibench {
 
-const char* toString(ObservationMode mode) {
-  switch (mode) {
-    case ObservationMode::State:
-      return "state";
-    case ObservationMode::PointCloud:
-      return "pointcloud";
-    case ObservationMode::Rgbd:
-      return "rgbd";
-  }
-  return "?";
-}
+namespace {
+// In enum order: the one place a mode's name is written.
+constexpr const char* kModeNames[] = {"state", "pointcloud", "rgbd"};
+constexpr std::size_t kModeCount = sizeof(kModeNames) / sizeof(kModeNames[0]);
+static_assert(kModeCount == std::size_t(ObservationMode::Rgbd) + 1, "a name per mode");
+}  // namespace
+
+const char* toString(ObservationMode mode) { return kModeNames[std::size_t(mode)]; }
 
 const std::vector<std::string>& getObservationModeNames() {
-  static const std::vector<std::string> names{toString(ObservationMode::State),
-                                              toString(ObservationMode::PointCloud),
-                                              toString(ObservationMode::Rgbd)};
+  static const std::vector<std::string> names(kModeNames, kModeNames + kModeCount);
   return names;
 }
 
 std::optional<ObservationMode> findObservationMode(const std::string& name) {
-  for (ObservationMode mode :
-       {ObservationMode::State, ObservationMode::PointCloud, ObservationMode::Rgbd})
-    if (name == toString(mode)) return mode;
+  for (std::size_t i = 0; i < kModeCount; ++i)
+    if (name == kModeNames[i]) return ObservationMode(i);
   return std::nullopt;
 }
 
