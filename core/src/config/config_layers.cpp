@@ -224,7 +224,7 @@ const std::string& getBuiltinConfigText() {
   return text;
 }
 
-ConfigNode getBuiltinConfig() {
+ConfigNode calcBuiltinConfig() {
   return parseConfig(getBuiltinConfigText(), "built-in defaults", ConfigLayer::Builtin);
 }
 
@@ -260,7 +260,7 @@ ConfigNode makeTaskConfigLayer(const TaskDescription& task) {
 }
 
 ConfigNode calcConfig(const TaskDescription* task, const ConfigSources& sources) {
-  ConfigNode config = getBuiltinConfig();
+  ConfigNode config = calcBuiltinConfig();
   std::vector<ConfigNode> layers;
   if (task != nullptr) layers.push_back(makeTaskConfigLayer(*task));
   for (const std::string& file : sources.files) layers.push_back(loadConfigFile(file));
