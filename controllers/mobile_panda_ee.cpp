@@ -126,7 +126,11 @@ class MobilePandaEeController : public manibench::sdk::Controller {
 
   void compute(const SceneView& scene, Eigen::Map<const Eigen::VectorXd> action,
                std::vector<DriveCommand>& drives) override {
-    if (tcp_links_.empty()) reset(scene);  // a host that skipped reset()
+    // abi.h's per-step contract: the host resets a controller before it
+    // computes.
+    if (tcp_links_.empty())
+      throw Error("mobile_panda_ee: compute before reset (the host broke the per-step contract)",
+                  MB_ERROR);
     const std::vector<PandaArm>& arms = joints_.arms;
     const double dt = 1.0 / context_.control_frequency;
     // body_link: base_link raised by the lift, so its axes are base_link's.

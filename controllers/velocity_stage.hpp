@@ -11,7 +11,7 @@
 
 namespace manibench::controllers {
 
-constexpr double kPi = 3.14159265358979323846;
+using sdk::kPi;
 
 // Smoothing factor of an exponential moving average whose -3 dB point is
 // `cutoff_hz` when sampled at `sample_hz` (first-order IIR design).

@@ -63,11 +63,33 @@ std::string valueOr(const Arguments& args, const std::string& key, const std::st
   return it == args.options.end() ? fallback : it->second;
 }
 
+std::string parseSplit(const Arguments& args, const std::string& fallback, const char* usage) {
+  const std::string split = valueOr(args, "split", fallback);
+  if (split != "train" && split != "test")
+    throw UsageError("--split must be train or test, got '" + split + "'", usage);
+  return split;
+}
+
+std::optional<mb::ObservationMode> parseObservationMode(
+    const Arguments& args, const char* usage, const std::vector<mb::ObservationMode>& allowed) {
+  const auto given = args.options.find("obs");
+  if (given == args.options.end()) return std::nullopt;
+  const std::optional<mb::ObservationMode> mode = mb::findObservationMode(given->second);
+  const bool ok =
+      mode && (allowed.empty() || std::find(allowed.begin(), allowed.end(), *mode) != allowed.end());
+  if (ok) return mode;
+  std::vector<std::string> names;
+  if (allowed.empty()) names = mb::getObservationModeNames();
+  for (mb::ObservationMode m : allowed) names.push_back(mb::toString(m));
+  std::string list;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    list += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
+  throw UsageError("--obs must be " + list + ", got '" + given->second + "'", usage);
+}
+
 void loadPlugins(mb::PluginRegistry& registry) { registry.loadSearchPath(); }
 
-// The user's configuration layers from --config, --set and --controller
-// (which acts as the last --set control.controller=NAME).
-mb::ConfigSources getConfigSources(const Arguments& args) {
+mb::ConfigSources getConfigSources(const Arguments& args, std::optional<mb::ObservationMode> mode) {
   mb::ConfigSources sources;
   const auto files = args.repeated.find("config");
   if (files != args.repeated.end()) sources.files = files->second;
@@ -76,6 +98,7 @@ mb::ConfigSources getConfigSources(const Arguments& args) {
   const auto controller = args.options.find("controller");
   if (controller != args.options.end())
     sources.overrides.push_back("control.controller=" + controller->second);
+  if (mode) sources.overrides.push_back(std::string("observation.mode=") + mb::toString(*mode));
   return sources;
 }
 

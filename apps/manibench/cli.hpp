@@ -1,15 +1,19 @@
-// Shared pieces of the manibench command-line program: argument parsing,
-// usage errors, building a configured environment, printing. Each command
-// lives in its own file (command_*.cpp) and is dispatched from main.cpp.
+// Shared pieces of the manibench command-line program: the commands (one
+// file each, command_*.cpp, dispatched from main.cpp), argument parsing and
+// the options several commands share, usage errors, building a configured
+// environment, printing.
 #pragma once
 
 #include <manibench/config.hpp>
 #include <manibench/environment.hpp>
+#include <manibench/episode.hpp>
+#include <manibench/observation.hpp>
 #include <manibench/plugin_registry.hpp>
 
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -17,6 +21,17 @@
 namespace manibench::cli {
 
 namespace mb = manibench;
+
+// The commands: argv[1] is the command's name; each returns the exit code.
+int commandList(int argc, char** argv);     // command_list.cpp
+int commandInfo(int argc, char** argv);     // command_info.cpp
+int commandRun(int argc, char** argv);      // command_run.cpp
+int commandBench(int argc, char** argv);    // command_bench.cpp
+int commandConfig(int argc, char** argv);   // command_config.cpp
+int commandRender(int argc, char** argv);   // command_render.cpp
+int commandObjects(int argc, char** argv);  // command_objects.cpp
+int commandEval(int argc, char** argv);     // command_eval.cpp
+int commandDemo(int argc, char** argv);     // command_demo.cpp
 
 // A usage error carries the usage text of the command it concerns.
 class UsageError : public std::runtime_error {
@@ -45,10 +60,17 @@ Arguments parseArguments(int argc, char** argv, int first, const std::vector<std
 // A non-negative integer, or a UsageError naming `option` with `usage`.
 uint64_t parseSeed(const std::string& text, const char* usage, const std::string& option = "--seed");
 std::string valueOr(const Arguments& args, const std::string& key, const std::string& fallback);
+// --split: train or test; `fallback` when not given.
+std::string parseSplit(const Arguments& args, const std::string& fallback, const char* usage);
+// --obs MODE: one of `allowed` (every mode when empty); nullopt when not given.
+std::optional<mb::ObservationMode> parseObservationMode(
+    const Arguments& args, const char* usage, const std::vector<mb::ObservationMode>& allowed = {});
 void loadPlugins(mb::PluginRegistry& registry);
 // The user's configuration layers from --config, --set and --controller
-// (which acts as the last --set control.controller=NAME).
-mb::ConfigSources getConfigSources(const Arguments& args);
+// (which acts as the last --set control.controller=NAME), then `mode`
+// (--obs) as the last --set observation.mode=MODE.
+mb::ConfigSources getConfigSources(const Arguments& args,
+                                   std::optional<mb::ObservationMode> mode = std::nullopt);
 // An environment as configured; plugin errors are annotated with the file
 // (or --set) that wrote the keys they name.
 std::unique_ptr<mb::Environment> makeEnvironment(const mb::PluginRegistry& registry,

@@ -142,9 +142,7 @@ int commandEval(int argc, char** argv) {
 
   EvaluationOptions options;
   options.task = task;
-  options.split = valueOr(args, "split", "test");
-  if (options.split != "train" && options.split != "test")
-    throw UsageError("--split must be train or test", kEvalUsage);
+  options.split = parseSplit(args, "test", kEvalUsage);
   options.seed = parseSeed(valueOr(args, "seed", "0"), kEvalUsage);
   const uint64_t workers = parseSeed(valueOr(args, "workers", "1"), kEvalUsage, "--workers");
   if (workers < 1 || workers > 256) throw UsageError("--workers must be 1 to 256", kEvalUsage);
@@ -168,15 +166,7 @@ int commandEval(int argc, char** argv) {
     throw UsageError(e.what(), kEvalUsage);
   }
 
-  ConfigSources sources = getConfigSources(args);
-  if (args.options.count("obs")) {
-    const std::string obs = args.options.at("obs");
-    const std::vector<std::string>& modes = getObservationModes();
-    if (std::find(modes.begin(), modes.end(), obs) == modes.end())
-      throw UsageError("--obs must be state, pointcloud or rgbd, got '" + obs + "'", kEvalUsage);
-    sources.overrides.push_back("observation.mode=" + obs);
-  }
-  options.observation_mode = valueOr(args, "obs", "");
+  const ConfigSources sources = getConfigSources(args, parseObservationMode(args, kEvalUsage));
   for (const std::string& file : sources.files) options.config_notes.push_back("--config " + file);
   for (const std::string& set : sources.overrides) options.config_notes.push_back("--set " + set);
   if (args.options.count("policy-config")) {
@@ -242,7 +232,7 @@ int commandEval(int argc, char** argv) {
 
   std::cout << "policy " << options.policy << " (" << result.policy_library << ", version "
             << result.policy_library_version << "), controller " << result.task.controller
-            << ", observation " << result.task.observation_mode << "\n\n";
+            << ", observation " << toString(result.task.observation_mode) << "\n\n";
   printEvaluationTable(std::cout, result);
   std::cout << "\n"
             << result.episodes.size() << " of " << result.planned.size() << " episodes in "

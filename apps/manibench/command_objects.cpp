@@ -40,9 +40,7 @@ int commandObjects(int argc, char** argv) {
   }
   if (args.positional.size() != 1) throw UsageError("objects takes one TASK", kObjectsUsage);
   const std::string task = args.positional[0];
-  const std::string split = valueOr(args, "split", "train");
-  if (split != "train" && split != "test")
-    throw UsageError("--split must be train or test, not '" + split + "'", kObjectsUsage);
+  const std::string split = parseSplit(args, "train", kObjectsUsage);
   mb::PluginRegistry registry;
   loadPlugins(registry);
   const auto env = makeEnvironment(registry, task, getConfigSources(args), true);

@@ -1,6 +1,7 @@
 // manibench render: the cameras' images, masks and point clouds of a task
 // after a reset, as files; optionally an episode as a video.
 #include <manibench/environment.hpp>
+#include <manibench/episode.hpp>
 #include <manibench/pointcloud.hpp>
 #include <manibench/renderer.hpp>
 
@@ -71,7 +72,7 @@ void writeCamera(const std::filesystem::path& dir, const CameraImages& image, co
   for (std::size_t m = 0; m < masks.size(); ++m) {
     std::vector<std::uint8_t> mask(pixels);
     for (std::size_t p = 0; p < pixels; ++p)
-      mask[p] = ((env.calcPixelMasks(image, p) >> m) & 1u) ? 255 : 0;
+      mask[p] = ((env.getObserver().getMasks().calcPixelMasks(image, p) >> m) & 1u) ? 255 : 0;
     writePng8(base + "_mask_" + fileName(masks[m]) + ".png", image.width, image.height, 1, mask);
   }
 }
@@ -131,34 +132,37 @@ void recordVideo(PluginRegistry& registry, Environment& env, const std::string& 
                  int height) {
   const std::string policy_name = resolvePolicy(registry, policy_arg);
   PolicyInstance policy(registry, policy_name, "", env.calcPolicyLayout());
-  env.reset(object, seed);
-  policy.reset(seed);
-  // Third person: from the front-right, above, looking at the robot's root.
   const TaskDescription& task = env.getTaskDescription();
-  const Scene& scene = env.getScene();
-  const int robot = scene.findArticulation(task.robot_articulation);
-  const Eigen::Vector3d target =
-      (robot >= 0 ? scene.getRootPose(robot).position : Eigen::Vector3d::Zero()) +
-      Eigen::Vector3d(0, 0, 0.6);
   CameraSpec camera;
   camera.name = "third_person";
   camera.width = width;
   camera.height = height;
   camera.fovy = 1.0;
   camera.far = 20;
-  const Pose pose = calcLookAtPose(target + Eigen::Vector3d(2.5, -2.5, 1.6), target);
+  Pose pose;
   VideoWriter video(path, width, height, task.control_frequency / task.frame_skip);
   CameraImages frame;
-  Eigen::VectorXd action;
-  for (;;) {
-    env.updRenderer().render(camera, pose, frame);
+  auto record = [&] {
+    env.updObserver().updRenderer().render(camera, pose, frame);
     video.write(frame);
-    policy.act(env.getObservation(), env.getElapsedSteps(), action,
-               env.getObservationMode() == "state" ? nullptr : &env.getVisualObservation());
-    if (env.step(action).done) break;
-  }
-  env.updRenderer().render(camera, pose, frame);
-  video.write(frame);
+  };
+  // A frame of every state a policy sees, then of the last one.
+  EpisodeHooks hooks;
+  hooks.on_phase = [&](EpisodePhase phase, uint32_t step) {
+    if (phase == EpisodePhase::PolicyReset) {
+      // Third person: from the front-right, above, looking at the robot's
+      // root where the reset put it.
+      const Scene& scene = env.getScene();
+      const int robot = scene.findArticulation(task.robot_articulation);
+      const Eigen::Vector3d target =
+          (robot >= 0 ? scene.getRootPose(robot).position : Eigen::Vector3d::Zero()) +
+          Eigen::Vector3d(0, 0, 0.6);
+      pose = calcLookAtPose(target + Eigen::Vector3d(2.5, -2.5, 1.6), target);
+    }
+    if (phase == EpisodePhase::PolicyAct) record();
+  };
+  runEpisode(env, policy, object, seed, hooks);
+  record();
   video.close();
   std::cout << "wrote " << path << ": " << video.getFrameCount() << " frames, "
             << env.getElapsedSteps() << " steps of policy " << policy_name << "\n";
@@ -177,12 +181,10 @@ int commandRender(int argc, char** argv) {
   }
   if (args.positional.size() != 1) throw UsageError("render needs exactly one TASK", kRenderUsage);
   if (!args.options.count("out")) throw UsageError("render needs --out DIR", kRenderUsage);
-  const std::string obs = valueOr(args, "obs", "rgbd");
-  if (obs != "rgbd" && obs != "pointcloud")
-    throw UsageError("--obs must be pointcloud or rgbd", kRenderUsage);
-  const std::string split = valueOr(args, "split", "train");
-  if (split != "train" && split != "test")
-    throw UsageError("--split must be train or test", kRenderUsage);
+  const ObservationMode mode =
+      parseObservationMode(args, kRenderUsage, {ObservationMode::PointCloud, ObservationMode::Rgbd})
+          .value_or(ObservationMode::Rgbd);
+  const std::string split = parseSplit(args, "train", kRenderUsage);
   const uint64_t seed = parseSeed(valueOr(args, "seed", "0"), kRenderUsage);
   const std::string video = valueOr(args, "video", "");
   if (!video.empty() && !args.options.count("policy"))
@@ -202,8 +204,7 @@ int commandRender(int argc, char** argv) {
 
   PluginRegistry registry;
   loadPlugins(registry);
-  ConfigSources sources = getConfigSources(args);
-  sources.overrides.push_back("observation.mode=" + obs);
+  const ConfigSources sources = getConfigSources(args, mode);
   const std::unique_ptr<Environment> env =
       makeEnvironment(registry, args.positional[0], sources, /*stop_on_success=*/true);
   const std::string object = args.options.count("object")
@@ -217,20 +218,21 @@ int commandRender(int argc, char** argv) {
   if (error) throw std::runtime_error("cannot create " + dir.string() + ": " + error.message());
   // The observation already rendered every camera; this renders them again
   // at the same state (same images) and hands them out.
-  const std::vector<CameraImages>& images = env->renderCameras();
+  VisualObserver& observer = env->updObserver();
+  const std::vector<CameraImages>& images = observer.renderCameras();
   for (const CameraImages& image : images) writeCamera(dir, image, *env);
   PointCloud full;
-  env->fusePointCloud(images, images.size(), full);
+  observer.fusePointCloud(images, images.size(), full);
   const std::vector<std::string>& masks = env->getTaskDescription().masks;
   writePly((dir / "pointcloud_full.ply").string(), full, masks);
-  const PointCloud sample = obs == "pointcloud" ? env->getVisualObservation().points
-                                                : samplePointCloud(full, env->getOptions().pointcloud, seed);
+  const PointCloud sample = mode == ObservationMode::PointCloud ? env->getVisualObservation().points
+                                                : samplePointCloud(full, env->getOptions().observation.pointcloud, seed);
   writePly((dir / "pointcloud.ply").string(), sample, masks);
   std::cout << "task " << args.positional[0] << ", object " << object << ", seed " << seed << ": "
             << images.size() << " camera" << (images.size() == 1 ? "" : "s") << ", "
             << full.size() << " points (" << sample.size() << " sampled), "
-            << env->updRenderer().getTriangleCount() << " triangles; "
-            << env->updRenderer().getDeviceInfo().gl_renderer << "\nwrote " << dir.string() << "\n";
+            << observer.updRenderer().getTriangleCount() << " triangles; "
+            << observer.updRenderer().getDeviceInfo().gl_renderer << "\nwrote " << dir.string() << "\n";
   if (!video.empty())
     recordVideo(registry, *env, args.options.at("policy"), object, seed, video, video_width,
                 video_height);

@@ -195,7 +195,7 @@ void ControllerInstance::reset(SceneBridge& scene) {
 }
 
 void ControllerInstance::compute(SceneBridge& scene, const Eigen::VectorXd& action,
-                                 std::vector<mb_drive_command>& drives) {
+                                 std::vector<DriveCommand>& drives) {
   callPlugin("controller", description_.name, "compute", descriptor_->compute, handle_,
              SceneBridge::getApi(), scene.getHandle(), action.data(),
              static_cast<uint32_t>(action.size()), drives.data(),
@@ -214,7 +214,7 @@ PolicyInstance::PolicyInstance(const PluginRegistry& registry, const std::string
   mb_policy_context context{};
   context.struct_size = sizeof(context);
   context.task_name = layout.task_name.c_str();
-  context.observation_mode = layout.observation_mode.c_str();
+  context.observation_mode = toString(layout.observation_mode);
   context.observation_dim = layout.observation_dim;
   context.observation_segment_count = static_cast<uint32_t>(observation.size());
   context.observation_segments = observation.data();
@@ -235,7 +235,7 @@ void PolicyInstance::reset(uint64_t seed) {
 }
 
 void PolicyInstance::act(const Eigen::VectorXd& observation, uint32_t step,
-                         Eigen::VectorXd& action, const VisualObservation* visual) {
+                         Eigen::VectorXd& action, const VisualObservation& visual) {
   const mb_observation obs = makeObservationView(observation, step, visual);
   action.setZero(action_dim_);
   callPlugin("policy", name_, "act", descriptor_->act, handle_, &obs, action.data(),
@@ -243,27 +243,31 @@ void PolicyInstance::act(const Eigen::VectorXd& observation, uint32_t step,
 }
 
 mb_observation makeObservationView(const Eigen::VectorXd& state, uint32_t step,
-                                   const VisualObservation* visual) {
+                                   const VisualObservation& visual) {
   mb_observation obs{};
   obs.struct_size = sizeof(obs);
   obs.state = state.data();
   obs.state_dim = static_cast<uint32_t>(state.size());
   obs.step = step;
-  if (visual != nullptr) {
-    obs.mask_count = visual->mask_count;
-    if (visual->mode == "pointcloud") {
-      obs.point_count = static_cast<uint32_t>(visual->points.size());
-      obs.points_xyz = visual->points.xyz.data();
-      obs.points_rgb = visual->points.rgb.data();
-      obs.points_mask = visual->points.masks.data();
-    } else if (visual->mode == "rgbd") {
-      obs.camera_count = visual->camera_count;
-      obs.image_height = visual->height;
-      obs.image_width = visual->width;
-      obs.image_rgb = visual->rgb.data();
-      obs.image_depth = visual->depth.data();
-      obs.image_masks = visual->masks.data();
-    }
+  switch (visual.mode) {
+    case ObservationMode::State:
+      break;
+    case ObservationMode::PointCloud:
+      obs.mask_count = visual.mask_count;
+      obs.point_count = static_cast<uint32_t>(visual.points.size());
+      obs.points_xyz = visual.points.xyz.data();
+      obs.points_rgb = visual.points.rgb.data();
+      obs.points_mask = visual.points.masks.data();
+      break;
+    case ObservationMode::Rgbd:
+      obs.mask_count = visual.mask_count;
+      obs.camera_count = visual.camera_count;
+      obs.image_height = visual.height;
+      obs.image_width = visual.width;
+      obs.image_rgb = visual.rgb.data();
+      obs.image_depth = visual.depth.data();
+      obs.image_masks = visual.masks.data();
+      break;
   }
   return obs;
 }

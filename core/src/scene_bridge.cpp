@@ -1,7 +1,7 @@
 // The host's mb_scene_api: C trampolines over Scene. Nothing thrown here may
 // reach the plugin; every exception becomes a status and a message.
-#include <manibench/plugin_instances.hpp>
-#include <manibench/scene.hpp>
+#include <manibench/scene_bridge.hpp>
+#include <manibench/visual_observer.hpp>
 
 #include <cstdint>
 #include <cstring>
@@ -16,11 +16,8 @@ struct mb_scene {
   // Names handed to plugins must outlive any later add_*; a std::set's nodes
   // never move.
   std::set<std::string> interned;
-  // Segmentation masks (ABI 1.1 add_to_mask): the task's mask names and,
-  // per visual of Scene::getVisualShapes(), bit m set when the visual
-  // belongs to mask m.
-  std::vector<std::string> mask_names;
-  std::vector<std::uint64_t> visual_masks;
+  // Where add_to_mask (ABI 1.1) records the task's segmentation masks.
+  manibench::SegmentationMasks* masks = nullptr;
 };
 
 namespace manibench {
@@ -76,23 +73,14 @@ void requirePointer(const void* p, const char* what) {
   if (p == nullptr) throw SceneError(std::string(what) + " is null");
 }
 
-Pose toPose(const mb_pose* p) {
+// A pose from a plugin, which must be there and have a unit quaternion.
+Pose toCheckedPose(const mb_pose* p) {
   requirePointer(p, "pose");
-  Pose out;
-  out.position = Eigen::Vector3d(p->position[0], p->position[1], p->position[2]);
-  out.orientation = Eigen::Quaterniond(p->quaternion[0], p->quaternion[1], p->quaternion[2],
-                                       p->quaternion[3]);
+  const Pose out = makePose(*p);
   const double norm = out.orientation.norm();
   if (!(std::abs(norm - 1.0) < 1e-6))
     throw SceneError("pose quaternion has norm " + std::to_string(norm) + ", expected 1");
   return out;
-}
-void fromPose(const Pose& p, mb_pose* out) {
-  for (int i = 0; i < 3; ++i) out->position[i] = p.position[i];
-  out->quaternion[0] = p.orientation.w();
-  out->quaternion[1] = p.orientation.x();
-  out->quaternion[2] = p.orientation.y();
-  out->quaternion[3] = p.orientation.z();
 }
 
 mb_status addGround(mb_scene* s, double height, mb_error* err) {
@@ -108,7 +96,7 @@ mb_status addUrdfFile(mb_scene* s, const char* path, const char* name, const mb_
     requirePointer(path, "path");
     requirePointer(name, "name");
     requirePointer(out, "output id");
-    *out = m.scene->addUrdfFile(path, name, toPose(root), fixed_base != 0);
+    *out = m.scene->addUrdfFile(path, name, toCheckedPose(root), fixed_base != 0);
   });
 }
 mb_status addUrdfString(mb_scene* s, const char* xml, const char* base_dir, const char* name,
@@ -118,7 +106,7 @@ mb_status addUrdfString(mb_scene* s, const char* xml, const char* base_dir, cons
     requirePointer(xml, "URDF text");
     requirePointer(name, "name");
     requirePointer(out, "output id");
-    *out = m.scene->addUrdfString(xml, base_dir ? base_dir : "", name, toPose(root),
+    *out = m.scene->addUrdfString(xml, base_dir ? base_dir : "", name, toCheckedPose(root),
                                   fixed_base != 0);
   });
 }
@@ -156,13 +144,7 @@ mb_status getJointInfo(mb_scene* s, mb_id articulation, uint32_t index, mb_joint
                        m.scene->getArticulationName(articulation) + "' has " +
                        std::to_string(joints.size()) + " joints");
     const JointDescription& j = joints[index];
-    out->name = m.interned.insert(j.name).first->c_str();
-    out->type = static_cast<uint32_t>(j.type);
-    out->index = static_cast<uint32_t>(j.index);
-    out->lower = j.lower;
-    out->upper = j.upper;
-    out->velocity_limit = j.velocity_limit;
-    out->effort_limit = j.effort_limit;
+    *out = makeJointInfo(j, m.interned.insert(j.name).first->c_str());
   });
 }
 mb_status findJoint(mb_scene* s, mb_id articulation, const char* name, uint32_t* out,
@@ -202,13 +184,13 @@ mb_status getJointVelocities(mb_scene* s, mb_id articulation, double* out, uint3
 mb_status getRootPose(mb_scene* s, mb_id articulation, mb_pose* out, mb_error* err) {
   return guarded(s, err, [&](mb_scene& m) {
     requirePointer(out, "output pose");
-    fromPose(m.scene->getRootPose(articulation), out);
+    *out = makeCPose(m.scene->getRootPose(articulation));
   });
 }
 mb_status getLinkPose(mb_scene* s, mb_id link, mb_pose* out, mb_error* err) {
   return guarded(s, err, [&](mb_scene& m) {
     requirePointer(out, "output pose");
-    fromPose(m.scene->getLinkPose(link), out);
+    *out = makeCPose(m.scene->getLinkPose(link));
   });
 }
 mb_status getLinkTwist(mb_scene* s, mb_id link, double out[6], mb_error* err) {
@@ -249,7 +231,7 @@ mb_status setJointVelocities(mb_scene* s, mb_id articulation, const double* v, u
 mb_status setRootPose(mb_scene* s, mb_id articulation, const mb_pose* pose, mb_error* err) {
   return guarded(s, err, [&](mb_scene& m) {
     requireStateChanges(m, "set_root_pose");
-    m.scene->setRootPose(articulation, toPose(pose));
+    m.scene->setRootPose(articulation, toCheckedPose(pose));
   });
 }
 mb_status setJointDynamics(mb_scene* s, mb_id articulation, uint32_t joint, double damping,
@@ -276,50 +258,15 @@ mb_status calcLinkJacobian(mb_scene* s, mb_id articulation, mb_id link,
   });
 }
 
-// "mask 'robot' (index 0)" or, past the end, the task's mask list.
-std::string describeMasks(const std::vector<std::string>& names) {
-  std::string list;
-  for (const std::string& n : names) list += (list.empty() ? "'" : ", '") + n + "'";
-  return std::to_string(names.size()) + " mask" + (names.size() == 1 ? "" : "s") +
-         (list.empty() ? "" : " (" + list + ")");
-}
-
 mb_status addToMask(mb_scene* s, uint32_t mask_index, mb_id articulation, mb_id link,
                     const char* visual_name_part, mb_error* err) {
   return guarded(s, err, [&](mb_scene& m) {
     requireBuilding(m, "add_to_mask");
-    if (mask_index >= m.mask_names.size())
-      throw SceneError("add_to_mask: mask index " + std::to_string(mask_index) +
-                       " out of range: the task declares " + describeMasks(m.mask_names));
-    const Scene& scene = *m.scene;
-    if (articulation < 0 || articulation >= scene.getArticulationCount())
-      throw SceneError("add_to_mask: no articulation with id " + std::to_string(articulation));
-    const std::string& articulation_name = scene.getArticulationName(articulation);
-    // Link ids are global; a link belongs to `articulation` when its name
-    // finds it there.
-    auto belongs = [&](int l) { return scene.findLink(articulation, scene.getLinkName(l)) == l; };
-    if (link >= 0 && !belongs(link))
-      throw SceneError("add_to_mask: link id " + std::to_string(link) +
-                       " is not a link of articulation '" + articulation_name + "'");
-    const std::string part = visual_name_part ? visual_name_part : "";
-    const std::vector<VisualShape>& visuals = scene.getVisualShapes();
-    m.visual_masks.resize(visuals.size(), 0);
-    std::size_t matched = 0;
-    for (std::size_t v = 0; v < visuals.size(); ++v) {
-      const VisualShape& shape = visuals[v];
-      if (shape.link < 0) continue;
-      if (link >= 0 ? shape.link != link : !belongs(shape.link)) continue;
-      if (!part.empty() && shape.name.find(part) == std::string::npos) continue;
-      m.visual_masks[v] |= std::uint64_t(1) << mask_index;
-      ++matched;
-    }
-    if (matched == 0)
-      throw SceneError(
-          "add_to_mask: mask '" + m.mask_names[mask_index] + "': " +
-          (link >= 0 ? "link '" + scene.getLinkName(link) + "' of articulation '" +
-                           articulation_name + "' has no visual" +
-                           (part.empty() ? "" : " whose name contains '" + part + "'")
-                     : "articulation '" + articulation_name + "' has no visuals"));
+    // Without masks to collect into, every index is out of range.
+    SegmentationMasks none;
+    (m.masks ? *m.masks : none)
+        .addVisuals(*m.scene, mask_index, articulation, link,
+                    visual_name_part ? visual_name_part : "");
   });
 }
 
@@ -354,24 +301,26 @@ const mb_scene_api kSceneApi = [] {
 
 }  // namespace
 
-SceneBridge::SceneBridge(Scene& scene) : handle_(new mb_scene) { handle_->scene = &scene; }
+SceneBridge::SceneBridge(Scene& scene, SegmentationMasks* masks) : handle_(new mb_scene) {
+  handle_->scene = &scene;
+  handle_->masks = masks;
+}
 SceneBridge::~SceneBridge() { delete handle_; }
 const mb_scene_api* SceneBridge::getApi() { return &kSceneApi; }
 mb_scene* SceneBridge::getHandle() { return handle_; }
 void SceneBridge::setBuilding(bool building) { handle_->building = building; }
 void SceneBridge::setStateChangesAllowed(bool allowed) { handle_->state_changes_allowed = allowed; }
-void SceneBridge::setMaskNames(const std::vector<std::string>& names) {
-  if (names.size() > kMaxMasks)
-    throw SceneError("a task may declare at most " + std::to_string(kMaxMasks) +
-                     " segmentation masks, this one declares " + std::to_string(names.size()));
-  handle_->mask_names = names;
-  handle_->visual_masks.clear();
-}
-const std::vector<std::string>& SceneBridge::getMaskNames() const { return handle_->mask_names; }
-std::vector<std::uint64_t> SceneBridge::calcVisualMasks() const {
-  std::vector<std::uint64_t> masks = handle_->visual_masks;
-  masks.resize(handle_->scene->getVisualShapes().size(), 0);
-  return masks;
+
+mb_joint_info makeJointInfo(const JointDescription& joint, const char* name) {
+  mb_joint_info info{};
+  info.name = name;
+  info.type = static_cast<uint32_t>(joint.type);
+  info.index = static_cast<uint32_t>(joint.index);
+  info.lower = joint.lower;
+  info.upper = joint.upper;
+  info.velocity_limit = joint.velocity_limit;
+  info.effort_limit = joint.effort_limit;
+  return info;
 }
 
 }  // namespace manibench

@@ -20,10 +20,9 @@
 namespace open_cabinet {
 
 using manibench::sdk::Error;
+using manibench::sdk::kPi;
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 struct SplitRange {
   int first, count;

@@ -221,7 +221,6 @@ class OpenCabinetTask : public manibench::sdk::Task {
   double lower_ = 0, upper_ = 1;
   Eigen::Vector3d joint_axis_local_ = Eigen::Vector3d::UnitZ();
   uint32_t cabinet_joint_count_ = 0;
-  uint32_t held_steps_ = 0;
 };
 
 class OpenCabinetDoorTask : public OpenCabinetTask {

@@ -81,7 +81,6 @@ void OpenCabinetExpert::reset(uint64_t) {
 Eigen::VectorXd OpenCabinetExpert::act(const Observation& observation) {
   using L = ObservationLayout;
   const Eigen::VectorXd s = observation.state;
-  if (observation.step == 0) reset(0);
   const Eigen::Vector2d base(s[L::kBasePosition], s[L::kBasePosition + 1]);
   const double yaw = s[L::kBaseYaw];
   const double lift = s[L::kJointPositions + 3];

@@ -22,10 +22,10 @@ using manibench::sdk::Error;
 using manibench::sdk::Pose;
 using manibench::sdk::SceneView;
 using manibench::sdk::TaskSpec;
+using manibench::sdk::kPi;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // Finger pad centre in its finger's frame (the URDF's pad collision box).
 const Eigen::Vector3d kPadOffset(0.0, 0.0076, 0.045);
 
@@ -124,6 +124,7 @@ TaskSpec OpenCabinetTask::describe() const {
     if (segment.name == "tcp_pose") break;
   }
   spec.success_conditions = {"open_enough", "static", "success"};
+  spec.success_hold_steps = hold_steps_;
   spec.masks = {"handle", "target_link", "robot"};
   spec.robot_articulation = "robot";
   spec.actuated_joints = robot_joints_;
@@ -230,7 +231,6 @@ void OpenCabinetTask::reset(SceneView& scene, uint64_t seed) {
     const double damping = rng.uniform(5.0, 20.0);
     scene.setJointDynamics(cabinet_id_, j, damping, friction);
   }
-  held_steps_ = 0;
 }
 
 Pose OpenCabinetTask::calcHandlePose(const SceneView& scene) const {
@@ -304,8 +304,8 @@ std::vector<Condition> OpenCabinetTask::evaluateSuccess(const SceneView& scene) 
   const Measured m = measure(scene);
   const bool open = m.open_fraction >= kOpenFraction;
   const bool still = m.linear_speed <= static_speed_ && m.angular_speed <= static_angular_speed_;
-  held_steps_ = (open && still) ? held_steps_ + 1 : 0;  // called once per env step
-  return {{open, m.open_fraction}, {still, m.linear_speed}, {held_steps_ >= hold_steps_, double(held_steps_)}};
+  // `success` once both have held for hold_steps steps (TaskSpec::success_hold_steps).
+  return {{open, m.open_fraction}, {still, m.linear_speed}, {open && still, 0.0}};
 }
 
 }  // namespace open_cabinet

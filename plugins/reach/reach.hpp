@@ -55,7 +55,6 @@ class ReachTask : public manibench::sdk::Task {
   mb_id robot_ = -1;
   mb_id tip_ = -1;
   Eigen::Vector3d target_ = Eigen::Vector3d::Zero();
-  uint32_t held_steps_ = 0;
 };
 
 class ReachExpert : public manibench::sdk::Policy {

@@ -108,6 +108,7 @@ TaskSpec ReachTask::describe() const {
       {"shoulder_position", 3, "shoulder joint, world frame (m)"},
   };
   spec.success_conditions = {"reached", "static", "success"};
+  spec.success_hold_steps = hold_steps_;
   spec.masks = {"robot"};
   spec.robot_articulation = "arm";
   spec.actuated_joints = {"shoulder", "elbow"};
@@ -162,7 +163,6 @@ void ReachTask::reset(SceneView& scene, uint64_t seed) {
   q << -0.3 + 0.6 * unit(rng), -0.3 + 0.6 * unit(rng);
   scene.setJointPositions(robot_, q);
   scene.setJointVelocities(robot_, Eigen::VectorXd::Zero(2));
-  held_steps_ = 0;
 }
 
 void ReachTask::observe(const SceneView& scene, Eigen::Map<Eigen::VectorXd> out) {
@@ -189,8 +189,8 @@ std::vector<Condition> ReachTask::evaluateSuccess(const SceneView& scene) {
   const double speed = scene.getLinkTwist(tip_).linear.norm();
   const bool reached = distance <= reach_tolerance_;
   const bool still = speed <= static_speed_;
-  held_steps_ = (reached && still) ? held_steps_ + 1 : 0;  // called once per env step
-  return {{reached, distance}, {still, speed}, {held_steps_ >= hold_steps_, double(held_steps_)}};
+  // `success` once both have held for hold_steps steps (TaskSpec::success_hold_steps).
+  return {{reached, distance}, {still, speed}, {reached && still, 0.0}};
 }
 
 }  // namespace reach

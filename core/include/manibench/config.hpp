@@ -11,7 +11,8 @@
 // from. docs/configuration.md lists every key.
 #pragma once
 
-#include <manibench/environment.hpp>
+#include <manibench/environment_options.hpp>
+#include <manibench/plugin_instances.hpp>
 #include <manibench/plugin_registry.hpp>
 
 #include <cstdint>
@@ -148,7 +149,7 @@ void completeConfig(ConfigNode& config);
 
 // The lowest layer: every key with its default (source "built-in defaults").
 const std::string& getBuiltinConfigText();
-ConfigNode getBuiltinConfig();
+ConfigNode calcBuiltinConfig();
 // The task's layer: its description (frequency, frame skip, episode length,
 // controller and controller config; source "task NAME description"), under
 // its default_config YAML (source "task NAME defaults").

@@ -87,9 +87,6 @@ struct EvaluationSummary {
 
 struct EvaluationOptions {
   std::string task;
-  // Informational: the environment the factory builds decides the mode
-  // (EvaluationTaskInfo::observation_mode is the one in force).
-  std::string observation_mode = "state";
   std::string policy;         // a registered policy name (resolved already)
   std::string policy_config;  // YAML handed to the policy's create
   std::string split = "test";
@@ -105,7 +102,7 @@ struct EvaluationOptions {
 
 // What a worker reports after setting up: the task as configured.
 struct EvaluationTaskInfo {
-  std::string observation_mode;  // the environment's, as configured
+  ObservationMode observation_mode = ObservationMode::State;  // the environment's, as configured
   std::string controller;
   std::vector<std::string> condition_names;
   std::vector<std::string> split_objects;

@@ -4,8 +4,10 @@
 #pragma once
 
 #include <manibench/abi.h>
+#include <manibench/geometry.hpp>
+#include <manibench/observation.hpp>
 #include <manibench/plugin_registry.hpp>
-#include <manibench/pointcloud.hpp>
+#include <manibench/scene_bridge.hpp>
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -13,8 +15,6 @@
 #include <vector>
 
 namespace manibench {
-
-class Scene;
 
 class PluginCallError : public std::runtime_error {
  public:
@@ -59,33 +59,6 @@ struct ControllerDescription {
   uint32_t flags = 0;
 };
 
-// The host's implementation of mb_scene_api over a Scene; one per Scene.
-// Phases guard misuse: adds only while building, setters only in resets.
-class SceneBridge {
- public:
-  explicit SceneBridge(Scene& scene);
-  ~SceneBridge();
-  SceneBridge(const SceneBridge&) = delete;
-  SceneBridge& operator=(const SceneBridge&) = delete;
-
-  static const mb_scene_api* getApi();
-  mb_scene* getHandle();
-  void setBuilding(bool building);
-  void setStateChangesAllowed(bool allowed);
-
-  // Segmentation masks (add_to_mask). The task's mask names, set before it
-  // builds (clearing earlier assignments); at most kMaxMasks.
-  static constexpr std::size_t kMaxMasks = 64;
-  void setMaskNames(const std::vector<std::string>& names);
-  const std::vector<std::string>& getMaskNames() const;
-  // One entry per visual of Scene::getVisualShapes(): bit m set when the
-  // visual belongs to mask m.
-  std::vector<std::uint64_t> calcVisualMasks() const;
-
- private:
-  mb_scene* handle_;
-};
-
 class TaskInstance {
  public:
   TaskInstance(const PluginRegistry& registry, const std::string& name,
@@ -123,7 +96,7 @@ class ControllerInstance {
   const ControllerDescription& getDescription() const { return description_; }
   void reset(SceneBridge& scene);
   void compute(SceneBridge& scene, const Eigen::VectorXd& action,
-               std::vector<mb_drive_command>& drives);
+               std::vector<DriveCommand>& drives);
 
  private:
   const mb_controller_descriptor* descriptor_;
@@ -131,32 +104,14 @@ class ControllerInstance {
   ControllerDescription description_;
 };
 
-// The visual part of an observation (mb_observation's ABI 1.1 fields).
-struct VisualObservation {
-  std::string mode;  // "state" (all empty), "pointcloud" or "rgbd"
-  uint32_t mask_count = 0;
-  // pointcloud: world-frame points of all cameras, subsampled (D.1).
-  PointCloud points;
-  // rgbd: cameras stacked along the channel axis as ManiSkill does, row-
-  // major height x width x channels (row 0 on top): rgb 3 per camera in
-  // [0, 1], depth 1 per camera (m along the optical axis; 0 where nothing
-  // was hit), masks mask_count per camera (0 or 1).
-  uint32_t camera_count = 0;
-  uint32_t height = 0, width = 0;
-  std::vector<float> rgb;
-  std::vector<float> depth;
-  std::vector<std::uint8_t> masks;
-};
-
 // The C view handed to a policy's act(): pointers into `state` and
-// `visual` (which must outlive it); the visual fields only for the mode
-// `visual` says (none when it is null).
+// `visual` (which must outlive it); the visual fields of visual.mode only.
 mb_observation makeObservationView(const Eigen::VectorXd& state, uint32_t step,
-                                   const VisualObservation* visual);
+                                   const VisualObservation& visual);
 
 struct PolicyLayout {
   std::string task_name;
-  std::string observation_mode = "state";
+  ObservationMode observation_mode = ObservationMode::State;
   uint32_t observation_dim = 0;
   std::vector<SegmentDescription> observation_segments;
   uint32_t action_dim = 0;
@@ -174,10 +129,10 @@ class PolicyInstance {
   const std::string& getName() const { return name_; }
   const std::string& getLibraryPath() const { return library_path_; }
   void reset(uint64_t seed);
-  // Writes the raw action; validation is the environment's job.
-  // `visual` fills the ABI 1.1 fields in the visual modes.
-  void act(const Eigen::VectorXd& observation, uint32_t step,
-           Eigen::VectorXd& action, const VisualObservation* visual = nullptr);
+  // Writes the raw action; validation is the environment's job. `visual`
+  // fills the ABI 1.1 fields of its mode (none in State).
+  void act(const Eigen::VectorXd& observation, uint32_t step, Eigen::VectorXd& action,
+           const VisualObservation& visual = VisualObservation());
 
  private:
   const mb_policy_descriptor* descriptor_;

@@ -4,6 +4,8 @@
 // includes this header needs neither Simbody's headers nor its no-NDEBUG rule.
 #pragma once
 
+#include <manibench/geometry.hpp>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstddef>
@@ -16,16 +18,6 @@
 #include <vector>
 
 namespace manibench {
-
-struct Pose {
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();
-  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
-};
-
-struct Twist {
-  Eigen::Vector3d angular = Eigen::Vector3d::Zero();  // world frame, rad/s
-  Eigen::Vector3d linear = Eigen::Vector3d::Zero();   // of the link origin, m/s
-};
 
 enum class JointType { Revolute = 1, Continuous = 2, Prismatic = 3 };
 
@@ -84,17 +76,6 @@ struct VisualShape {
   std::string mesh_file;
   Eigen::Vector3d mesh_scale = Eigen::Vector3d::Ones();
   std::shared_ptr<const std::vector<VisualMesh>> meshes;
-};
-
-// Same meaning as mb_drive_command in sdk/include/manibench/abi.h:
-// tau = stiffness (position_target - q) + damping (velocity_target - qdot)
-//       + force, clamped to the effort limit when one is set.
-struct DriveCommand {
-  double position_target = 0;
-  double velocity_target = 0;
-  double stiffness = 0;
-  double damping = 0;
-  double force = 0;
 };
 
 // The contact properties of a body's surface. Two surfaces in contact

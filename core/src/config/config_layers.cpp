@@ -10,9 +10,10 @@
 namespace manibench {
 namespace {
 
-// The lowest layer. It mirrors PhysicsSettings' defaults (a test holds the
-// two together) and names every key that is not inside a list item or a
-// free-form map; docs/configuration.md explains each.
+// The lowest layer. It mirrors the defaults of PhysicsSettings and
+// ObservationOptions (config tests hold them together; the directional
+// lights are the exception they name) and names every key that is not
+// inside a list item or a free-form map; docs/configuration.md explains each.
 const char* const kBuiltinConfig = R"(# manibench built-in defaults (the lowest configuration layer)
 control:
   frequency: null          # Hz; null: the task's
@@ -148,7 +149,7 @@ Eigen::Vector3d calcVector3(const ConfigNode& node) {
 }
 
 // Cameras and lights, for the renderer of the visual observation modes.
-void calcRenderOptions(const ConfigNode& config, EnvironmentOptions& options) {
+void calcRenderOptions(const ConfigNode& config, ObservationOptions& options) {
   LightingSpec& lighting = options.lighting;
   lighting.ambient = calcVector3(getPath(config, "lights.ambient")).cast<float>();
   lighting.directional.clear();
@@ -224,7 +225,7 @@ const std::string& getBuiltinConfigText() {
   return text;
 }
 
-ConfigNode getBuiltinConfig() {
+ConfigNode calcBuiltinConfig() {
   return parseConfig(getBuiltinConfigText(), "built-in defaults", ConfigLayer::Builtin);
 }
 
@@ -260,7 +261,7 @@ ConfigNode makeTaskConfigLayer(const TaskDescription& task) {
 }
 
 ConfigNode calcConfig(const TaskDescription* task, const ConfigSources& sources) {
-  ConfigNode config = getBuiltinConfig();
+  ConfigNode config = calcBuiltinConfig();
   std::vector<ConfigNode> layers;
   if (task != nullptr) layers.push_back(makeTaskConfigLayer(*task));
   for (const std::string& file : sources.files) layers.push_back(loadConfigFile(file));
@@ -355,11 +356,12 @@ EnvironmentOptions calcEnvironmentOptions(const ConfigNode& config) {
   const ConfigNode* task = config.find("task");
   if (task != nullptr && task->isMap() && !task->entries.empty())
     options.task_config = formatConfig(*task);
-  calcRenderOptions(config, options);
+  calcRenderOptions(config, options.observation);
 
   // -- observation ------------------------------------------------------------
-  options.observation_mode = getPath(config, "observation.mode").scalar;
-  PointCloudSampling& sampling = options.pointcloud;
+  // The schema allows only the modes' names.
+  options.observation.mode = *findObservationMode(getPath(config, "observation.mode").scalar);
+  PointCloudSampling& sampling = options.observation.pointcloud;
   sampling.per_mask = uint32_t(*calcInt(getPath(config, "observation.pointcloud.per_mask")));
   sampling.masked_total = uint32_t(*calcInt(getPath(config, "observation.pointcloud.masked_total")));
   sampling.total = uint32_t(*calcInt(getPath(config, "observation.pointcloud.total")));

@@ -2,6 +2,7 @@
 // every key; validation, nearest-key suggestions, list-item defaults and
 // docs/configuration.md all follow it.
 #include <manibench/config.hpp>
+#include <manibench/sdk/numbers.hpp>
 
 #include <algorithm>
 #include <cassert>
@@ -12,8 +13,9 @@
 namespace manibench {
 namespace {
 
+using sdk::kPi;
+
 constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kPi = 3.14159265358979323846;
 
 // Fluent construction of the table's rows.
 struct Key {
@@ -119,7 +121,7 @@ std::vector<ConfigKey> makeSchema() {
   k.push_back(Key("observation.mode", T::Enum,
                   "state: the task's vector; pointcloud and rgbd add the cameras' points or "
                   "images (and render)")
-                  .oneOf({"state", "pointcloud", "rgbd"}));
+                  .oneOf(getObservationModeNames()));
   k.push_back(Key("observation.pointcloud", T::Map,
                   "subsampling of the fused point cloud (supplement D.1)"));
   k.push_back(Key("observation.pointcloud.per_mask", T::Int,

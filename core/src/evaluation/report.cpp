@@ -239,7 +239,7 @@ void writeEvaluationJson(std::ostream& out, const EvaluationResult& result) {
   out << "{\n";
   out << "  \"manibench_version\": " << quote(getManibenchVersion()) << ",\n";
   out << "  \"task\": " << quote(o.task) << ",\n";
-  out << "  \"observation_mode\": " << quote(result.task.observation_mode) << ",\n";
+  out << "  \"observation_mode\": " << quote(toString(result.task.observation_mode)) << ",\n";
   out << "  \"controller\": " << quote(result.task.controller) << ",\n";
   out << "  \"policy\": {\"name\": " << quote(o.policy)
       << ", \"library\": " << quote(result.policy_library)

@@ -20,6 +20,19 @@
  *  - A minor version adds functions or fields at the end of structs, new
  *    flag bits, new kinds. A major version is anything else.
  *
+ * The per-step contract: the order in which the host calls a task (T), its
+ * controller (C) and a policy (P). Plugins may rely on it and need not
+ * guard against other orders.
+ *  - T build_scene once per scene, before anything else on that scene; the
+ *    scene API's add_* and add_to_mask work only then.
+ *  - An episode starts with T reset, then C reset, then T observe (the
+ *    first observation); then P reset. The scene API's setters work only
+ *    in the two resets.
+ *  - Each environment step: P act on the last observation; frame_skip times
+ *    C compute followed by one control tick of physics; T compute_reward;
+ *    T evaluate_success exactly once; T observe. A step never comes before
+ *    its episode's resets, and a failed call ends the episode.
+ *
  * Entry point: a plugin library exports one data symbol named
  * MB_ENTRY_POINT_NAME ("manibench_plugin_entry") of type `const void*`
  * holding the address of an `mb_entry_fn`. Boost.DLL's BOOST_DLL_ALIAS makes
@@ -93,17 +106,26 @@ typedef struct mb_joint_info {
   double effort_limit;   /* N m or N; 0 when unlimited */
 } mb_joint_info;
 
+/* In C++, fields of mb_drive_command start at 0 (a default member
+ * initializer changes neither the layout nor the C view), so that a command
+ * declared without an initializer is the passive "no drive" command. */
+#ifdef __cplusplus
+#define MB_ZERO_BY_DEFAULT = 0
+#else
+#define MB_ZERO_BY_DEFAULT
+#endif
+
 /* What a controller asks of one joint's drive for the next control step.
  * The host applies, at every physics evaluation,
  *   tau = stiffness (position_target - q) + damping (velocity_target - qdot)
  *         + force
  * clamped to the joint's effort limit when one is set. */
 typedef struct mb_drive_command {
-  double position_target;
-  double velocity_target;
-  double stiffness;
-  double damping;
-  double force;
+  double position_target MB_ZERO_BY_DEFAULT;
+  double velocity_target MB_ZERO_BY_DEFAULT;
+  double stiffness MB_ZERO_BY_DEFAULT;
+  double damping MB_ZERO_BY_DEFAULT;
+  double force MB_ZERO_BY_DEFAULT;
 } mb_drive_command;
 
 /* ---- host scene API (the host implements it, plugins call it) --------- */
@@ -280,12 +302,15 @@ typedef struct mb_task_descriptor {
   mb_status (*observe)(mb_task* task, const mb_scene_api* api,
                        mb_scene* scene, double* out, uint32_t dim,
                        mb_error* err);
-  /* Called once per environment step, after physics, before observe. */
+  /* Called once per environment step, after physics (see the per-step
+   * contract at the top). */
   mb_status (*compute_reward)(mb_task* task, const mb_scene_api* api,
                               mb_scene* scene, const double* action,
                               uint32_t action_dim, double* out_reward,
                               mb_error* err);
-  /* One flag and one value per success condition. */
+  /* One flag and one value per success condition. Called exactly once per
+   * environment step, after compute_reward and before observe, so a task
+   * may count steps here (the C++ SDK's TaskSpec::success_hold_steps does). */
   mb_status (*evaluate_success)(mb_task* task, const mb_scene_api* api,
                                 mb_scene* scene, uint8_t* out_flags,
                                 double* out_values, uint32_t count,
@@ -328,7 +353,8 @@ typedef struct mb_controller_descriptor {
   mb_status (*reset)(mb_controller* controller, const mb_scene_api* api,
                      mb_scene* scene, mb_error* err);
   /* One control step: a normalized action in [-1, 1] (already validated and
-   * clipped by the host) to one drive command per joint. */
+   * clipped by the host) to one drive command per joint. Always after the
+   * episode's reset. */
   mb_status (*compute)(mb_controller* controller, const mb_scene_api* api,
                        mb_scene* scene, const double* action,
                        uint32_t action_dim, mb_drive_command* out,

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <manibench/abi.h>
+#include <manibench/sdk/numbers.hpp>
 
 #include <yaml-cpp/yaml.h>
 

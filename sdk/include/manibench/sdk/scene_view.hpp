@@ -147,11 +147,18 @@ class SceneView {
     t.linear = Eigen::Vector3d(v[3], v[4], v[5]);
     return t;
   }
-  Eigen::Vector3d getContactForce(mb_id link_a, mb_id link_b = -1) const {
+  // Contact force on link_a from link_b (from anything when link_b < 0),
+  // world frame: the host computes the contacts for it (hence calc; the ABI
+  // function keeps its 1.0 name).
+  Eigen::Vector3d calcContactForce(mb_id link_a, mb_id link_b = -1) const {
     double f[3] = {0, 0, 0};
     call("get_contact_force", required(&mb_scene_api::get_contact_force),
          link_a, link_b, f);
     return Eigen::Vector3d(f[0], f[1], f[2]);
+  }
+  [[deprecated("use calcContactForce")]] Eigen::Vector3d getContactForce(
+      mb_id link_a, mb_id link_b = -1) const {
+    return calcContactForce(link_a, link_b);
   }
 
   void setJointPositions(mb_id articulation, const Eigen::VectorXd& q) {

@@ -35,6 +35,13 @@ struct TaskSpec {
   // robot's own state, what the pointcloud and rgbd modes pass on in place
   // of the full state (which holds privileged object state). 0: all.
   uint32_t agent_state_dim = 0;
+  // When > 0, `success` (the last condition) is satisfied only once the
+  // condition the task returns last has held at this many consecutive env
+  // steps (ManiSkill's "open and still for N steps"), and its value becomes
+  // that count. The SDK counts, on the per-step contract of abi.h
+  // (evaluate_success exactly once per env step, reset before the first),
+  // so no task keeps such a counter itself.
+  uint32_t success_hold_steps = 0;
 };
 
 // One success condition's outcome: whether it holds, and the value behind
@@ -73,6 +80,7 @@ struct TaskHandle {
   SegmentTable observation;
   StringTable conditions, masks, joints;
   std::map<std::string, std::unique_ptr<StringTable>> objects;
+  uint32_t held_steps = 0;  // TaskSpec::success_hold_steps' count
 
   TaskHandle(std::unique_ptr<Task> t, TaskSpec s)
       : task(std::move(t)),
@@ -158,7 +166,9 @@ struct TaskTrampolines {
                          uint64_t seed, mb_error* err) {
     return guard(err, [&] {
       SceneView view(api, scene);
-      asTask(t)->task->reset(view, seed);
+      TaskHandle& h = *asTask(t);
+      h.task->reset(view, seed);
+      h.held_steps = 0;
     });
   }
   static mb_status observe(mb_task* t, const mb_scene_api* api, mb_scene* scene,
@@ -193,6 +203,11 @@ struct TaskTrampolines {
       for (uint32_t i = 0; i < count; ++i) {
         out_flags[i] = result[i].satisfied ? 1 : 0;
         out_values[i] = result[i].value;
+      }
+      if (h.spec.success_hold_steps > 0) {
+        h.held_steps = result.back().satisfied ? h.held_steps + 1 : 0;
+        out_flags[count - 1] = h.held_steps >= h.spec.success_hold_steps ? 1 : 0;
+        out_values[count - 1] = double(h.held_steps);
       }
     });
   }

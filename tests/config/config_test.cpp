@@ -13,6 +13,7 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <tuple>
 
 #include "test_support.hpp"
 
@@ -45,21 +46,13 @@ class TempFile {
 // The ConfigError message of `body`; fails the test when nothing is thrown.
 template <class Body>
 std::string getConfigError(Body&& body) {
-  try {
-    body();
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no ConfigError thrown";
-  return "";
+  return testing::catchMessage<ConfigError>(body);
 }
 
 bool startsWith(const std::string& text, const std::string& prefix) {
   return text.rfind(prefix, 0) == 0;
 }
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
+using testing::contains;
 
 // The merged configuration of one user file over the built-in defaults.
 ConfigNode calcWithFile(const TempFile& file) { return calcConfig(nullptr, {{file.path()}, {}}); }
@@ -396,6 +389,25 @@ TEST(Config, BuiltinDefaultsMatchPhysicsSettingsAndCoverTheSchema) {
       EXPECT_NE(config.findPath(key.path), nullptr) << key.path << " has no built-in default";
     }
   }
+}
+
+// The observation keys' built-in values are ObservationOptions' defaults, so
+// that an environment built from EnvironmentOptions{} observes as one built
+// from an empty configuration.
+TEST(Config, BuiltinDefaultsMatchObservationOptions) {
+  const ObservationOptions built_in =
+      calcEnvironmentOptions(calcConfig(nullptr, {})).observation;
+  const ObservationOptions expected;
+  // Lights: the ambient term and the point lights agree; the directional
+  // ones do not (the built-in layer has one sun, LightingSpec ManiSkill's
+  // two lights), which only a hand-built environment in a visual mode sees.
+  auto fields = [](const ObservationOptions& o) {
+    const PointCloudSampling& s = o.pointcloud;
+    return std::make_tuple(o.mode, o.cameras.size(), s.per_mask, s.masked_total, s.total,
+                           s.ground_height, s.pad, o.lighting.ambient.x(), o.lighting.ambient.y(),
+                           o.lighting.ambient.z(), o.lighting.point.size());
+  };
+  EXPECT_EQ(fields(built_in), fields(expected));
 }
 
 TEST(Config, DocsDescribeEveryKey) {

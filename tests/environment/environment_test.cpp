@@ -2,6 +2,7 @@
 // real Simbody physics: the example task Reach-v0, its expert, the baseline
 // policies and both joint controllers.
 #include <manibench/environment.hpp>
+#include <manibench/episode.hpp>
 
 #include <gtest/gtest.h>
 
@@ -13,10 +14,12 @@
 namespace manibench {
 namespace {
 
+using testing::catchMessage;
+using testing::expectMentions;
 using testing::getBuildTreeRegistry;
 
 PolicyInstance makePolicy(Environment& env, const std::string& name) {
-  return PolicyInstance(getBuildTreeRegistry(), name, "", env.calcPolicyLayout("state"));
+  return PolicyInstance(getBuildTreeRegistry(), name, "", env.calcPolicyLayout(ObservationMode::State));
 }
 
 TEST(Environment, ExpertSolvesEveryTestObject) {
@@ -33,6 +36,44 @@ TEST(Environment, ExpertSolvesEveryTestObject) {
       EXPECT_LT(r.steps, env.getTaskDescription().max_episode_steps);
     }
   }
+}
+
+TEST(Environment, StepBeforeResetIsRefused) {
+  Environment env(getBuildTreeRegistry(), "Reach-v0");
+  EXPECT_THROW(env.step(Eigen::VectorXd::Zero(2)), std::logic_error);
+  env.reset("0", 1);
+  EXPECT_NO_THROW(env.step(Eigen::VectorXd::Zero(2)));
+}
+
+// TaskSpec::success_hold_steps: `success` holds once the task's condition
+// has held at hold_steps consecutive steps; its value is the count, which
+// every reset starts again.
+TEST(Environment, SuccessCountsTheStepsTheTaskConditionHeldInARow) {
+  EnvironmentOptions options;
+  options.task_config = "hold_steps: 4";
+  options.stop_on_success = false;
+  Environment env(getBuildTreeRegistry(), "Reach-v0", options);
+  PolicyInstance expert = makePolicy(env, "reach_expert");
+  double previous = 0;
+  int held_steps = 0;
+  EpisodeHooks hooks;
+  hooks.on_step = [&](const StepResult& step, const EpisodeResult&) {
+    const bool holds = step.flags[0] && step.flags[1];  // reached and static
+    const double count = step.values.back();
+    EXPECT_EQ(count, holds ? previous + 1 : 0);
+    EXPECT_EQ(step.success, count >= 4);
+    held_steps += holds;
+    previous = count;
+    return true;
+  };
+  for (uint64_t seed : {0, 1}) {
+    previous = 0;
+    const EpisodeResult r = runEpisode(env, expert, "0", seed, hooks);
+    EXPECT_TRUE(r.success);
+    EXPECT_EQ(r.steps, env.getTaskDescription().max_episode_steps);
+    EXPECT_GT(previous, 4) << "the expert stays at the target";
+  }
+  EXPECT_GT(held_steps, 8);
 }
 
 TEST(Environment, RandomPolicyFails) {
@@ -89,24 +130,12 @@ TEST(Environment, RejectsNonFiniteAndWrongSizeActions) {
   env.step(Eigen::VectorXd::Zero(2));
   Eigen::VectorXd bad(2);
   bad << 0.0, std::nan("");
-  try {
-    env.step(bad);
-    FAIL() << "a NaN action was accepted";
-  } catch (const InvalidAction& e) {
-    const std::string message = e.what();
-    EXPECT_NE(message.find("step 1"), std::string::npos) << message;
-    EXPECT_NE(message.find("action[1] is NaN"), std::string::npos) << message;
-    EXPECT_NE(message.find("seed 5"), std::string::npos) << message;
-  }
+  expectMentions(catchMessage<InvalidAction>([&] { env.step(bad); }),
+                 {"step 1", "action[1] is NaN", "seed 5"});
   bad << INFINITY, 0.0;
   EXPECT_THROW(env.step(bad), InvalidAction);
-  try {
-    env.step(Eigen::VectorXd::Zero(3));
-    FAIL() << "a 3-value action was accepted";
-  } catch (const InvalidAction& e) {
-    EXPECT_NE(std::string(e.what()).find("has 3 values"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("expects 2"), std::string::npos) << e.what();
-  }
+  expectMentions(catchMessage<InvalidAction>([&] { env.step(Eigen::VectorXd::Zero(3)); }),
+                 {"has 3 values", "expects 2"});
   // The environment still works after refusing.
   EXPECT_NO_THROW(env.step(Eigen::VectorXd::Zero(2)));
 }
@@ -114,15 +143,9 @@ TEST(Environment, RejectsNonFiniteAndWrongSizeActions) {
 TEST(Environment, UnknownControllerListsTheAvailableOnes) {
   EnvironmentOptions options;
   options.controller = "no_such_controller";
-  try {
-    Environment env(getBuildTreeRegistry(), "Reach-v0", options);
-    FAIL() << "an unknown controller was accepted";
-  } catch (const PluginError& e) {
-    const std::string message = e.what();
-    EXPECT_NE(message.find("no_such_controller"), std::string::npos) << message;
-    EXPECT_NE(message.find("joint_velocity"), std::string::npos) << message;
-    EXPECT_NE(message.find("joint_position"), std::string::npos) << message;
-  }
+  expectMentions(
+      catchMessage<PluginError>([&] { Environment(getBuildTreeRegistry(), "Reach-v0", options); }),
+      {"no_such_controller", "joint_velocity", "joint_position"});
   EXPECT_THROW(Environment(getBuildTreeRegistry(), "NoSuchTask-v0"), PluginError);
 }
 

@@ -1,7 +1,8 @@
 // OpenCabinetDoor-v0 / OpenCabinetDrawer-v0 (plugins/open_cabinet): object
 // ids and splits, generated URDFs, reset placement, reward stages, success
-// flags, the random policy. The generator and reward are header/source
-// level checks (compiled in here); everything else runs the real plugin.
+// flags, the random policy. The generator and reward are checked directly
+// (the family's generator library and header); everything else runs the
+// real plugin.
 #include <gtest/gtest.h>
 
 #include <manibench/config.hpp>
@@ -14,7 +15,7 @@
 #include <set>
 #include <sstream>
 
-#include "../plugins/open_cabinet/cabinet_generator.cpp"
+#include "open_cabinet.hpp"
 #include "test_support.hpp"
 
 namespace {
@@ -261,7 +262,7 @@ TEST(OpenCabinet, ExpertRefusesOtherControllers) {
   const auto env = makeEnv("OpenCabinetDrawer-v0");  // default controller mobile_panda
   try {
     mb::PolicyInstance policy(mb::testing::getBuildTreeRegistry(), "open_cabinet_expert", "",
-                              env->calcPolicyLayout("state"));
+                              env->calcPolicyLayout(mb::ObservationMode::State));
     FAIL() << "expected a refusal";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("mobile_panda_ee"), std::string::npos) << e.what();
@@ -374,7 +375,7 @@ TEST(OpenCabinet, Trace) {
   if (const char* extra = std::getenv("OPEN_CABINET_TRACE_SET")) overrides.push_back(extra);  // KEY=VALUE
   const auto env = makeEnv(task, overrides);
   mb::PolicyInstance policy(mb::testing::getBuildTreeRegistry(), "open_cabinet_expert", "",
-                            env->calcPolicyLayout("state"));
+                            env->calcPolicyLayout(mb::ObservationMode::State));
   env->reset(object, seed);
   policy.reset(seed);
   Eigen::VectorXd action;

@@ -30,9 +30,7 @@ const std::string kFixtureDir = MANIBENCH_TEST_FIXTURE_DIR;
 const std::string kEvalFixtureDir = kFixtureDir + "/eval";
 const std::string kFixturePath = "MANIBENCH_PLUGIN_PATH=" + kEvalFixtureDir;
 
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
+using testing::contains;
 
 std::string readFile(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);

@@ -3,9 +3,11 @@
 // three head cameras and one mask, "robot"), rendered for real with EGL.
 #include <manibench/config.hpp>
 #include <manibench/environment.hpp>
+#include <manibench/episode.hpp>
 #include <manibench/plugin_instances.hpp>
 #include <manibench/renderer.hpp>
 #include <manibench/scene.hpp>
+#include <manibench/visual_observer.hpp>
 #include <manibench/sdk/policy.hpp>
 
 #include "test_support.hpp"
@@ -75,13 +77,13 @@ EnvironmentOptions makeOptions(const std::vector<std::string>& overrides) {
 
 struct MaskFixture {
   Scene scene;
-  SceneBridge bridge{scene};
+  SegmentationMasks masks{{"hand", "robot"}};
+  SceneBridge bridge{scene, &masks};
   int robot = -1;
   char message[512] = {0};
   mb_error err{message, sizeof(message)};
 
   MaskFixture() {
-    bridge.setMaskNames({"hand", "robot"});
     bridge.setBuilding(true);
     robot = scene.addUrdfFile(kRobotUrdf, "robot", Pose(), true);
   }
@@ -99,7 +101,7 @@ TEST(AddToMask, LinkVisualsByNamePartAndWholeArticulations) {
   ASSERT_EQ(f.add(0, f.robot, hand, "dark"), MB_OK) << f.message;
   ASSERT_EQ(f.add(1, f.robot, -1, nullptr), MB_OK) << f.message;
   const std::vector<VisualShape>& visuals = f.scene.getVisualShapes();
-  const std::vector<std::uint64_t> masks = f.bridge.calcVisualMasks();
+  const std::vector<std::uint64_t> masks = f.masks.getVisualMasks();
   ASSERT_EQ(masks.size(), visuals.size());
   int in_hand = 0;
   for (std::size_t v = 0; v < visuals.size(); ++v) {
@@ -113,7 +115,7 @@ TEST(AddToMask, LinkVisualsByNamePartAndWholeArticulations) {
   // An empty part takes every visual of the link.
   ASSERT_EQ(f.add(0, f.robot, hand, ""), MB_OK) << f.message;
   int hand_visuals = 0, hand_masked = 0;
-  const std::vector<std::uint64_t> after = f.bridge.calcVisualMasks();
+  const std::vector<std::uint64_t> after = f.masks.getVisualMasks();
   for (std::size_t v = 0; v < visuals.size(); ++v)
     if (visuals[v].link == hand) {
       ++hand_visuals;
@@ -138,7 +140,7 @@ TEST(AddToMask, ErrorsNameTheMaskLinkAndPart) {
   EXPECT_EQ(f.add(0, f.robot, hand, nullptr), MB_INVALID_ARGUMENT);
   EXPECT_NE(std::string(f.message).find("only allowed while a task builds"), std::string::npos)
       << f.message;
-  EXPECT_EQ(f.bridge.calcVisualMasks()[0], 0u) << "failed calls assign nothing";
+  for (std::uint64_t bits : f.masks.getVisualMasks()) EXPECT_EQ(bits, 0u) << "failed calls assign nothing";
 }
 
 // ---- state mode stays away from EGL -----------------------------------------------
@@ -173,7 +175,7 @@ TEST(ObservationModes, PointCloudIsSubsampledAndItsRobotMaskLiesOnTheRobot) {
   Environment env(getRegistry(), "RobotTestbed-v0", makeOptions({"observation.mode=pointcloud"}));
   env.reset("0", 3);
   const VisualObservation& visual = env.getVisualObservation();
-  EXPECT_EQ(visual.mode, "pointcloud");
+  EXPECT_EQ(visual.mode, ObservationMode::PointCloud);
   ASSERT_EQ(visual.mask_count, 1u);
   const PointCloud& cloud = visual.points;
   ASSERT_EQ(cloud.size(), 1200u) << "D.1 size (padded)";
@@ -240,7 +242,7 @@ TEST(ObservationModes, RgbdStacksCamerasAlongChannels) {
 
   // Channel c of depth is camera c; a robot pixel has depth, and the
   // masks agree with the renderer's per-pixel visuals.
-  const std::vector<CameraImages> images = env.renderCameras();
+  const std::vector<CameraImages> images = env.updObserver().renderCameras();
   ASSERT_EQ(images.size(), 3u);
   std::size_t robot_pixels = 0;
   for (std::size_t c = 0; c < 3; ++c)
@@ -259,7 +261,8 @@ TEST(ObservationModes, RgbdStacksCamerasAlongChannels) {
   // The head cameras ride on base_link, 1.5 m up.
   const Scene& scene = env.getScene();
   const Pose base = scene.getLinkPose(scene.findLink(scene.findArticulation("robot"), "base_link"));
-  EXPECT_NEAR(env.calcCameraPose(0).position.z() - base.position.z(), 1.5, 1e-9);
+  EXPECT_NEAR(env.getObserver().getCameras().calcCameraPose(0).position.z() - base.position.z(), 1.5,
+              1e-9);
 }
 
 // A policy that reports what it saw through the SDK's views, as its action.
@@ -288,16 +291,15 @@ Eigen::VectorXd probe(const Environment& env) {
   mb_policy_context context{};
   context.struct_size = sizeof(context);
   context.task_name = layout.task_name.c_str();
-  context.observation_mode = layout.observation_mode.c_str();
+  context.observation_mode = toString(layout.observation_mode);
   context.action_dim = 9;
   using Trampolines = sdk::detail::PolicyTrampolines<ProbePolicy>;
   char message[256] = {0};
   mb_error err{message, sizeof(message)};
   mb_policy* policy = nullptr;
   EXPECT_EQ(Trampolines::create("", &context, &policy, &err), MB_OK) << message;
-  const mb_observation view = makeObservationView(
-      env.getObservation(), env.getElapsedSteps(),
-      env.getObservationMode() == "state" ? nullptr : &env.getVisualObservation());
+  const mb_observation view =
+      makeObservationView(env.getObservation(), env.getElapsedSteps(), env.getVisualObservation());
   Eigen::VectorXd action = Eigen::VectorXd::Zero(9);
   EXPECT_EQ(Trampolines::act(policy, &view, action.data(), 9, &err), MB_OK) << message;
   Trampolines::destroy(policy);
@@ -332,7 +334,7 @@ TEST(ObservationModes, PoliciesSeeTheVisualFieldsThroughTheSdk) {
   EXPECT_EQ(seen[3], 0) << "no images in pointcloud";
 
   // A host older than ABI 1.1 passes a shorter struct: empty views.
-  mb_observation old = makeObservationView(cloud.getObservation(), 0, &cloud.getVisualObservation());
+  mb_observation old = makeObservationView(cloud.getObservation(), 0, cloud.getVisualObservation());
   old.struct_size = offsetof(mb_observation, mask_count);
   const sdk::Observation o(old);
   EXPECT_EQ(o.points_xyz.rows(), 0);
@@ -351,19 +353,19 @@ TEST(ObservationModes, ConfigurationMapsCamerasLightsAndSampling) {
   const EnvironmentOptions options = makeOptions(
       {"lights.ambient=[0.1, 0.2, 0.3]", "lights.point=[{position: [1, 2, 3], color: [4, 5, 6]}]",
        "observation.pointcloud.total=500", "observation.pointcloud.masked_total=300"});
-  EXPECT_EQ(options.observation_mode, "state");
-  EXPECT_TRUE(options.lighting.ambient.isApprox(Eigen::Vector3f(0.1f, 0.2f, 0.3f)));
-  ASSERT_EQ(options.lighting.directional.size(), 1u) << "the built-in sun";
-  EXPECT_TRUE(options.lighting.directional[0].shadow);
-  ASSERT_EQ(options.lighting.point.size(), 1u);
-  EXPECT_TRUE(options.lighting.point[0].color.isApprox(Eigen::Vector3f(4, 5, 6)));
-  EXPECT_EQ(options.pointcloud.total, 500u);
-  EXPECT_EQ(options.pointcloud.masked_total, 300u);
-  EXPECT_EQ(options.pointcloud.per_mask, 50u);
+  EXPECT_EQ(options.observation.mode, ObservationMode::State);
+  EXPECT_TRUE(options.observation.lighting.ambient.isApprox(Eigen::Vector3f(0.1f, 0.2f, 0.3f)));
+  ASSERT_EQ(options.observation.lighting.directional.size(), 1u) << "the built-in sun";
+  EXPECT_TRUE(options.observation.lighting.directional[0].shadow);
+  ASSERT_EQ(options.observation.lighting.point.size(), 1u);
+  EXPECT_TRUE(options.observation.lighting.point[0].color.isApprox(Eigen::Vector3f(4, 5, 6)));
+  EXPECT_EQ(options.observation.pointcloud.total, 500u);
+  EXPECT_EQ(options.observation.pointcloud.masked_total, 300u);
+  EXPECT_EQ(options.observation.pointcloud.per_mask, 50u);
   // The testbed's head cameras: rpy (0, pi/4, 2 pi/3) is Rz(yaw) Ry(pitch),
   // so the optical axis (+x) points 45 degrees down, 120 degrees left.
-  ASSERT_EQ(options.cameras.size(), 3u);
-  const CameraMount& left = options.cameras[1];
+  ASSERT_EQ(options.observation.cameras.size(), 3u);
+  const CameraMount& left = options.observation.cameras[1];
   EXPECT_EQ(left.spec.name, "head_left");
   EXPECT_EQ(left.articulation, "robot");
   EXPECT_EQ(left.link, "base_link");

@@ -16,9 +16,7 @@ namespace {
 using testing::getBuildTreeRegistry;
 using testing::runCli;
 
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
+using testing::contains;
 
 // A file with `text`, removed with the object.
 class TempYaml {

@@ -661,8 +661,8 @@ TEST(RendererEnvironment, RenderFailureIsAnEpisodeFailureNamingTheEpisode) {
   sources.overrides = {"observation.mode=rgbd"};
   EnvironmentOptions options =
       calcEnvironmentOptions(loadTaskConfig(registry, "RobotTestbed-v0", sources));
-  ASSERT_FALSE(options.cameras.empty());
-  options.cameras[0].spec.fovy = 3.5;  // > pi: refused at the first render
+  ASSERT_FALSE(options.observation.cameras.empty());
+  options.observation.cameras[0].spec.fovy = 3.5;  // > pi: refused at the first render
   Environment env(registry, "RobotTestbed-v0", options);
   try {
     env.reset("0", 7);
@@ -671,7 +671,7 @@ TEST(RendererEnvironment, RenderFailureIsAnEpisodeFailureNamingTheEpisode) {
     const std::string message = e.what();
     EXPECT_NE(message.find("task 'RobotTestbed-v0', object '0', seed 7, step 0"), std::string::npos)
         << message;
-    EXPECT_NE(message.find("'" + options.cameras[0].spec.name + "'"), std::string::npos) << message;
+    EXPECT_NE(message.find("'" + options.observation.cameras[0].spec.name + "'"), std::string::npos) << message;
     EXPECT_NE(message.find("fovy"), std::string::npos) << message;
   }
 }

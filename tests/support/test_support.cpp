@@ -82,4 +82,9 @@ CommandResult runCli(const std::vector<std::string>& arguments,
   return result;
 }
 
+void expectMentions(const std::string& message, const std::vector<std::string>& parts) {
+  for (const std::string& part : parts)
+    EXPECT_TRUE(contains(message, part)) << "'" << part << "' is not in: " << message;
+}
+
 }  // namespace manibench::testing

@@ -22,21 +22,9 @@ namespace fs = std::filesystem;
 using testing::getBuildTreeRegistry;
 using testing::runCli;
 
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
+using testing::contains;
 
-// The message of what `make` throws as E, or "" (a test failure) if nothing.
-template <class E, class F>
-std::string messageOf(F make) {
-  try {
-    make();
-  } catch (const E& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "nothing thrown";
-  return "";
-}
+using testing::catchMessage;
 
 // As the CLI builds environments: the id's configuration, then the id.
 std::unique_ptr<Environment> makeEnv(const std::string& id) {
@@ -81,7 +69,7 @@ TEST(FixedObjectEnv, NamesResolveToTheLongestRegisteredBase) {
   EXPECT_FALSE(matchTaskId(tasks, "Pushy_3-v0"));  // base must end at the '_'
 
   const std::string unknown =
-      messageOf<PluginError>([&] { resolveTaskId(registry, "NoSuch_1-v0"); });
+      catchMessage<PluginError>([&] { resolveTaskId(registry, "NoSuch_1-v0"); });
   EXPECT_TRUE(contains(unknown, "no task named 'NoSuch_1-v0'")) << unknown;
   EXPECT_TRUE(contains(unknown, "Reach-v0")) << unknown;  // the task list
   EXPECT_TRUE(contains(unknown, "<Task>_<object>-v<N>")) << unknown;
@@ -101,10 +89,10 @@ TEST(FixedObjectEnv, ReachObjectSpecSelectsExactlyItsObjects) {
   EXPECT_EQ(test_object.listObjects("train"), std::vector<std::string>{"10"});
   EXPECT_EQ(test_object.getObjectId(), "10");
 
-  const std::string other = messageOf<std::invalid_argument>([&] { one.reset("2", 0); });
+  const std::string other = catchMessage<std::invalid_argument>([&] { one.reset("2", 0); });
   EXPECT_TRUE(contains(other, "Reach_1-v0")) << other;
   EXPECT_TRUE(contains(other, "'2'")) << other;
-  const std::string unknown = messageOf<PluginError>(
+  const std::string unknown = catchMessage<PluginError>(
       [&] { Environment env(getBuildTreeRegistry(), "Reach_99-v0"); });
   EXPECT_TRUE(contains(unknown, "Reach-v0 has no object '99' nor objects '99_*'")) << unknown;
   EXPECT_TRUE(contains(unknown, "manibench objects Reach-v0")) << unknown;
@@ -144,7 +132,7 @@ TEST(FixedObjectEnv, CabinetAndLinkIdsListTheirTargets) {
   EXPECT_EQ(cabinet->getObjectId(), expected.front());
   cabinet->reset(expected[1], 4);
   EXPECT_EQ(cabinet->getObjectId(), expected[1]);
-  const std::string other = messageOf<std::invalid_argument>([&] { cabinet->reset("2101_link_0", 0); });
+  const std::string other = catchMessage<std::invalid_argument>([&] { cabinet->reset("2101_link_0", 0); });
   EXPECT_TRUE(contains(other, "OpenCabinetDrawer_2100-v0")) << other;
   EXPECT_TRUE(contains(other, expected.front())) << other;
 

@@ -104,25 +104,36 @@ struct ErrorBuffer {
   ErrorBuffer() { std::strcpy(text, "untouched"); }
 };
 
+// A state-mode policy context and observation, as the host makes them.
+mb_policy_context makePolicyContext(const char* task, uint32_t observation_dim,
+                                    uint32_t action_dim) {
+  mb_policy_context context{};
+  context.struct_size = sizeof(context);
+  context.task_name = task;
+  context.observation_mode = "state";
+  context.observation_dim = observation_dim;
+  context.action_dim = action_dim;
+  return context;
+}
+mb_observation makeObservation(const double* state, uint32_t dim) {
+  mb_observation observation{};
+  observation.struct_size = sizeof(observation);
+  observation.state = state;
+  observation.state_dim = dim;
+  return observation;
+}
+
 // A zero-action policy (fixture_newer_minor's, the duplicates') works
 // through the ABI: create, reset, act writes zeros, destroy.
 void expectZeroPolicyWorks(const mb_policy_descriptor& policy) {
   const double state[3] = {0.1, 0.2, 0.3};
-  mb_policy_context context{};
-  context.struct_size = sizeof(context);
-  context.task_name = "Test-v0";
-  context.observation_mode = "state";
-  context.observation_dim = 3;
-  context.action_dim = 2;
+  const mb_policy_context context = makePolicyContext("Test-v0", 3, 2);
   ErrorBuffer e;
   mb_policy* handle = nullptr;
   ASSERT_EQ(policy.create("", &context, &handle, &e.err), MB_OK) << e.text;
   ASSERT_NE(handle, nullptr);
   EXPECT_EQ(policy.reset(handle, 7, &e.err), MB_OK) << e.text;
-  mb_observation observation{};
-  observation.struct_size = sizeof(observation);
-  observation.state = state;
-  observation.state_dim = 3;
+  const mb_observation observation = makeObservation(state, 3);
   double action[2] = {std::numeric_limits<double>::quiet_NaN(), 5.0};
   EXPECT_EQ(policy.act(handle, &observation, action, 2, &e.err), MB_OK) << e.text;
   EXPECT_EQ(action[0], 0.0);
@@ -535,22 +546,14 @@ TEST_F(ThrowingFixture, ControllerCreateReportsTheExceptionAsStatus) {
 
 TEST_F(ThrowingFixture, PolicyActReportsTheExceptionAsStatus) {
   const mb_policy_descriptor& policy = registry.getPolicy("throwing_policy");
-  mb_policy_context context{};
-  context.struct_size = sizeof(context);
-  context.task_name = "Throwing-v0";
-  context.observation_mode = "state";
-  context.observation_dim = 1;
-  context.action_dim = 1;
+  const mb_policy_context context = makePolicyContext("Throwing-v0", 1, 1);
   ErrorBuffer e;
   mb_policy* handle = nullptr;
   ASSERT_EQ(policy.create("", &context, &handle, &e.err), MB_OK) << e.text;
   ASSERT_NE(handle, nullptr);
 
   const double state[1] = {0};
-  mb_observation observation{};
-  observation.struct_size = sizeof(observation);
-  observation.state = state;
-  observation.state_dim = 1;
+  const mb_observation observation = makeObservation(state, 1);
   double action[1] = {0};
   EXPECT_EQ(policy.act(handle, &observation, action, 1, &e.err), MB_ERROR);
   EXPECT_TRUE(contains(e.text, "fixture: act failed on purpose"));

@@ -6,6 +6,7 @@
 
 #include <manibench/config.hpp>
 #include <manibench/environment.hpp>
+#include <manibench/episode.hpp>
 
 #include "test_support.hpp"
 
@@ -27,7 +28,7 @@ ExpertSetup makeExpertSetup(const std::string& task, std::vector<std::string> ov
   s.env = std::make_unique<mb::Environment>(mb::testing::getBuildTreeRegistry(), task,
                                             mb::calcEnvironmentOptions(config));
   s.expert = std::make_unique<mb::PolicyInstance>(mb::testing::getBuildTreeRegistry(), "open_cabinet_expert", "",
-                                                  s.env->calcPolicyLayout("state"));
+                                                  s.env->calcPolicyLayout(mb::ObservationMode::State));
   return s;
 }
 

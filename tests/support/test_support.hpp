@@ -3,6 +3,8 @@
 
 #include <manibench/plugin_registry.hpp>
 
+#include <gtest/gtest.h>
+
 #include <string>
 #include <vector>
 
@@ -13,6 +15,27 @@ PluginRegistry& getBuildTreeRegistry();
 // The build tree's plugins plus the fixture task RobotTestbed-v0 (which
 // lives outside the default search path).
 const PluginRegistry& getRobotTestbedRegistry();
+
+// Whether `text` contains `part`.
+inline bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+// The message of the E that `body` throws; "" and a test failure when it
+// throws nothing (anything else propagates).
+template <class E, class Body>
+std::string catchMessage(Body&& body) {
+  try {
+    body();
+  } catch (const E& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "nothing was thrown";
+  return "";
+}
+
+// Expects every one of `parts` in `message` (an error, say).
+void expectMentions(const std::string& message, const std::vector<std::string>& parts);
 
 // This process's resident memory (VmRSS), kB; -1 if unknown.
 long readRssKb();

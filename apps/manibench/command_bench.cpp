@@ -1,0 +1,107 @@
+// manibench bench: environment steps per second of a task, and the
+// integrator's work per step (which does not depend on the machine's load).
+#include <chrono>
+#include <iomanip>
+#include <iostream>
+#include <manibench/episode.hpp>
+#include <memory>
+
+#include "cli.hpp"
+
+namespace manibench::cli {
+
+namespace {
+
+const char* kBenchUsage = R"(usage: manibench bench TASK [options]
+
+Measures environment steps per second: episodes of TASK on the split's
+objects (in turn, seeds 0, 1, ...) until --steps environment steps have run.
+Each env step is frame_skip control steps of physics plus the task's reward,
+success and observation; resets are timed separately. A second line gives
+the integrator's work per env step (steps, failed steps, Newton iterations,
+Jacobians, evaluations of the equations of motion), which does not depend
+on the load of the machine.
+
+Options:
+  --policy NAME|PATH.so   policy acting (default random)
+  --obs MODE              observation mode: state (default), pointcloud or rgbd
+                          (the visual modes render every camera at every step)
+  --steps N               environment steps to time (default 2000)
+  --split train|test      objects to cycle through (default train)
+  --controller NAME       override the task's default controller
+  --config FILE, --set KEY=VALUE   configuration layers, as for run
+)";
+
+}  // namespace
+
+int commandBench(int argc, char** argv) {
+  const Arguments args = parseArguments(argc, argv, 2,
+                                        {"policy", "obs", "steps", "split", "controller", "config", "set"}, {},
+                                        kBenchUsage);
+  if (args.help) {
+    std::cout << kBenchUsage;
+    return 0;
+  }
+  if (args.positional.size() != 1) throw UsageError("bench needs exactly one TASK", kBenchUsage);
+  const mb::ConfigSources sources = getConfigSources(args, parseObservationMode(args, kBenchUsage));
+  const std::string split = parseSplit(args, "train", kBenchUsage);
+  const uint64_t target_steps = parseSeed(valueOr(args, "steps", "2000"), kBenchUsage, "--steps");
+  if (target_steps == 0) throw UsageError("--steps must be positive", kBenchUsage);
+
+  mb::PluginRegistry registry;
+  loadPlugins(registry);
+  const std::string policy_name = resolvePolicy(registry, valueOr(args, "policy", "random"));
+  registry.getEntry(mb::PluginKind::Policy, policy_name);
+  const std::unique_ptr<mb::Environment> env =
+      makeEnvironment(registry, args.positional[0], sources, true);
+  const std::vector<std::string> objects = env->listObjects(split);
+  if (objects.empty()) throw std::runtime_error("the " + split + " split has no objects");
+  mb::PolicyInstance policy(registry, policy_name, "", env->calcPolicyLayout());
+
+  using Clock = std::chrono::steady_clock;
+  std::chrono::duration<double> step_time{0}, reset_time{0};
+  uint64_t steps = 0, episodes = 0, successes = 0;
+  // Integrator work during env steps only (resets rebuild scenes).
+  mb::IntegratorStatistics physics, before;
+  Clock::time_point start;
+  // Resets (environment and policy) from entering the first to the first
+  // act; env steps from each act to the end of its step.
+  mb::EpisodeHooks hooks;
+  hooks.on_phase = [&](mb::EpisodePhase phase, uint32_t step) {
+    if (phase == mb::EpisodePhase::EnvReset) start = Clock::now();
+    if (phase != mb::EpisodePhase::PolicyAct) return;
+    if (step == 0) reset_time += Clock::now() - start;
+    before = env->getScene().getIntegratorStatistics();
+    start = Clock::now();
+  };
+  hooks.on_step = [&](const mb::StepResult& result, const mb::EpisodeResult&) {
+    step_time += Clock::now() - start;
+    physics += env->getScene().getIntegratorStatistics();
+    physics -= before;
+    ++steps;
+    if (result.done && result.success) ++successes;
+    return steps < target_steps;
+  };
+  while (steps < target_steps) {
+    mb::runEpisode(*env, policy, objects[episodes % objects.size()], episodes, hooks);
+    ++episodes;
+  }
+  std::cout << "task " << args.positional[0] << ", obs " << mb::toString(env->getObservationMode()) << ", policy " << policy_name
+            << ", controller " << env->getControllerDescription().name << "\n"
+            << steps << " env steps in " << episodes << " episodes (" << successes
+            << " successful), " << std::fixed << std::setprecision(1)
+            << steps / step_time.count() << " env steps/s (policy + physics + task), "
+            << std::setprecision(2) << 1e3 * reset_time.count() / double(episodes)
+            << " ms per reset\n"
+            << "physics per env step: " << std::setprecision(1)
+            << double(physics.steps) / double(steps) << " integrator steps ("
+            << double(physics.error_test_failures) / double(steps) << " error-test and "
+            << double(physics.convergence_test_failures) / double(steps) << " convergence failures), "
+            << double(physics.iterations) / double(steps) << " Newton iterations, "
+            << double(physics.jacobians) / double(steps) << " Jacobians, "
+            << double(physics.realizations) / double(steps) << " evaluations of the dynamics\n";
+  std::cout.unsetf(std::ios::fixed);
+  return 0;
+}
+
+}  // namespace manibench::cli

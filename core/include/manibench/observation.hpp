@@ -1,0 +1,81 @@
+// The observation modes (ManiSkill's obs_mode) and what an observation of
+// the visual modes holds. A mode is a name only at the edges (YAML, the
+// command line, the ABI's mb_policy_context); inside the host it is
+// ObservationMode.
+#pragma once
+
+#include <manibench/geometry.hpp>
+#include <manibench/pointcloud.hpp>
+#include <manibench/renderer.hpp>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace manibench {
+
+enum class ObservationMode {
+  State,       // the task's state vector only
+  PointCloud,  // the robot's state, and a fused world-frame point cloud (D.1 sampling)
+  Rgbd,        // the robot's state, and every camera's rgb, depth and masks
+};
+
+// "state", "pointcloud" or "rgbd": the name in YAML, on the command line
+// and in mb_policy_context::observation_mode.
+const char* toString(ObservationMode mode);
+// The mode called `name`; nullopt for any other text.
+std::optional<ObservationMode> findObservationMode(const std::string& name);
+// Every mode's name, in enum order.
+const std::vector<std::string>& getObservationModeNames();
+// Whether the mode renders cameras (every mode but State).
+inline bool isVisualMode(ObservationMode mode) { return mode != ObservationMode::State; }
+
+// A camera of the visual observation modes: mounted on a link (it moves
+// with it) or fixed in the world.
+struct CameraMount {
+  CameraSpec spec;           // name, image size, fovy, near and far
+  std::string articulation;  // empty: fixed in the world
+  std::string link;          // empty: the articulation's root
+  Pose pose;                 // in the mount frame (SAPIEN: +x optical axis, +z up)
+  std::string source;        // where it was configured, for errors
+};
+
+// What the observation of an environment is made of (the `observation`,
+// `cameras` and `lights` keys of the configuration).
+struct ObservationOptions {
+  // State: the task's vector only. PointCloud and Rgbd add, from every
+  // camera, a fused world-frame point cloud subsampled as supplement D.1
+  // or the stacked images (see VisualObservation). Only these two modes
+  // create a renderer (and so touch EGL), lazily.
+  ObservationMode mode = ObservationMode::State;
+  std::vector<CameraMount> cameras;  // names unique; Rgbd: all of one size
+  LightingSpec lighting;
+  PointCloudSampling pointcloud;
+  RenderOptions render;
+};
+
+// Throws std::invalid_argument, naming the camera and where it was
+// configured, for options no scene could honour: a visual mode without a
+// camera, duplicate camera names, a link without its articulation, an empty
+// image, Rgbd cameras of different sizes, masked_total above total.
+void validateObservationOptions(const ObservationOptions& options);
+
+// The visual part of an observation (mb_observation's ABI 1.1 fields).
+struct VisualObservation {
+  ObservationMode mode = ObservationMode::State;  // State: everything empty
+  uint32_t mask_count = 0;
+  // PointCloud: world-frame points of all cameras, subsampled (D.1).
+  PointCloud points;
+  // Rgbd: cameras stacked along the channel axis as ManiSkill does, row-
+  // major height x width x channels (row 0 on top): rgb 3 per camera in
+  // [0, 1], depth 1 per camera (m along the optical axis; 0 where nothing
+  // was hit), masks mask_count per camera (0 or 1).
+  uint32_t camera_count = 0;
+  uint32_t height = 0, width = 0;
+  std::vector<float> rgb;
+  std::vector<float> depth;
+  std::vector<std::uint8_t> masks;
+};
+
+}  // namespace manibench

@@ -1,0 +1,35 @@
+#include <manibench/episode.hpp>
+
+namespace manibench {
+
+EpisodeResult runEpisode(Environment& env, PolicyInstance& policy, const std::string& object_id,
+                         uint64_t seed, const EpisodeHooks& hooks) {
+  auto enter = [&](EpisodePhase phase, uint32_t step) {
+    if (hooks.on_phase) hooks.on_phase(phase, step);
+  };
+  enter(EpisodePhase::EnvReset, 0);
+  env.reset(object_id, seed);
+  enter(EpisodePhase::PolicyReset, 0);
+  policy.reset(seed);
+  EpisodeResult result;
+  result.object_id = object_id;
+  result.seed = seed;
+  result.condition_names = env.getTaskDescription().success_conditions;
+  Eigen::VectorXd action;
+  for (;;) {
+    enter(EpisodePhase::PolicyAct, env.getElapsedSteps());
+    policy.act(env.getObservation(), env.getElapsedSteps(), action, env.getVisualObservation());
+    enter(EpisodePhase::EnvStep, env.getElapsedSteps());
+    const StepResult step = env.step(action);
+    result.total_reward += step.reward;
+    result.final_flags = step.flags;
+    result.final_values = step.values;
+    result.success = step.success;
+    result.steps = env.getElapsedSteps();
+    const bool go_on = !hooks.on_step || hooks.on_step(step, result);
+    if (step.done || !go_on) break;
+  }
+  return result;
+}
+
+}  // namespace manibench

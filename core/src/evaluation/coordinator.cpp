@@ -1,0 +1,444 @@
+// The evaluation's coordinator: forks the workers (worker.hpp), hands out
+// the episode list one episode at a time, collects the records, and turns a
+// worker's death or a call past its time limit into a failed episode and a
+// fresh worker, so that the evaluation goes on.
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/mman.h>
+#include <sys/prctl.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <iostream>
+#include <manibench/evaluation.hpp>
+#include <sstream>
+
+#include "wire_format.hpp"
+#include "worker.hpp"
+
+namespace manibench {
+namespace {
+
+using namespace evaluation_detail;
+
+std::string describeSignal(int sig) {
+  const char* name = nullptr;
+  switch (sig) {
+    case SIGSEGV:
+      name = "SIGSEGV";
+      break;
+    case SIGABRT:
+      name = "SIGABRT";
+      break;
+    case SIGBUS:
+      name = "SIGBUS";
+      break;
+    case SIGFPE:
+      name = "SIGFPE";
+      break;
+    case SIGILL:
+      name = "SIGILL";
+      break;
+    case SIGKILL:
+      name = "SIGKILL";
+      break;
+    case SIGTERM:
+      name = "SIGTERM";
+      break;
+    case SIGTRAP:
+      name = "SIGTRAP";
+      break;
+    default:
+      break;
+  }
+  std::string text = "signal " + std::to_string(sig);
+  if (name) text += std::string(" (") + name + ", " + strsignal(sig) + ")";
+  return text;
+}
+
+std::string describeExit(int status) {
+  if (WIFSIGNALED(status)) return "killed by " + describeSignal(WTERMSIG(status));
+  if (WIFEXITED(status)) return "exited with status " + std::to_string(WEXITSTATUS(status));
+  return "stopped (wait status " + std::to_string(status) + ")";
+}
+
+// The coordinator's view of one worker process.
+struct Worker {
+  pid_t pid = -1;
+  int fd = -1;
+  std::string buffer;    // bytes received, not yet a whole message
+  int64_t episode = -1;  // index of the episode it runs, -1 when idle
+  bool ready = false;
+  const char* kill_reason = nullptr;  // set when the coordinator killed it
+  std::string kill_message;
+};
+
+// The worker processes and their shared-memory slots.
+class Pool {
+ public:
+  Pool(const WorkerContext& context, unsigned count) : context_(context), workers_(count) {
+    void* memory = mmap(nullptr, sizeof(Slot) * count, PROT_READ | PROT_WRITE,
+                        MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+    if (memory == MAP_FAILED)
+      throw EvaluationError(std::string("cannot map the workers' shared memory: ") +
+                            std::strerror(errno));
+    slots_ = static_cast<Slot*>(memory);
+    for (unsigned i = 0; i < count; ++i) new (&slots_[i]) Slot();
+  }
+  ~Pool() {
+    for (std::size_t i = 0; i < workers_.size(); ++i) stop(i, true);
+    munmap(slots_, sizeof(Slot) * workers_.size());
+  }
+  Pool(const Pool&) = delete;
+  Pool& operator=(const Pool&) = delete;
+
+  std::vector<Worker>& workers() { return workers_; }
+  Slot& slot(std::size_t i) { return slots_[i]; }
+
+  void start(std::size_t i) {
+    int fds[2];
+    if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, fds) != 0)
+      throw EvaluationError(std::string("cannot create a worker's socket: ") +
+                            std::strerror(errno));
+    Slot& s = slots_[i];
+    s.step.store(0);
+    s.total_reward.store(0);
+    enterPhase(s, kSetup);
+    // Buffered output would otherwise be written twice, once by the child.
+    std::cout.flush();
+    std::cerr.flush();
+    std::fflush(nullptr);
+    const pid_t parent = getpid();
+    const pid_t pid = fork();
+    if (pid < 0) {
+      close(fds[0]);
+      close(fds[1]);
+      throw EvaluationError(std::string("cannot fork a worker: ") + std::strerror(errno));
+    }
+    if (pid == 0) {
+      // The child keeps only its own end: another worker holding a socket
+      // would hide that worker's death (no end of stream).
+      close(fds[0]);
+      for (const Worker& w : workers_)
+        if (w.fd >= 0) close(w.fd);
+      prctl(PR_SET_PDEATHSIG, SIGKILL);
+      if (getppid() != parent) _exit(1);
+      // Ctrl-C reaches the whole process group; the coordinator decides.
+      signal(SIGINT, SIG_IGN);
+      signal(SIGPIPE, SIG_DFL);
+      try {
+        runWorker(fds[1], s, context_);
+      } catch (...) {
+        // Whatever escaped (not a std::exception): the coordinator records
+        // the exit status as a crash.
+      }
+      std::fflush(nullptr);
+      _exit(70);
+    }
+    close(fds[1]);
+    Worker& w = workers_[i];
+    w = Worker();
+    w.pid = pid;
+    w.fd = fds[0];
+  }
+
+  // Ends worker i (killing it when `kill`) and waits for it; the exit status.
+  int stop(std::size_t i, bool kill) {
+    Worker& w = workers_[i];
+    int status = 0;
+    if (w.fd >= 0) close(w.fd);  // a waiting worker reads end of stream and leaves
+    w.fd = -1;
+    if (w.pid > 0) {
+      if (kill) ::kill(w.pid, SIGKILL);
+      while (waitpid(w.pid, &status, 0) < 0 && errno == EINTR) {
+      }
+    }
+    w.pid = -1;
+    return status;
+  }
+
+ private:
+  WorkerContext context_;
+  std::vector<Worker> workers_;
+  Slot* slots_ = nullptr;
+};
+
+// One evaluation run: the event loop over the workers' sockets and slots.
+class Coordinator {
+ public:
+  Coordinator(const PluginRegistry& registry, const EvaluationOptions& options,
+              const EnvironmentFactory& make_environment, const EvaluationHooks& hooks,
+              EvaluationResult& result)
+      : options_(options),
+        hooks_(hooks),
+        result_(result),
+        context_{&registry, &options, &make_environment},
+        pool_(context_, options.workers) {}
+
+  // Runs every planned episode (or until stopped); leaves the records,
+  // sorted by index, in the result.
+  void run();
+
+ private:
+  // Progress to the hook: after each episode, else a few times a second.
+  void report(bool force);
+  void record(EpisodeRecord r);
+  // The first worker to report sets the episode list up.
+  void plan(EvaluationTaskInfo info);
+  // Sends idle worker i the next episode, if any.
+  void dispatch(std::size_t i);
+  // Ends the run for `reason`; with nothing done there is nothing to keep.
+  void stopRun(const std::string& reason);
+  // Reads what worker i sent, handles its whole messages, or its end.
+  void readFrom(std::size_t i);
+  // Handles one message of worker i; false when the worker was stopped.
+  bool handleMessage(std::size_t i, const std::string& payload);
+  // Worker i's socket ended: record the episode it was running, restart it.
+  void handleExit(std::size_t i);
+  // Kills workers whose call is past its time limit; their end of stream
+  // records the episode.
+  void killOverdue();
+
+  const EvaluationOptions& options_;
+  const EvaluationHooks& hooks_;
+  EvaluationResult& result_;
+  const WorkerContext context_;
+  Pool pool_;
+  std::vector<EpisodeRecord> records_;
+  std::size_t next_ = 0;  // next episode of result_.planned to hand out
+  bool planned_ = false;
+  std::size_t successes_ = 0, failures_ = 0;
+  int64_t start_ns_ = getMonotonicNs();
+  int64_t last_progress_ns_ = 0;
+};
+
+void Coordinator::report(bool force) {
+  if (!hooks_.on_progress) return;
+  const int64_t now = getMonotonicNs();
+  if (!force && now - last_progress_ns_ < 200000000) return;
+  last_progress_ns_ = now;
+  hooks_.on_progress({records_.size(), result_.planned.size(), successes_, failures_,
+                      double(now - start_ns_) * 1e-9});
+}
+
+void Coordinator::record(EpisodeRecord r) {
+  if (r.success) ++successes_;
+  if (r.failed()) ++failures_;
+  records_.push_back(std::move(r));
+  report(true);
+}
+
+void Coordinator::plan(EvaluationTaskInfo info) {
+  result_.task = std::move(info);
+  const std::vector<std::string>& split = result_.task.split_objects;
+  std::vector<std::string> objects = options_.objects;
+  if (objects.empty()) objects = split;
+  for (const std::string& id : objects)
+    if (std::find(split.begin(), split.end(), id) == split.end()) {
+      std::string available;
+      for (const std::string& o : split) available += (available.empty() ? "" : ", ") + o;
+      throw EvaluationError("object '" + id + "' is not in the " + options_.split + " split of " +
+                            options_.task + " (its objects: " + available + ")");
+    }
+  if (objects.empty())
+    throw EvaluationError("the " + options_.split + " split of " + options_.task +
+                          " has no objects");
+  result_.planned = makeEpisodeList(objects, options_.levels, options_.seed);
+  planned_ = true;
+}
+
+void Coordinator::dispatch(std::size_t i) {
+  Worker& w = pool_.workers()[i];
+  if (!planned_ || !w.ready || w.episode >= 0 || next_ >= result_.planned.size()) return;
+  const EpisodeSpec& spec = result_.planned[next_++];
+  w.episode = static_cast<int64_t>(spec.index);
+  Writer m;
+  transferRun(m.u8(kRun), spec);
+  sendMessage(w.fd, m);  // a dead worker is noticed by poll
+}
+
+void Coordinator::stopRun(const std::string& reason) {
+  if (records_.empty() && !result_.interrupted) throw EvaluationError(reason);
+  result_.interrupted = true;
+  result_.stop_reason = reason;
+}
+
+bool Coordinator::handleMessage(std::size_t i, const std::string& payload) {
+  Worker& w = pool_.workers()[i];
+  Reader in(payload);
+  const uint8_t type = in.u8();
+  if (type == kReady) {
+    EvaluationTaskInfo info;
+    transferReady(in, info);
+    w.ready = true;
+    if (!planned_) plan(std::move(info));
+  } else if (type == kSetupError) {
+    const std::string message = in.str();
+    pool_.stop(i, true);
+    stopRun("a worker could not set up: " + message);
+    return false;
+  } else if (type == kResult) {
+    EpisodeRecord r;
+    transferResult(in, r);
+    const std::size_t index = r.spec.index;
+    if (w.episode < 0 || uint64_t(w.episode) != index)
+      throw EvaluationError("worker reported episode " + std::to_string(index) +
+                            " it was not running");
+    r.spec = result_.planned[index];
+    w.episode = -1;
+    record(std::move(r));
+  }
+  return true;
+}
+
+void Coordinator::readFrom(std::size_t i) {
+  Worker& w = pool_.workers()[i];
+  char chunk[65536];
+  const ssize_t got = ::read(w.fd, chunk, sizeof(chunk));
+  if (got < 0 && errno == EINTR) return;
+  if (got <= 0) {
+    handleExit(i);
+    return;
+  }
+  w.buffer.append(chunk, static_cast<std::size_t>(got));
+  std::string payload;
+  while (takeMessage(w.buffer, payload))
+    if (!handleMessage(i, payload)) break;
+  if (w.fd >= 0) dispatch(i);
+}
+
+void Coordinator::handleExit(std::size_t i) {
+  Worker& w = pool_.workers()[i];
+  const bool was_ready = w.ready;
+  const int64_t episode = w.episode;
+  const char* kill_reason = w.kill_reason;
+  const std::string kill_message = w.kill_message;
+  const uint32_t phase = pool_.slot(i).phase.load();
+  const uint32_t step = pool_.slot(i).step.load();
+  const int status = pool_.stop(i, false);
+  if (!was_ready) {
+    stopRun("a worker died while building the environment and policy (" +
+            (kill_message.empty() ? describeExit(status) : kill_message) + ")");
+    return;
+  }
+  if (episode >= 0) {
+    EpisodeRecord r;
+    r.spec = result_.planned[std::size_t(episode)];
+    r.flags.assign(result_.task.condition_names.size(), 0);
+    r.failure_step = step;
+    r.steps = step;
+    r.total_reward = pool_.slot(i).total_reward.load();
+    if (kill_reason) {
+      r.failure = kill_reason;
+      r.message = kill_message;
+    } else {
+      r.failure = failure::kCrash;
+      r.message = std::string(getPhaseName(phase)) + " at step " + std::to_string(step) +
+                  ": the worker was " + describeExit(status);
+    }
+    record(std::move(r));
+  }
+  if (next_ < result_.planned.size()) {
+    pool_.start(i);
+    ++result_.worker_restarts;
+  }
+}
+
+void Coordinator::killOverdue() {
+  const int64_t now = getMonotonicNs();
+  std::vector<Worker>& workers = pool_.workers();
+  for (std::size_t i = 0; i < workers.size(); ++i) {
+    Worker& w = workers[i];
+    if (w.pid <= 0 || w.kill_reason) continue;
+    const Slot& s = pool_.slot(i);
+    const uint32_t phase = s.phase.load();
+    if (phase == kIdle) continue;
+    const double limit =
+        isPolicyPhase(phase) ? options_.step_timeout : options_.environment_timeout;
+    const double elapsed = double(now - s.since_ns.load()) * 1e-9;
+    if (elapsed <= limit) continue;
+    std::ostringstream message;
+    message << getPhaseName(phase) << " at step " << s.step.load() << ": no return within "
+            << limit << " s; the worker was killed";
+    w.kill_reason = isPolicyPhase(phase) ? failure::kTimeout : failure::kEnvironmentTimeout;
+    w.kill_message = message.str();
+    ::kill(w.pid, SIGKILL);
+  }
+}
+
+void Coordinator::run() {
+  std::vector<Worker>& workers = pool_.workers();
+  for (std::size_t i = 0; i < workers.size(); ++i) pool_.start(i);
+
+  std::vector<pollfd> fds;
+  std::vector<std::size_t> owners;
+  while (!result_.interrupted && !(planned_ && records_.size() == result_.planned.size())) {
+    if (hooks_.should_stop && hooks_.should_stop()) {
+      result_.interrupted = true;
+      result_.stop_reason = "interrupted";
+      break;
+    }
+    fds.clear();
+    owners.clear();
+    for (std::size_t i = 0; i < workers.size(); ++i)
+      if (workers[i].fd >= 0) {
+        fds.push_back({workers[i].fd, POLLIN, 0});
+        owners.push_back(i);
+      }
+    if (fds.empty()) {
+      // Every worker is gone and none can be started: cannot happen unless
+      // the list is done, which the loop condition covers.
+      stopRun("no worker left");
+      break;
+    }
+    const int ready = poll(fds.data(), fds.size(), 100);
+    if (ready < 0 && errno != EINTR)
+      throw EvaluationError(std::string("poll failed: ") + std::strerror(errno));
+    for (std::size_t k = 0; ready > 0 && k < fds.size() && !result_.interrupted; ++k)
+      if (fds[k].revents & (POLLIN | POLLHUP | POLLERR)) readFrom(owners[k]);
+    killOverdue();
+    report(false);
+  }
+
+  // Idle workers leave at end of stream; busy ones (an interrupted run) are
+  // killed.
+  for (std::size_t i = 0; i < workers.size(); ++i)
+    pool_.stop(i, result_.interrupted || workers[i].episode >= 0);
+  report(true);
+  std::sort(records_.begin(), records_.end(), [](const EpisodeRecord& a, const EpisodeRecord& b) {
+    return a.spec.index < b.spec.index;
+  });
+  result_.episodes = std::move(records_);
+}
+
+}  // namespace
+
+EvaluationResult evaluatePolicy(const PluginRegistry& registry, const EvaluationOptions& options,
+                                const EnvironmentFactory& make_environment,
+                                const EvaluationHooks& hooks) {
+  if (options.workers < 1 || options.workers > 256)
+    throw EvaluationError("the number of workers must be between 1 and 256, got " +
+                          std::to_string(options.workers));
+  if (!(options.step_timeout > 0) || !(options.environment_timeout > 0))
+    throw EvaluationError("timeouts must be positive numbers of seconds");
+  if (options.levels.empty()) throw EvaluationError("no episodes to run (the level list is empty)");
+  const PluginEntry& entry = registry.getEntry(PluginKind::Policy, options.policy);
+
+  EvaluationResult result;
+  result.options = options;
+  result.policy_library = registry.getLibraries()[entry.library].path;
+  result.policy_library_version = registry.getLibraries()[entry.library].version;
+  const int64_t start_ns = getMonotonicNs();
+  Coordinator(registry, options, make_environment, hooks, result).run();
+  result.seconds = double(getMonotonicNs() - start_ns) * 1e-9;
+  summarizeEvaluation(result);
+  return result;
+}
+
+}  // namespace manibench
