@@ -31,6 +31,10 @@ double SceneRun::measure(double seconds) {
   return ok() ? steps / elapsed : std::nan("");
 }
 
+void SceneRun::runEpisodes(long count) {
+  while (ok() && episodes_ < count) envStep();
+}
+
 std::string SceneRun::getProblem() const {
   std::string problem = failure_.empty() ? problem_ : failure_;
   const std::string engine_problems = getEngineProblems();

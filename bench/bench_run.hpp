@@ -28,6 +28,7 @@ struct RunOptions {
   std::string integrator;  // manibench's integrator; empty: the scene's
   double accuracy = 0;     // > 0: overrides PhysicsSettings::accuracy
   double fixed_step = 0;   // > 0: overrides PhysicsSettings::fixed_step
+  double implicit_step = 0;  // > 0: overrides PhysicsSettings::implicit_step
   double mujoco_dt = 0.002;
   std::string mujoco_integrator;  // empty: the scene's
   // The cabinet twin: object, seed and env steps per episode (0: the
@@ -50,6 +51,8 @@ class SceneRun {
   // Untimed: runs to the end of the current episode, so that episodic
   // scenes are checked at least once.
   virtual void finish() = 0;
+  // Untimed: runs until `count` episodes are complete (episodic scenes only).
+  void runEpisodes(long count);
 
   bool ok() const { return failure_.empty(); }
   // "" if every check so far passed and the engine reported nothing wrong.

@@ -508,9 +508,16 @@ TwinBuild buildTwin(const RunOptions& options) {
   build.registry->loadSearchPath();
   ConfigSources sources;
   if (!options.integrator.empty()) sources.overrides.push_back("physics.integrator=" + options.integrator);
-  if (options.accuracy > 0) sources.overrides.push_back("physics.accuracy=" + std::to_string(options.accuracy));
+  auto exact = [](double value) {  // reads back as the same double
+    char text[32];
+    std::snprintf(text, sizeof text, "%.17g", value);
+    return std::string(text);
+  };
+  if (options.accuracy > 0) sources.overrides.push_back("physics.accuracy=" + exact(options.accuracy));
   if (options.fixed_step > 0)
-    sources.overrides.push_back("physics.fixed_step=" + std::to_string(options.fixed_step));
+    sources.overrides.push_back("physics.fixed_step=" + exact(options.fixed_step));
+  if (options.implicit_step > 0)
+    sources.overrides.push_back("physics.implicit_step=" + exact(options.implicit_step));
   EnvironmentOptions env_options = calcEnvironmentOptions(loadTaskConfig(*build.registry, kTask, sources));
   env_options.stop_on_success = false;
   for (const SelfCollisionSetting& setting : env_options.self_collision)

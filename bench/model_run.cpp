@@ -84,6 +84,7 @@ PhysicsSettings makeModelSettings(const BenchScene& scene, const RunOptions& opt
       parseIntegrator(options.integrator.empty() ? scene.integrator : options.integrator);
   if (options.accuracy > 0) settings.accuracy = options.accuracy;
   if (options.fixed_step > 0) settings.fixed_step = options.fixed_step;
+  if (options.implicit_step > 0) settings.implicit_step = options.implicit_step;
   // MuJoCo has one friction coefficient: use it for both of Simbody's.
   settings.default_material.static_friction = scene.model.friction;
   settings.default_material.dynamic_friction = scene.model.friction;

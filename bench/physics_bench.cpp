@@ -48,6 +48,11 @@ struct Options {
   bool run_unsupported = false;  // run scenes whose contact is missing
   bool strict = false;           // a scene not supported yet is a failure
   std::string write_models;      // directory for the generated URDF/MJCF
+  // An accuracy reference for manibench: "INTEGRATOR[:VALUE]" (VALUE: the
+  // accuracy of cpodes/rk_merson, the step of the fixed-step ones), run
+  // untimed on the first `reference_episodes` episodes of episodic scenes.
+  std::string reference;
+  int reference_episodes = 3;
 };
 
 void printUsage(std::FILE* out) {
@@ -67,6 +72,12 @@ void printUsage(std::FILE* out) {
                "                          rk_merson or semi_explicit_euler (default: per scene)\n"
                "  --accuracy A            Simbody integrator accuracy (default 1e-2)\n"
                "  --fixed-step H          Simbody semi_explicit_euler step (default 5e-4 s)\n"
+               "  --implicit-step H       Simbody implicit_euler step (default 2e-3 s)\n"
+               "  --reference I[:V]       accuracy: also run manibench with integrator I\n"
+               "                          (V: its accuracy, or its step for the fixed-step\n"
+               "                          ones) on the first episodes of each episodic scene\n"
+               "                          and print how far the episode ends differ\n"
+               "  --reference-episodes N  episodes compared with --reference (default 3)\n"
                "  --mujoco-dt DT          MuJoCo timestep, must divide 10 ms (default 0.002)\n"
                "  --twin-object ID        cabinet_random: the object (default: the first\n"
                "                          train object, 2000_link_0)\n"
@@ -140,6 +151,13 @@ bool parseOptions(int argc, char** argv, Options& options) {
       if (!value(options.run.accuracy, 1e-12)) return false;
     } else if (arg == "--fixed-step") {
       if (!value(options.run.fixed_step, 1e-9)) return false;
+    } else if (arg == "--implicit-step") {
+      if (!value(options.run.implicit_step, 1e-9)) return false;
+    } else if (arg == "--reference") {
+      if (!text(options.reference)) return false;
+    } else if (arg == "--reference-episodes") {
+      if (!value(number, 1)) return false;
+      options.reference_episodes = static_cast<int>(number);
     } else if (arg == "--mujoco-integrator") {
       if (!text(options.run.mujoco_integrator)) return false;
     } else if (arg == "--mujoco-dt") {
@@ -250,7 +268,8 @@ std::string formatRatio(const Row& row) {
 // "end of episodes 1-3, manibench vs MuJoCo: largest joint difference
 // 0.0012" over the episodes both engines completed; sets `worst` (NaN if
 // there were none).
-std::string compareEpisodeEnds(const SceneRun& a, const SceneRun& b, double& worst) {
+std::string compareEpisodeEnds(const SceneRun& a, const SceneRun& b, double& worst,
+                               const std::string& versus = "manibench vs MuJoCo") {
   const std::size_t n = std::min(a.getEpisodeEnds().size(), b.getEpisodeEnds().size());
   worst = std::nan("");
   if (n == 0) return {};
@@ -265,7 +284,7 @@ std::string compareEpisodeEnds(const SceneRun& a, const SceneRun& b, double& wor
   const std::string episodes = n == 1 ? "episode 1" : "episodes 1-" + std::to_string(n);
   char buffer[64];
   std::snprintf(buffer, sizeof buffer, "%.3g", worst);
-  return "end of " + episodes + ", manibench vs MuJoCo: largest joint difference " + buffer;
+  return "end of " + episodes + ", " + versus + ": largest joint difference " + buffer;
 }
 
 // manibench's integrator work per env step: load-independent, unlike the
@@ -285,6 +304,43 @@ std::string describeWork(const SceneRun& run) {
   std::snprintf(buffer, sizeof buffer, "%.1f evaluations of the dynamics (%ld env steps)",
                 s.realizations / n, run.getEnvSteps());
   return text + buffer;
+}
+
+// --reference: the run's options with the reference integrator.
+RunOptions makeReferenceOptions(const Options& options) {
+  RunOptions reference = options.run;
+  const std::size_t colon = options.reference.find(':');
+  reference.integrator = options.reference.substr(0, colon);
+  if (colon == std::string::npos) return reference;
+  double value = 0;
+  if (!parseNumber(options.reference.c_str() + colon + 1, value) || !(value > 0))
+    throw std::invalid_argument("--reference " + options.reference + ": the value after ':' must be positive");
+  switch (parseIntegrator(reference.integrator)) {
+    case Integrator::ImplicitEuler: reference.implicit_step = value; break;
+    case Integrator::SemiExplicitEuler: reference.fixed_step = value; break;
+    case Integrator::CPodes:
+    case Integrator::RkMerson: reference.accuracy = value; break;
+  }
+  return reference;
+}
+
+// How far manibench's episode ends lie from the reference integrator's on
+// the same commands: the integration error of the timed settings.
+std::string compareWithReference(const BenchScene& scene, const Options& options,
+                                 const SceneRun& measured) {
+  try {
+    const RunOptions reference_options = makeReferenceOptions(options);
+    SceneRuns runs = scene.make_runs ? scene.make_runs(reference_options)
+                                     : makeModelRuns(scene, reference_options);
+    SceneRun& reference = *runs.manibench;
+    reference.settle();
+    reference.runEpisodes(std::min<long>(options.reference_episodes, measured.getEpisodes()));
+    if (!reference.ok()) return "reference " + runs.integrator + ": " + reference.getProblem();
+    double worst = 0;
+    return compareEpisodeEnds(measured, reference, worst, "manibench vs " + runs.integrator);
+  } catch (const std::exception& e) {
+    return std::string("reference: ") + e.what();
+  }
 }
 
 Row runScene(const BenchScene& scene, const Options& options, bool box_box) {
@@ -355,6 +411,8 @@ Row runScene(const BenchScene& scene, const Options& options, bool box_box) {
       row.notes.push_back(std::string(names[e]) + ": " + seen);
   const std::string work = describeWork(*engines[0]);
   if (!work.empty()) row.notes.push_back(work);
+  if (!options.reference.empty() && engines[0]->getEpisodes() > 0)
+    row.notes.push_back(compareWithReference(scene, options, *engines[0]));
   return row;
 }
 
