@@ -92,10 +92,10 @@ class NarrowPhase {
   void calcContacts(const ShapeGeometry& a, const SimTK::Transform& X_GA, const ShapeGeometry& b,
                     const SimTK::Transform& X_GB, std::vector<ContactPoint>& out);
 
-  struct Scratch;
+  struct Impl;  // narrow_phase_impl.hpp
 
  private:
-  std::unique_ptr<Scratch> scratch_;
+  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace scene_detail
