@@ -203,10 +203,10 @@ mb_status getLinkTwist(mb_scene* s, mb_id link, double out[6], mb_error* err) {
     }
   });
 }
-mb_status getContactForce(mb_scene* s, mb_id a, mb_id b, double out[3], mb_error* err) {
+mb_status calcContactForce(mb_scene* s, mb_id a, mb_id b, double out[3], mb_error* err) {
   return guarded(s, err, [&](mb_scene& m) {
     requirePointer(out, "output force");
-    const Eigen::Vector3d f = m.scene->getContactForce(a, b);
+    const Eigen::Vector3d f = m.scene->calcContactForce(a, b);
     for (int i = 0; i < 3; ++i) out[i] = f[i];
   });
 }
@@ -289,7 +289,7 @@ const mb_scene_api kSceneApi = [] {
   api.get_root_pose = &getRootPose;
   api.get_link_pose = &getLinkPose;
   api.get_link_twist = &getLinkTwist;
-  api.get_contact_force = &getContactForce;
+  api.get_contact_force = &calcContactForce;
   api.set_joint_positions = &setJointPositions;
   api.set_joint_velocities = &setJointVelocities;
   api.set_root_pose = &setRootPose;

@@ -277,7 +277,7 @@ class Scene {
   Pose getLinkPose(int link) const;
   Twist getLinkTwist(int link) const;
   // Contact force on link_a from link_b (from anything if link_b < 0), world.
-  Eigen::Vector3d getContactForce(int link_a, int link_b) const;
+  Eigen::Vector3d calcContactForce(int link_a, int link_b) const;
   double calcKineticEnergy() const;
   // Geometric Jacobian of the point `point_in_link` (link frame) on `link`
   // with respect to the joint velocities of `articulation`: rows angular
@@ -315,7 +315,14 @@ class Scene {
   // finalize(), across re-initializations): the cost behind a step.
   IntegratorStatistics getIntegratorStatistics() const;
 
-  SceneState saveState() const;
+  // A snapshot of the state, the drive commands, the joint dynamics and
+  // the friction anchors. CPODES and Simbody's integrators carry a step
+  // history (order, step size) that no snapshot can hold, so under them
+  // saving also restarts the integrator: a run continued after the save and
+  // one restored from it are then bit-identical. implicit_euler (the
+  // default) carries none: saving leaves it alone, and a restored run
+  // continues bit-identically to the uninterrupted one.
+  SceneState saveState();
   void restoreState(const SceneState& state);
 
  private:

@@ -1,5 +1,7 @@
 #include "scene/urdf_model.hpp"
 
+#include <manibench/sdk/numbers.hpp>
+
 #include <console_bridge/console.h>
 #include <tinyxml.h>
 #include <urdf_parser/urdf_parser.h>
@@ -28,7 +30,7 @@ using SimTK::SymMat33;
 using SimTK::Transform;
 using SimTK::Vec3;
 
-constexpr double kPi = 3.14159265358979323846;
+using sdk::kPi;
 
 // urdfdom reports why it rejected a model only through console_bridge. This
 // routes its error messages into a string for the SceneError while parsing;
