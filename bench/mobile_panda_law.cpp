@@ -1,5 +1,7 @@
 #include "mobile_panda_law.hpp"
 
+#include <manibench/sdk/numbers.hpp>
+
 #include <cmath>
 #include <stdexcept>
 
@@ -16,7 +18,7 @@ constexpr double kCutoffHz = 40;  // velocity_stage.hpp
 
 // velocity_stage.hpp's calcLowPassAlpha, the same expression.
 double calcLowPassAlpha(double cutoff_hz, double sample_hz) {
-  constexpr double kPi = 3.14159265358979323846;
+  using sdk::kPi;
   const double y = 1.0 - std::cos(2.0 * kPi * cutoff_hz / sample_hz);
   return -y + std::sqrt(y * y + 2.0 * y);
 }

@@ -17,10 +17,14 @@ const char* kBenchUsage = R"(usage: manibench bench TASK [options]
 Measures environment steps per second: episodes of TASK on the split's
 objects (in turn, seeds 0, 1, ...) until --steps environment steps have run.
 Each env step is frame_skip control steps of physics plus the task's reward,
-success and observation; resets are timed separately. A second line gives
-the integrator's work per env step (steps, failed steps, Newton iterations,
-Jacobians, evaluations of the equations of motion), which does not depend
-on the load of the machine.
+success and observation. Resets are timed separately: the first on its
+own (its scene was built with the environment; in the visual modes it
+starts the renderer), then the mean of the rest (a new object each, scene
+rebuilt, while the split has several).
+The last line gives the integrator's work per env step (steps; for
+implicit_euler its island solves, for cpodes its failed steps, Newton
+iterations and Jacobians; evaluations of the equations of motion), which
+does not depend on the load of the machine.
 
 Options:
   --policy NAME|PATH.so   policy acting (default random)
@@ -59,7 +63,7 @@ int commandBench(int argc, char** argv) {
   mb::PolicyInstance policy(registry, policy_name, "", env->calcPolicyLayout());
 
   using Clock = std::chrono::steady_clock;
-  std::chrono::duration<double> step_time{0}, reset_time{0};
+  std::chrono::duration<double> step_time{0}, reset_time{0}, first_reset_time{0};
   uint64_t steps = 0, episodes = 0, successes = 0;
   // Integrator work during env steps only (resets rebuild scenes).
   mb::IntegratorStatistics physics, before;
@@ -70,7 +74,7 @@ int commandBench(int argc, char** argv) {
   hooks.on_phase = [&](mb::EpisodePhase phase, uint32_t step) {
     if (phase == mb::EpisodePhase::EnvReset) start = Clock::now();
     if (phase != mb::EpisodePhase::PolicyAct) return;
-    if (step == 0) reset_time += Clock::now() - start;
+    if (step == 0) (episodes == 0 ? first_reset_time : reset_time) += Clock::now() - start;
     before = env->getScene().getIntegratorStatistics();
     start = Clock::now();
   };
@@ -86,20 +90,35 @@ int commandBench(int argc, char** argv) {
     mb::runEpisode(*env, policy, objects[episodes % objects.size()], episodes, hooks);
     ++episodes;
   }
-  std::cout << "task " << args.positional[0] << ", obs " << mb::toString(env->getObservationMode()) << ", policy " << policy_name
-            << ", controller " << env->getControllerDescription().name << "\n"
+  const mb::PhysicsSettings& settings = env->getScene().getPhysicsSettings();
+  std::cout << "task " << args.positional[0] << ", obs " << mb::toString(env->getObservationMode())
+            << ", policy " << policy_name << ", controller " << env->getControllerDescription().name
+            << ", integrator " << mb::getIntegratorName(settings.integrator) << "\n"
             << steps << " env steps in " << episodes << " episodes (" << successes
             << " successful), " << std::fixed << std::setprecision(1)
-            << steps / step_time.count() << " env steps/s (policy + physics + task), "
-            << std::setprecision(2) << 1e3 * reset_time.count() / double(episodes)
-            << " ms per reset\n"
-            << "physics per env step: " << std::setprecision(1)
-            << double(physics.steps) / double(steps) << " integrator steps ("
-            << double(physics.error_test_failures) / double(steps) << " error-test and "
-            << double(physics.convergence_test_failures) / double(steps) << " convergence failures), "
-            << double(physics.iterations) / double(steps) << " Newton iterations, "
-            << double(physics.jacobians) / double(steps) << " Jacobians, "
-            << double(physics.realizations) / double(steps) << " evaluations of the dynamics\n";
+            << steps / step_time.count() << " env steps/s (policy + physics + task)\n"
+            << "resets: the first " << std::setprecision(2) << 1e3 * first_reset_time.count()
+            << " ms (on the scene built with the environment"
+            << (mb::isVisualMode(env->getObservationMode()) ? "; it starts the renderer" : "")
+            << ")";
+  if (episodes > 1)
+    std::cout << ", then " << 1e3 * reset_time.count() / double(episodes - 1) << " ms per reset ("
+              << episodes - 1 << (objects.size() > 1 ? ", a new object each" : ", the same object")
+              << ")";
+  std::cout << "\nphysics per env step: " << std::setprecision(1)
+            << double(physics.steps) / double(steps) << " integrator steps";
+  if (settings.integrator == mb::Integrator::ImplicitEuler) {
+    // Its steps never fail; one solve per contact island, more where a
+    // drive's effort limit is reached during the step.
+    std::cout << ", " << double(physics.iterations) / double(steps) << " island solves, ";
+  } else {
+    std::cout << " (" << double(physics.error_test_failures) / double(steps) << " error-test and "
+              << double(physics.convergence_test_failures) / double(steps)
+              << " convergence failures), " << double(physics.iterations) / double(steps)
+              << " Newton iterations, " << double(physics.jacobians) / double(steps)
+              << " Jacobians, ";
+  }
+  std::cout << double(physics.realizations) / double(steps) << " evaluations of the dynamics\n";
   std::cout.unsetf(std::ios::fixed);
   return 0;
 }

@@ -56,6 +56,25 @@ TEST(Cli, HelpAndUsageErrors) {
   EXPECT_EQ(runCli({"run", "Reach-v0", "--policy", "random", "--seed", "-3"}).exit_code, 2);
 }
 
+TEST(Cli, BenchReportsSpeedResetsAndTheIntegratorsWork) {
+  // Reach-v0: 3 episodes of 100 steps over its train objects.
+  const auto r = runCli({"bench", "Reach-v0", "--policy", "zero", "--steps", "300"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(contains(r.out, "integrator implicit_euler")) << r.out;
+  EXPECT_TRUE(contains(r.out, "300 env steps in 3 episodes")) << r.out;
+  EXPECT_TRUE(contains(r.out, "env steps/s")) << r.out;
+  EXPECT_TRUE(contains(r.out, "resets: the first ")) << r.out;
+  EXPECT_TRUE(contains(r.out, "ms per reset (2, a new object each)")) << r.out;
+  // A fixed step: 5 control ticks of 2 ms steps, one evaluation each.
+  EXPECT_TRUE(contains(r.out, "physics per env step: 25.0 integrator steps")) << r.out;
+  EXPECT_TRUE(contains(r.out, "25.0 evaluations of the dynamics")) << r.out;
+  const auto cpodes = runCli({"bench", "Reach-v0", "--policy", "zero", "--steps", "20", "--set",
+                              "physics.integrator=cpodes"});
+  ASSERT_EQ(cpodes.exit_code, 0) << cpodes.err;
+  EXPECT_TRUE(contains(cpodes.out, "integrator cpodes")) << cpodes.out;
+  EXPECT_TRUE(contains(cpodes.out, "Newton iterations")) << cpodes.out;
+}
+
 TEST(Cli, ListShowsEveryPluginWithItsLibrary) {
   const auto r = runCli({"list"});
   ASSERT_EQ(r.exit_code, 0) << r.err;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <gtest/gtest.h>
+#include <manibench/sdk/numbers.hpp>
 #include <unistd.h>
 
 #include <cmath>
@@ -16,7 +17,7 @@
 namespace manibench {
 namespace contact_scenes {
 
-constexpr double kPi = 3.14159265358979323846;
+using sdk::kPi;
 constexpr double kG = 9.81;
 
 // --- URDF building blocks -------------------------------------------------------
@@ -243,7 +244,7 @@ inline void expectPileIsBitIdentical(const std::string& integrator, int ticks) {
     const double z = first.scene.getRootPose(body).position.z();
     EXPECT_LT(z, 0.6) << integrator;
     EXPECT_GT(z, 0.0) << integrator;
-    if (first.scene.getContactForce(first.scene.findLink(body, "body"), -1).norm() > 0) ++resting;
+    if (first.scene.calcContactForce(first.scene.findLink(body, "body"), -1).norm() > 0) ++resting;
   }
   EXPECT_GE(resting, 6) << integrator;
   for (double v : a) ASSERT_TRUE(std::isfinite(v)) << integrator;

@@ -104,7 +104,7 @@ RestResult simulateRest(const Support& support, const Rester& rester,
   }
   RestResult r;
   const Pose end = scene.getRootPose(body);
-  r.force = scene.getContactForce(link, support_link);
+  r.force = scene.calcContactForce(link, support_link);
   r.drift = (end.position - half_way.position).norm();
   r.turn = end.orientation.angularDistance(half_way.orientation);
   r.height = end.position.z();
@@ -269,7 +269,7 @@ TEST_P(FrictionTest, LightObjectsComeToRestToo) {
     const double weight = 1000 * size * size * size * kG;
     SCOPED_TRACE("cube of " + num(size) + " m");
     EXPECT_NEAR(scene.getRootPose(cube).position.z(), size / 2, 1e-5);
-    EXPECT_NEAR(scene.getContactForce(scene.findLink(cube, "cube"), -1).z(), weight, 0.02 * weight);
+    EXPECT_NEAR(scene.calcContactForce(scene.findLink(cube, "cube"), -1).z(), weight, 0.02 * weight);
     EXPECT_LT(scene.getLinkTwist(scene.findLink(cube, "cube")).linear.norm(), 1e-4);
   }
 }
@@ -308,13 +308,13 @@ TEST(ContactTest, LinksOfAnArticulationTouchOnlyWithSelfCollisionAndNeverAcrossA
               l2 = scene.findLink(arm, "l2");
     SCOPED_TRACE(self_collision ? "self collision on" : "self collision off");
     // Joined by a joint: never.
-    EXPECT_EQ(scene.getContactForce(l1, base), Eigen::Vector3d::Zero());
-    EXPECT_EQ(scene.getContactForce(l2, l1), Eigen::Vector3d::Zero());
+    EXPECT_EQ(scene.calcContactForce(l1, base), Eigen::Vector3d::Zero());
+    EXPECT_EQ(scene.calcContactForce(l2, l1), Eigen::Vector3d::Zero());
     // Two joints apart: only when asked.
-    const Eigen::Vector3d push = scene.getContactForce(l2, base);
+    const Eigen::Vector3d push = scene.calcContactForce(l2, base);
     if (self_collision) {
       EXPECT_GT(push.norm(), 100.0);
-      EXPECT_EQ(scene.getContactForce(base, l2), -push);
+      EXPECT_EQ(scene.calcContactForce(base, l2), -push);
       scene.advance(0.05);
       EXPECT_GT(scene.getJointPositions(arm).norm(), 1e-3);
     } else {
@@ -355,7 +355,7 @@ TEST(ContactTest, AnArmThatOnlyTurnsStillMeetsThePostInItsWay) {
     // Free, it would swing through pi; the post stops it near 0.7 rad.
     EXPECT_GT(largest_angle, 0.5);
     EXPECT_LT(largest_angle, 0.9);
-    EXPECT_GT(scene.getContactForce(post_link, arm_link).norm(), 1.0);
+    EXPECT_GT(scene.calcContactForce(post_link, arm_link).norm(), 1.0);
   }
 }
 
@@ -397,9 +397,9 @@ TEST_P(StackTest, FourBoxesStandStill) {
   // Each box carries the ones above it; in sum every box's contacts hold
   // its own weight.
   for (int i = 1; i < 4; ++i)
-    EXPECT_NEAR(scene.getContactForce(links[i], links[i - 1]).z(), (4 - i) * kG,
+    EXPECT_NEAR(scene.calcContactForce(links[i], links[i - 1]).z(), (4 - i) * kG,
                 0.02 * (4 - i) * kG);
-  for (int i = 0; i < 4; ++i) EXPECT_NEAR(scene.getContactForce(links[i], -1).z(), kG, 0.02 * kG);
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(scene.calcContactForce(links[i], -1).z(), kG, 0.02 * kG);
 }
 
 INSTANTIATE_TEST_SUITE_P(Integrators, StackTest,
@@ -432,7 +432,7 @@ std::pair<double, double> restOnFloor(const std::string& collisions, double z0,
       scene.addUrdfString(singleLink("body", collisions), base_dir, "body", at(0, 0, z0), false);
   scene.finalize();
   for (int k = 0; k < 100; ++k) scene.advance(0.01);
-  return {scene.getContactForce(scene.findLink(body, "body"), -1).z(),
+  return {scene.calcContactForce(scene.findLink(body, "body"), -1).z(),
           scene.getRootPose(body).position.z()};
 }
 
@@ -476,7 +476,7 @@ TEST(ContactTest, ConcaveMeshesCollideAsTheirConvexHull) {
   for (int k = 0; k < 100; ++k) scene.advance(0.01);
   EXPECT_NEAR(scene.getRootPose(ball).position.z(), 0.23, 1e-3);
   EXPECT_NEAR(
-      scene.getContactForce(scene.findLink(ball, "ball"), scene.findLink(channel, "channel")).z(),
+      scene.calcContactForce(scene.findLink(ball, "ball"), scene.findLink(channel, "channel")).z(),
       kG, 0.02 * kG);
 }
 

@@ -3,6 +3,7 @@
 // RobotTestbed-v0 (tests/fixtures/fixture_robot_testbed.cpp): the robot
 // alone, initial configuration from its YAML, every joint actuated.
 #include <manibench/environment.hpp>
+#include <manibench/sdk/numbers.hpp>
 
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
@@ -19,7 +20,7 @@
 namespace manibench {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using sdk::kPi;
 constexpr double kArmMax = 3.14;  // rad/s at action 1 (ManiSkill)
 constexpr int kArm = 4;           // first arm action and first arm joint (root_x, root_y, root_yaw, lift first)
 

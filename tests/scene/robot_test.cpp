@@ -5,6 +5,7 @@
 // damping drives + passive-force balancing, visual meshes, and the robot
 // YAML against the URDF.
 #include <gtest/gtest.h>
+#include <manibench/sdk/numbers.hpp>
 #include <manibench/scene.hpp>
 #include <yaml-cpp/yaml.h>
 
@@ -27,7 +28,7 @@
 namespace manibench {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using sdk::kPi;
 const std::string kRobotDir = std::string(MANIBENCH_TEST_SOURCE_DIR) + "/assets/robots";
 
 // --- facts (../shared/reference/asset-facts.md, maniskill-v1-facts.md) ------
@@ -361,7 +362,7 @@ TEST_P(RobotTest, HoldsStillWithDampingDrivesAndBalancing) {
   for (int j = 0; j < robot.dof; ++j)
     EXPECT_LT(std::abs(drift[j]), 1e-3)
         << scene.getJoints(l.robot)[j].name << " drifted " << drift[j];
-  EXPECT_LT(scene.getContactForce(scene.findLink(l.robot, "body_link"), -1).norm(), 1e-9)
+  EXPECT_LT(scene.calcContactForce(scene.findLink(l.robot, "body_link"), -1).norm(), 1e-9)
       << "the body column touches the floor";
   std::printf("%s: 10 s held in %.2f s wall, max |drift| %.3g\n", robot.name.c_str(), seconds,
               drift.cwiseAbs().maxCoeff());
