@@ -108,12 +108,15 @@ std::string toString(HandleType type);
 
 // ---- PartNet-Mobility (partnet_loader.cpp) ------------------------------------
 
-// Loads <folder>/<id>/mobility.urdf and semantics.txt. Handles are the
+// Loads <folder>/<id>/mobility.urdf and semantics.txt through the SDK's
+// PartNet reader (manibench/sdk/partnet.hpp). Handles are the
 // visuals whose name contains "handle"; targets are links with a handle
 // and a revolute/continuous (door) or prismatic (drawer) joint.
 CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id);
-// Sub-folders of `folder` holding a mobility.urdf, sorted.
+// Sub-folders of `folder` holding a mobility.urdf, sorted; with a split,
+// those of the split (`folder`/test.txt lists the test ids).
 std::vector<std::string> listPartNetCabinets(const std::string& folder);
+std::vector<std::string> listPartNetCabinets(const std::string& folder, const std::string& split);
 
 // ---- object ids ------------------------------------------------------------
 

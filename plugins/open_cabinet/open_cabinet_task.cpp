@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 
 #ifndef MANIBENCH_ROBOT_DIR
@@ -152,20 +151,8 @@ const CabinetModel& OpenCabinetTask::getCabinet(const std::string& cabinet_id) c
 }
 
 std::vector<std::string> OpenCabinetTask::listObjects(const std::string& split) const {
-  std::vector<std::string> cabinets;
-  if (partnet_dir_.empty()) {
-    cabinets = listGeneratedCabinets(kind_, split);
-  } else {
-    if (split != "train" && split != "test")
-      throw Error("unknown split '" + split + "' (use train or test)", MB_INVALID_ARGUMENT);
-    // <dir>/test.txt lists the test cabinets, one id a line; the rest train.
-    std::vector<std::string> test;
-    if (std::ifstream in(partnet_dir_ + "/test.txt"); in)
-      for (std::string line; std::getline(in, line);)
-        if (!line.empty()) test.push_back(line);
-    for (const std::string& id : listPartNetCabinets(partnet_dir_))
-      if ((std::find(test.begin(), test.end(), id) != test.end()) == (split == "test")) cabinets.push_back(id);
-  }
+  const std::vector<std::string> cabinets =
+      partnet_dir_.empty() ? listGeneratedCabinets(kind_, split) : listPartNetCabinets(partnet_dir_, split);
   std::vector<std::string> ids;
   for (const std::string& c : cabinets)
     for (const TargetLink* t : getCabinet(c).getTargets(kind_)) ids.push_back(c + "_" + t->link);
