@@ -8,6 +8,7 @@
 #pragma once
 
 #include <manibench/sdk.hpp>
+#include <manibench/sdk/random.hpp>
 
 #include <algorithm>
 #include <array>
@@ -23,24 +24,9 @@ namespace open_cabinet {
 
 enum class TargetKind { kDoor, kDrawer };
 
-// splitmix64: a tiny, fully specified generator (std::*_distribution output
-// differs between standard libraries; ours must not).
-class Random {
- public:
-  explicit Random(uint64_t seed) : state_(seed) {}
-  uint64_t next() {
-    uint64_t z = (state_ += 0x9E3779B97F4A7C15ULL);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    return z ^ (z >> 31);
-  }
-  double uniform(double lo, double hi) { return lo + (hi - lo) * double(next() >> 11) * 0x1.0p-53; }
-  int integer(int lo, int hi) { return lo + int(next() % uint64_t(hi - lo + 1)); }  // inclusive
-  bool chance(double p) { return uniform(0, 1) < p; }
-
- private:
-  uint64_t state_;
-};
+// The SDK's fully specified generator (splitmix64) and id hash (FNV-1a).
+using manibench::sdk::Random;
+using manibench::sdk::hashString;
 
 // A door or drawer the robot can be asked to open: a link with a handle
 // and a revolute (door) or prismatic (drawer) joint.
