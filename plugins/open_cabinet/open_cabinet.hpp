@@ -8,6 +8,7 @@
 #pragma once
 
 #include <manibench/sdk.hpp>
+#include <manibench/sdk/mobile_panda.hpp>
 #include <manibench/sdk/random.hpp>
 
 #include <algorithm>
@@ -196,16 +197,13 @@ class OpenCabinetTask : public manibench::sdk::Task {
   std::string robot_dir_;
   double static_speed_, static_angular_speed_;
   uint32_t hold_steps_;
-  // robot facts (assets/robots/mobile_panda_single.yaml)
-  std::vector<std::string> robot_joints_;
-  Eigen::VectorXd robot_initial_;
-  std::string camera_yaml_;
+  // the robot's facts (assets/robots/mobile_panda_single.yaml) and state
+  std::unique_ptr<manibench::sdk::mobile_panda::AgentState> robot_;
   mutable std::map<std::string, std::shared_ptr<CabinetModel>> cabinets_;
   // the scene
   std::shared_ptr<CabinetModel> cabinet_;
   const TargetLink* target_ = nullptr;
-  mb_id robot_ = -1, cabinet_id_ = -1, target_link_ = -1;
-  mb_id left_finger_ = -1, right_finger_ = -1, tcp_ = -1;
+  mb_id robot_id_ = -1, cabinet_id_ = -1, target_link_ = -1, tcp_ = -1;
   uint32_t target_joint_ = 0;
   double lower_ = 0, upper_ = 1;
   Eigen::Vector3d joint_axis_local_ = Eigen::Vector3d::UnitZ();
