@@ -3,6 +3,7 @@
 //   MANIBENCH_REGISTER_CONTROLLER(MyController, "my_controller", "summary");
 #pragma once
 
+#include <algorithm>
 #include <manibench/sdk/common.hpp>
 #include <manibench/sdk/registry.hpp>
 #include <manibench/sdk/scene_view.hpp>
@@ -113,7 +114,12 @@ struct ControllerTrampolines {
                          mb_scene* scene, mb_error* err) {
     return guard(err, [&] {
       const SceneView view(api, scene);
-      asController(c)->controller->reset(view);
+      ControllerHandle& h = *asController(c);
+      // An episode starts from the commands a new controller has, not from
+      // what the last episode left: episodes must not depend on the ones
+      // before them (and the saved state of a reset must not either).
+      std::fill(h.drives.begin(), h.drives.end(), DriveCommand{});
+      h.controller->reset(view);
     });
   }
   static mb_status compute(mb_controller* c, const mb_scene_api* api,
