@@ -1,6 +1,8 @@
 #include "cli.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <iomanip>
 #include <iostream>
 #include <random>
@@ -159,5 +161,52 @@ void printEpisode(const mb::EpisodeResult& r) {
   std::cout.unsetf(std::ios::fixed);
 }
 
+
+std::string formatDuration(double seconds) {
+  const long s = std::lround(std::max(0.0, seconds));
+  char buffer[32];
+  if (s >= 3600)
+    std::snprintf(buffer, sizeof(buffer), "%ld:%02ld:%02ld", s / 3600, (s / 60) % 60, s % 60);
+  else
+    std::snprintf(buffer, sizeof(buffer), "%02ld:%02ld", s / 60, s % 60);
+  return buffer;
+}
+
+void drawProgressBar(std::size_t done, std::size_t total, const std::string& unit,
+                     const std::string& details, double elapsed) {
+  const int width = 30;
+  const int filled = total ? int(width * std::min(done, total) / total) : 0;
+  std::string bar(std::size_t(filled), '#');
+  bar.resize(width, '.');
+  std::ostringstream line;
+  line << "\r[" << bar << "] " << done << "/" << total << " " << unit << details;
+  if (done > 0 && total > done)
+    line << ", ~" << formatDuration(elapsed / double(done) * double(total - done)) << " left";
+  else
+    line << ", " << formatDuration(elapsed) << " elapsed";
+  line << "   ";
+  std::cerr << line.str() << std::flush;
+}
+
+namespace {
+volatile sig_atomic_t g_stop_requested = 0;
+void onStopSignal(int) { g_stop_requested = 1; }
+constexpr int kStopSignals[3] = {SIGINT, SIGTERM, SIGHUP};
+}  // namespace
+
+StopSignals::StopSignals() {
+  g_stop_requested = 0;
+  struct sigaction action {};
+  action.sa_handler = onStopSignal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = 0;  // no SA_RESTART: poll() and waits return at once
+  for (int k = 0; k < 3; ++k) sigaction(kStopSignals[k], &action, &previous_[k]);
+}
+
+StopSignals::~StopSignals() {
+  for (int k = 0; k < 3; ++k) sigaction(kStopSignals[k], &previous_[k], nullptr);
+}
+
+bool StopSignals::isRequested() { return g_stop_requested != 0; }
 
 }  // namespace manibench::cli

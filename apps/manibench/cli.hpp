@@ -10,6 +10,8 @@
 #include <manibench/observation.hpp>
 #include <manibench/plugin_registry.hpp>
 
+#include <signal.h>
+
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -32,6 +34,7 @@ int commandRender(int argc, char** argv);   // command_render.cpp
 int commandObjects(int argc, char** argv);  // command_objects.cpp
 int commandEval(int argc, char** argv);     // command_eval.cpp
 int commandDemo(int argc, char** argv);     // command_demo.cpp
+int commandDemos(int argc, char** argv);    // command_demos.cpp
 
 // A usage error carries the usage text of the command it concerns.
 class UsageError : public std::runtime_error {
@@ -84,5 +87,27 @@ std::string resolvePolicy(mb::PluginRegistry& registry, const std::string& polic
 std::string chooseObject(const std::vector<std::string>& objects, uint64_t seed,
                          const std::string& split);
 void printEpisode(const mb::EpisodeResult& r);
+
+// "mm:ss" or "h:mm:ss".
+std::string formatDuration(double seconds);
+// One progress line on stderr, redrawn in place: a bar of done/total, the
+// unit, `details` (", 3 successful"), and the time left (or elapsed).
+void drawProgressBar(std::size_t done, std::size_t total, const std::string& unit,
+                     const std::string& details, double elapsed);
+
+// While one lives, SIGINT, SIGTERM and SIGHUP only set a flag (the long
+// commands stop cleanly and keep what they finished); the previous
+// handlers come back when it goes.
+class StopSignals {
+ public:
+  StopSignals();
+  ~StopSignals();
+  StopSignals(const StopSignals&) = delete;
+  StopSignals& operator=(const StopSignals&) = delete;
+  static bool isRequested();
+
+ private:
+  struct sigaction previous_[3];
+};
 
 }  // namespace manibench::cli

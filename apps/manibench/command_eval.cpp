@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <manibench/evaluation.hpp>
 #include <manibench/task_name.hpp>
 #include <sstream>
@@ -61,10 +62,6 @@ Exit status: 0 when every episode ran (failed episodes included), 1 on an
 error, 130 when interrupted (partial results written).
 )";
 
-volatile sig_atomic_t g_interrupted = 0;
-
-void onInterrupt(int) { g_interrupted = 1; }
-
 double parsePositive(const std::string& text, const std::string& option) {
   try {
     std::size_t used = 0;
@@ -75,33 +72,11 @@ double parsePositive(const std::string& text, const std::string& option) {
   throw UsageError(option + " needs a positive number, got '" + text + "'", kEvalUsage);
 }
 
-std::string formatDuration(double seconds) {
-  const long s = std::lround(std::max(0.0, seconds));
-  char buffer[32];
-  if (s >= 3600)
-    std::snprintf(buffer, sizeof(buffer), "%ld:%02ld:%02ld", s / 3600, (s / 60) % 60, s % 60);
-  else
-    std::snprintf(buffer, sizeof(buffer), "%02ld:%02ld", s / 60, s % 60);
-  return buffer;
-}
-
 // One line, redrawn in place on the terminal.
 void drawProgress(const EvaluationProgress& p) {
-  const int width = 30;
-  const int filled = p.total ? int(width * p.done / p.total) : 0;
-  std::string bar(std::size_t(filled), '#');
-  bar.resize(width, '.');
-  std::ostringstream line;
-  line << "\r[" << bar << "] " << p.done << "/" << p.total << " episodes, " << p.successes
-       << " successful";
-  if (p.failures) line << ", " << p.failures << " failed";
-  if (p.done > 0 && p.total > p.done)
-    line << ", ~" << formatDuration(p.elapsed / double(p.done) * double(p.total - p.done))
-         << " left";
-  else
-    line << ", " << formatDuration(p.elapsed) << " elapsed";
-  line << "   ";
-  std::cerr << line.str() << std::flush;
+  std::string details = ", " + std::to_string(p.successes) + " successful";
+  if (p.failures) details += ", " + std::to_string(p.failures) + " failed";
+  drawProgressBar(p.done, p.total, "episodes", details, p.elapsed);
 }
 
 std::string readTextFile(const std::string& path) {
@@ -199,14 +174,8 @@ int commandEval(int argc, char** argv) {
   const bool progress = !args.options.count("no-progress") && isatty(STDERR_FILENO);
   EvaluationHooks hooks;
   if (progress) hooks.on_progress = drawProgress;
-  hooks.should_stop = [] { return g_interrupted != 0; };
-  struct sigaction action {
-  }, previous{};
-  action.sa_handler = onInterrupt;
-  sigemptyset(&action.sa_mask);
-  action.sa_flags = 0;  // no SA_RESTART: poll() returns at once
-  g_interrupted = 0;
-  sigaction(SIGINT, &action, &previous);
+  hooks.should_stop = [] { return StopSignals::isRequested(); };
+  std::optional<StopSignals> stop_signals(std::in_place);
 
   std::cout << "evaluating policy " << options.policy << " on " << task << " ("
             << (task_id.isFixed() ? "its fixed objects" : options.split + " split") << "), " << options.levels.size() << " level(s) per object, seed " << options.seed
@@ -228,7 +197,7 @@ int commandEval(int argc, char** argv) {
   }
   if (!result.interrupted) result = evaluatePolicy(registry, options, factory, hooks);
   if (progress) std::cerr << "\n";
-  sigaction(SIGINT, &previous, nullptr);
+  stop_signals.reset();
 
   std::cout << "policy " << options.policy << " (" << result.policy_library << ", version "
             << result.policy_library_version << "), controller " << result.task.controller

@@ -1,5 +1,5 @@
 // manibench: the host program. Loads plugins by name and runs them.
-//   manibench list | info | run | bench | config | render | objects | eval | demo
+//   manibench list | info | run | bench | config | render | objects | eval | demos | demo
 // Exit codes: 0 success, 1 failure (reported on stderr), 2 usage error.
 // Each command lives in its own command_*.cpp; cli.hpp declares them.
 #include <iostream>
@@ -22,6 +22,10 @@ Commands:
   render TASK --out DIR     camera images, masks and point clouds as PNG/PLY
   eval TASK --policy NAME   evaluate a policy on a split's objects: success
                             rates per object, CSV and JSON (docs/evaluation.md)
+  demos generate|replay|convert|info
+                            demonstrations: a policy's successful episodes in
+                            HDF5, replayed bit for bit, converted to another
+                            observation mode (docs/demonstrations.md)
   objects TASK              object ids of a split (--split train|test)
   config [TASK]             print the merged YAML configuration
   demo                      list the plugins, then evaluate the cabinet expert
@@ -54,6 +58,7 @@ int main(int argc, char** argv) {
     if (command == "render") return commandRender(argc, argv);
     if (command == "eval") return commandEval(argc, argv);
     if (command == "objects") return commandObjects(argc, argv);
+    if (command == "demos") return commandDemos(argc, argv);
     throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'",
                      kMainUsage);
   } catch (const UsageError& e) {

@@ -310,6 +310,43 @@ Environment::StateHeader readHeader(sdk::StateReader& in) {
   return header;
 }
 
+// A blob's parts.
+struct StateParts {
+  Environment::StateHeader header;
+  std::vector<uint8_t> scene, controller_state, task;
+  std::string controller;
+};
+
+StateParts splitState(const std::vector<uint8_t>& blob, const std::string& task) {
+  StateParts parts;
+  try {
+    sdk::StateReader in(blob.data(), blob.size());
+    parts.header = readHeader(in);
+    if (parts.header.task != task)
+      throw std::invalid_argument("a state of task '" + parts.header.task +
+                                  "', this environment is '" + task + "'");
+    parts.scene = readBlob(in);
+    in.read(parts.controller);
+    parts.controller_state = readBlob(in);
+    parts.task = readBlob(in);
+    if (!in.atEnd())
+      throw std::invalid_argument(std::to_string(in.getRemaining()) + " bytes left over");
+  } catch (const sdk::Error& e) {
+    throw std::invalid_argument(std::string("environment state cut short: ") + e.what());
+  }
+  return parts;
+}
+
+std::string findBytesDifference(const char* what, const std::vector<uint8_t>& a,
+                                const std::vector<uint8_t>& b) {
+  if (a == b) return "";
+  if (a.size() != b.size())
+    return std::string(what) + ": " + std::to_string(a.size()) + " vs " + std::to_string(b.size()) + " bytes";
+  std::size_t i = 0;
+  while (a[i] == b[i]) ++i;
+  return std::string(what) + ": byte " + std::to_string(i) + " of " + std::to_string(a.size()) + " differs";
+}
+
 }  // namespace
 
 std::vector<uint8_t> Environment::saveState() {
@@ -338,25 +375,31 @@ Environment::StateHeader Environment::readStateHeader(const std::vector<uint8_t>
   }
 }
 
-void Environment::restoreState(const std::vector<uint8_t>& blob) {
-  StateHeader header;
-  std::vector<uint8_t> scene_bytes, controller_bytes, task_bytes;
-  std::string controller;
-  try {
-    sdk::StateReader in(blob.data(), blob.size());
-    header = readHeader(in);
-    if (header.task != description_.name)
-      throw std::invalid_argument("a state of task '" + header.task + "', this environment is '" +
-                                  description_.name + "'");
-    scene_bytes = readBlob(in);
-    in.read(controller);
-    controller_bytes = readBlob(in);
-    task_bytes = readBlob(in);
-    if (!in.atEnd())
-      throw std::invalid_argument(std::to_string(in.getRemaining()) + " bytes left over");
-  } catch (const sdk::Error& e) {
-    throw std::invalid_argument(std::string("environment state cut short: ") + e.what());
+std::string Environment::findStateDifference(const std::vector<uint8_t>& a,
+                                             const std::vector<uint8_t>& b) const {
+  if (a == b) return "";
+  const StateParts x = splitState(a, description_.name), y = splitState(b, description_.name);
+  if (x.header.object_id != y.header.object_id) return "object '" + x.header.object_id + "' vs '" + y.header.object_id + "'";
+  if (x.header.seed != y.header.seed) return "seed " + std::to_string(x.header.seed) + " vs " + std::to_string(y.header.seed);
+  if (x.header.step != y.header.step) return "step " + std::to_string(x.header.step) + " vs " + std::to_string(y.header.step);
+  if (x.scene != y.scene) {
+    // The scene decodes only into a scene of its object.
+    if (x.header.object_id == object_id_ && scene_) return "scene " + scene_->findStateDifference(x.scene, y.scene);
+    return findBytesDifference("scene", x.scene, y.scene);
   }
+  if (x.controller != y.controller) return "controller '" + x.controller + "' vs '" + y.controller + "'";
+  if (const std::string d = findBytesDifference("controller state", x.controller_state, y.controller_state); !d.empty())
+    return d;
+  return findBytesDifference("task state", x.task, y.task);
+}
+
+void Environment::restoreState(const std::vector<uint8_t>& blob) {
+  const StateParts parts = splitState(blob, description_.name);
+  const StateHeader& header = parts.header;
+  const std::vector<uint8_t>& scene_bytes = parts.scene;
+  const std::vector<uint8_t>& controller_bytes = parts.controller_state;
+  const std::vector<uint8_t>& task_bytes = parts.task;
+  const std::string& controller = parts.controller;
   if (controller != controller_->getDescription().name)
     throw std::invalid_argument("a state of controller '" + controller +
                                 "', this environment drives '" +

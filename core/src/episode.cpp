@@ -9,6 +9,7 @@ EpisodeResult runEpisode(Environment& env, PolicyInstance& policy, const std::st
   };
   enter(EpisodePhase::EnvReset, 0);
   env.reset(object_id, seed);
+  if (hooks.on_reset) hooks.on_reset();
   enter(EpisodePhase::PolicyReset, 0);
   policy.reset(seed);
   EpisodeResult result;
@@ -21,6 +22,7 @@ EpisodeResult runEpisode(Environment& env, PolicyInstance& policy, const std::st
     policy.act(env.getObservation(), env.getElapsedSteps(), action, env.getVisualObservation());
     enter(EpisodePhase::EnvStep, env.getElapsedSteps());
     const StepResult step = env.step(action);
+    if (hooks.on_transition) hooks.on_transition(action, step);
     result.total_reward += step.reward;
     result.final_flags = step.flags;
     result.final_values = step.values;

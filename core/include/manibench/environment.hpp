@@ -106,6 +106,11 @@ class Environment {
     uint32_t step = 0;
   };
   static StateHeader readStateHeader(const std::vector<uint8_t>& blob);
+  // The first difference between two blobs of this environment's task, for
+  // people: a header field, the scene's (Scene::findStateDifference), the
+  // controller's or the task's bytes; "" when they are identical.
+  std::string findStateDifference(const std::vector<uint8_t>& a,
+                                  const std::vector<uint8_t>& b) const;
   // The cameras, masks and renderer of the current scene: `render`, videos
   // and tests render through it in any mode (only then is a renderer made).
   const VisualObserver& getObserver() const { return *observer_; }

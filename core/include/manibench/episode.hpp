@@ -39,6 +39,12 @@ struct EpisodeHooks {
   // On entering each phase; `step` is the env step being taken (0 during
   // the resets). May be empty.
   std::function<void(EpisodePhase phase, uint32_t step)> on_phase;
+  // After the environment's reset, before the policy's (a recorder takes
+  // the first observation and state here). May be empty.
+  std::function<void()> on_reset;
+  // After each env step and before on_step, with the action the policy gave
+  // (as given: unclipped). May be empty.
+  std::function<void(const Eigen::VectorXd& action, const StepResult& step)> on_transition;
   // After each env step, with that step and the episode so far; returning
   // false ends the episode after this step (a step budget). May be empty.
   std::function<bool(const StepResult& step, const EpisodeResult& so_far)> on_step;

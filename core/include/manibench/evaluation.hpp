@@ -18,6 +18,8 @@
 
 namespace manibench {
 
+struct Trajectory;  // demos.hpp
+
 // The evaluation could not start or could not go on (bad options, a worker
 // that cannot build its environment or policy); names the cause.
 class EvaluationError : public std::runtime_error {
@@ -70,6 +72,9 @@ struct EpisodeRecord {
   int64_t failure_step = -1;  // the step being taken when it failed
   std::string message;        // what went wrong, for people
   double seconds = 0;         // wall time of the episode (timing)
+  // The recorded episode, when EvaluationOptions::record_successes asked
+  // for it and the episode succeeded; else empty.
+  std::shared_ptr<const Trajectory> trajectory;
   bool failed() const { return !failure.empty(); }
 };
 
@@ -98,6 +103,9 @@ struct EvaluationOptions {
   double environment_timeout = 300;  // s, for each reset/step and a worker's setup
   // Written into the JSON as they are (the configuration sources, say).
   std::vector<std::string> config_notes;
+  // Workers record every episode (observations, actions, a state per step)
+  // and send back the successful ones in their EpisodeRecord (demos).
+  bool record_successes = false;
 };
 
 // What a worker reports after setting up: the task as configured.
@@ -145,6 +153,13 @@ struct EvaluationHooks {
   // Polled between events; true stops the run, kills the workers and
   // returns the episodes finished so far with `interrupted` set.
   std::function<bool()> should_stop;
+  // Called from the coordinating process once the first worker has set up:
+  // the task as configured. May be empty.
+  std::function<void(const EvaluationTaskInfo&)> on_ready;
+  // Called from the coordinating process with each episode's record as it
+  // arrives (in the order episodes finish); it may take the record's
+  // trajectory (the result keeps the rest). May be empty.
+  std::function<void(EpisodeRecord&)> on_episode;
 };
 
 // Runs the evaluation. `registry` must hold the policy (and the task); its

@@ -331,6 +331,11 @@ class Scene {
   // structure (other articulations, joints or contact shapes).
   std::vector<std::uint8_t> encodeState(const SceneState& state) const;
   SceneState decodeState(const std::uint8_t* data, std::size_t size) const;
+  // The first difference between two encoded states, for people ("time",
+  // "position q[3] of link 'l2' of articulation 'arm': a vs b", ...); ""
+  // when they are bit-identical.
+  std::string findStateDifference(const std::vector<std::uint8_t>& a,
+                                  const std::vector<std::uint8_t>& b) const;
 
  private:
   struct Impl;

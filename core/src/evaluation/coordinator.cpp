@@ -228,6 +228,7 @@ void Coordinator::report(bool force) {
 }
 
 void Coordinator::record(EpisodeRecord r) {
+  if (hooks_.on_episode) hooks_.on_episode(r);
   if (r.success) ++successes_;
   if (r.failed()) ++failures_;
   records_.push_back(std::move(r));
@@ -251,6 +252,7 @@ void Coordinator::plan(EvaluationTaskInfo info) {
                           " has no objects");
   result_.planned = makeEpisodeList(objects, options_.levels, options_.seed);
   planned_ = true;
+  if (hooks_.on_ready) hooks_.on_ready(result_.task);
 }
 
 void Coordinator::dispatch(std::size_t i) {
@@ -286,6 +288,11 @@ bool Coordinator::handleMessage(std::size_t i, const std::string& payload) {
   } else if (type == kResult) {
     EpisodeRecord r;
     transferResult(in, r);
+    if (in.u8() != 0) {
+      auto trajectory = std::make_shared<Trajectory>();
+      transferTrajectory(in, *trajectory);
+      r.trajectory = std::move(trajectory);
+    }
     const std::size_t index = r.spec.index;
     if (w.episode < 0 || uint64_t(w.episode) != index)
       throw EvaluationError("worker reported episode " + std::to_string(index) +

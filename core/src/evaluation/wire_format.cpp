@@ -4,10 +4,15 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdint>
+#include <string>
 
 namespace manibench::evaluation_detail {
 
 bool sendMessage(int fd, const Writer& w) {
+  if (w.data().size() > UINT32_MAX)
+    throw std::runtime_error("a message of " + std::to_string(w.data().size()) +
+                             " bytes is more than a frame holds (4 GiB)");
   const uint32_t size = static_cast<uint32_t>(w.data().size());
   std::string frame(reinterpret_cast<const char*>(&size), 4);
   frame += w.data();

@@ -3,6 +3,7 @@
 // ends are this same binary, so host byte order is fine.
 #pragma once
 
+#include <manibench/demos.hpp>
 #include <manibench/evaluation.hpp>
 
 #include <cstdint>
@@ -41,9 +42,12 @@ class Writer {
   }
   void field(const std::string& v) { str(v); }
   void field(const std::vector<std::string>& v) { strings(v); }
-  void field(const std::vector<uint8_t>& v) {
-    u32(static_cast<uint32_t>(v.size()));
-    for (uint8_t b : v) u8(b);
+  // Arrays of numbers: a u64 count, then their bytes.
+  template <class T>
+  void field(const std::vector<T>& v) {
+    static_assert(std::is_arithmetic_v<T>, "no layout for this type");
+    u64(v.size());
+    raw(v.data(), v.size() * sizeof(T));
   }
   template <class... T>
   void fields(const T&... v) {
@@ -87,9 +91,14 @@ class Reader {
   }
   void field(std::string& v) { v = str(); }
   void field(std::vector<std::string>& v) { v = strings(); }
-  void field(std::vector<uint8_t>& v) {
-    v.resize(u32());
-    for (uint8_t& b : v) b = u8();
+  template <class T>
+  void field(std::vector<T>& v) {
+    static_assert(std::is_arithmetic_v<T>, "no layout for this type");
+    const uint64_t n = u64();
+    if (n > (data_.size() - pos_) / sizeof(T)) throw std::runtime_error("truncated message from a worker");
+    v.resize(n);
+    std::memcpy(v.data(), data_.data() + pos_, n * sizeof(T));
+    pos_ += n * sizeof(T);
   }
   template <class... T>
   void fields(T&... v) {
@@ -150,6 +159,17 @@ template <class Stream, class Record>
 void transferResult(Stream& s, Record& r) {
   s.fields(r.spec.index, r.steps, r.total_reward, r.success, r.flags, r.failure, r.failure_step,
            r.message, r.seconds);
+}
+
+// After kResult's record: a recorded trajectory (a u8 says whether one
+// follows).
+template <class Stream, class Recorded>
+void transferTrajectory(Stream& s, Recorded& t) {
+  s.fields(t.object_id, t.level, t.seed, t.steps, t.success, t.total_reward, t.action_dim,
+           t.condition_count, t.actions, t.rewards, t.terminated, t.truncated, t.success_flags,
+           t.conditions, t.mode, t.state_dim, t.state, t.mask_count, t.point_counts, t.xyz,
+           t.point_rgb, t.point_masks, t.camera_count, t.height, t.width, t.image_rgb, t.depth,
+           t.image_masks, t.env_states, t.env_state_offsets);
 }
 
 }  // namespace manibench::evaluation_detail

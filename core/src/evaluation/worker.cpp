@@ -4,8 +4,10 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <manibench/demos.hpp>
 #include <manibench/episode.hpp>
 #include <memory>
+#include <optional>
 
 #include "wire_format.hpp"
 
@@ -60,9 +62,10 @@ Phase toWorkerPhase(EpisodePhase phase) {
 
 // Runs one episode; failures of the policy or the environment are recorded,
 // never thrown. The slot follows the episode's phases (the coordinator's
-// view of a worker that hangs or dies).
+// view of a worker that hangs or dies). With `record_trajectory` the
+// episode is recorded, and kept in the record when it succeeds.
 After runWorkerEpisode(Environment& env, PolicyInstance& policy, Slot& slot,
-                       EpisodeRecord& record) {
+                       bool record_trajectory, EpisodeRecord& record) {
   const auto start = getMonotonicNs();
   const std::size_t conditions = env.getTaskDescription().success_conditions.size();
   record.flags.assign(conditions, 0);
@@ -77,6 +80,14 @@ After runWorkerEpisode(Environment& env, PolicyInstance& policy, Slot& slot,
     slot.total_reward.store(record.total_reward);
     return true;
   };
+  std::optional<TrajectoryRecorder> recorder;
+  if (record_trajectory) {
+    recorder.emplace(env);
+    hooks.on_reset = [&] { recorder->onReset(record.spec.object_id, record.spec.level, record.spec.seed); };
+    hooks.on_transition = [&](const Eigen::VectorXd& action, const StepResult& step) {
+      recorder->onStep(action, step);
+    };
+  }
   try {
     slot.step.store(0);
     slot.total_reward.store(0);
@@ -85,6 +96,7 @@ After runWorkerEpisode(Environment& env, PolicyInstance& policy, Slot& slot,
     record.success = result.success;
     record.flags = result.final_flags;
     record.flags.resize(conditions, 0);
+    if (recorder && record.success) record.trajectory = std::make_shared<Trajectory>(recorder->take());
   } catch (const std::exception& e) {
     const uint32_t phase = slot.phase.load();
     record.failure_step = slot.step.load();
@@ -166,9 +178,12 @@ void runWorker(int fd, Slot& slot, const WorkerContext& context) {
       if (in.u8() != kRun) break;
       EpisodeRecord record;
       transferRun(in, record.spec);
-      const After after = runWorkerEpisode(*env, *policy, slot, record);
+      const After after =
+          runWorkerEpisode(*env, *policy, slot, context.options->record_successes, record);
       Writer w;
       transferResult(w.u8(kResult), record);
+      w.u8(record.trajectory ? 1 : 0);
+      if (record.trajectory) transferTrajectory(w, *record.trajectory);
       if (!sendMessage(fd, w) || after == After::kLeave) break;
       if (after == After::kNewPolicy) {
         enterPhase(slot, kSetup);

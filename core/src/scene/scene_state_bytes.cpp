@@ -8,6 +8,9 @@
 // a cache), so a state is rebuilt from a copy of the scene's own.
 #include <manibench/sdk/state.hpp>
 
+#include <cstring>
+#include <sstream>
+
 #include "scene/scene_impl.hpp"
 
 namespace manibench {
@@ -131,6 +134,49 @@ SceneState Scene::decodeState(const std::uint8_t* data, std::size_t size) const 
     throw SceneError(std::string("Scene::decodeState: ") + e.what());
   }
   return saved;
+}
+
+std::string Scene::findStateDifference(const std::vector<std::uint8_t>& a,
+                                       const std::vector<std::uint8_t>& b) const {
+  if (a == b) return "";
+  const SceneState x = decodeState(a.data(), a.size()), y = decodeState(b.data(), b.size());
+  const SimTK::State& sx = x.data->state;
+  const SimTK::State& sy = y.data->state;
+  auto number = [](double v) {
+    std::ostringstream s;
+    s.precision(17);
+    s << v;
+    return s.str();
+  };
+  auto differs = [](double p, double q) { return std::memcmp(&p, &q, sizeof p) != 0; };
+  if (differs(sx.getTime(), sy.getTime()))
+    return "time " + number(sx.getTime()) + " vs " + number(sy.getTime());
+  for (int i = 0; i < sx.getNQ(); ++i)
+    if (differs(sx.getQ()[i], sy.getQ()[i]))
+      return "position q[" + std::to_string(i) + "] of " + impl_->describeMobod(impl_->q_mobod[i]) +
+             ": " + number(sx.getQ()[i]) + " vs " + number(sy.getQ()[i]);
+  for (int i = 0; i < sx.getNU(); ++i)
+    if (differs(sx.getU()[i], sy.getU()[i]))
+      return "speed u[" + std::to_string(i) + "] of " + impl_->describeMobod(impl_->u_mobod[i]) +
+             ": " + number(sx.getU()[i]) + " vs " + number(sy.getU()[i]);
+  const auto& ax = impl_->contact_force->getAnchors(sx).anchors;
+  const auto& ay = impl_->contact_force->getAnchors(sy).anchors;
+  if (ax.size() != ay.size())
+    return "friction anchors: " + std::to_string(ax.size()) + " vs " + std::to_string(ay.size());
+  for (std::size_t i = 0; i < ax.size(); ++i)
+    if (std::memcmp(&ax[i], &ay[i], sizeof ax[i]) != 0)
+      return "friction anchor " + std::to_string(i) + " (shapes " +
+             std::to_string(ax[i].pair >> 32) + " and " + std::to_string(ax[i].pair & 0xFFFFFFFFu) +
+             ") moved";
+  const scene_detail::JointControls& cx = x.data->controls;
+  const scene_detail::JointControls& cy = y.data->controls;
+  for (std::size_t j = 0; j < cx.drives.size(); ++j)
+    if (std::memcmp(&cx.drives[j], &cy.drives[j], sizeof(DriveCommand)) != 0 ||
+        cx.driven[j] != cy.driven[j] || cx.balanced[j] != cy.balanced[j] ||
+        differs(cx.damping[j], cy.damping[j]) || differs(cx.friction[j], cy.friction[j]))
+      return "drive or dynamics of joint slot " + std::to_string(j) + " (" +
+             impl_->describeMobod(impl_->joint_mobods[j]) + ")";
+  return "the encodings differ";
 }
 
 }  // namespace manibench

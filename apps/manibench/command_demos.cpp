@@ -1,0 +1,393 @@
+// manibench demos: demonstrations (docs/demonstrations.md). generate runs a
+// policy in the evaluation kit's workers and keeps its successful episodes;
+// replay re-simulates them (--check: bit for bit); convert renders another
+// observation mode; info describes a file.
+#include <unistd.h>
+
+#include <manibench/demos.hpp>
+#include <manibench/evaluation.hpp>
+#include <manibench/task_name.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <ctime>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <optional>
+#include <sstream>
+
+#include "cli.hpp"
+
+namespace manibench::cli {
+namespace {
+
+const char* kDemosUsage = R"(usage: manibench demos generate|replay|convert|info ...
+
+  generate TASK --policy NAME|PATH.so --out FILE.h5 [options]
+      Runs the policy on the split's objects in worker processes (as eval
+      does: same seeds, same isolation) and keeps the successful episodes,
+      each ending at its first success, until --per-object of every object.
+      Ctrl-C (or SIGTERM/SIGHUP) stops and leaves a readable file with every
+      trajectory finished so far.
+        --split train|test     objects (default train)
+        --objects ID,ID,...    only these objects of the split
+        --per-object N         trajectories per object (default 1)
+        --max-attempts N       episodes per object at most (default 10 x N)
+        --workers N            worker processes (default 1)
+        --seed S               base seed of the episode seeds (default 0)
+        --obs MODE             observations recorded: state (default: the
+                               configuration's), pointcloud or rgbd
+        --policy-config FILE   YAML handed to the policy's create
+        --controller NAME, --config FILE, --set KEY=VALUE
+        --step-timeout SEC, --env-timeout SEC   as for eval
+        --no-progress          no progress bar
+  replay FILE.h5 [--trajectories traj_0,traj_3] [--check]
+      Re-simulates each trajectory from its first state with its actions;
+      --check compares every step's state, observation, reward and flags
+      with the recording, bit for bit, and reports the first difference.
+      Exit status 1 when any trajectory differs or cannot be read.
+  convert FILE.h5 --obs pointcloud|rgbd --out FILE2.h5 [--workers N]
+          [--trajectories LIST] [--set KEY=VALUE]... [--no-progress]
+      The same trajectories with the observations of another mode, rendered
+      at every recorded state in worker processes.
+  info FILE.h5 [--write-json]
+      Task, versions, configuration sources, objects, counts, lengths,
+      success and bytes per step; --write-json (re)writes the JSON sidecar.
+)";
+
+std::string joinCommand(int argc, char** argv) {
+  std::string text;
+  for (int i = 0; i < argc; ++i) text += (i ? " " : "") + std::string(argv[i]);
+  return text;
+}
+
+std::string formatUtcNow() {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char buffer[32];
+  std::strftime(buffer, sizeof(buffer), "%Y-%m-%dT%H:%M:%SZ", &utc);
+  return buffer;
+}
+
+// The loaded libraries as JSON: what made the file.
+std::string describePlugins(const PluginRegistry& registry) {
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (const LoadedLibrary& library : registry.getLibraries())
+    list.push_back({{"name", library.name},
+                    {"version", library.version},
+                    {"abi", std::to_string(library.abi_major) + "." + std::to_string(library.abi_minor)},
+                    {"library", library.path}});
+  return list.dump();
+}
+
+std::vector<std::string> parseTrajectoryList(const Arguments& args) {
+  if (!args.options.count("trajectories")) return {};
+  try {
+    return parseIdList(args.options.at("trajectories"));
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what(), kDemosUsage);
+  }
+}
+
+uint64_t parseCount(const Arguments& args, const std::string& option, uint64_t fallback) {
+  const uint64_t n = parseSeed(valueOr(args, option, std::to_string(fallback)), kDemosUsage, "--" + option);
+  if (n < 1 || n > 1000000) throw UsageError("--" + option + " must be 1 to 1000000", kDemosUsage);
+  return n;
+}
+
+std::string onePositional(const Arguments& args, const std::string& what) {
+  if (args.positional.size() != 1) throw UsageError("demos " + what + " takes one file", kDemosUsage);
+  return args.positional[0];
+}
+
+int generate(int argc, char** argv) {
+  const Arguments args = parseArguments(
+      argc, argv, 3,
+      {"policy", "policy-config", "out", "split", "objects", "per-object", "max-attempts", "workers",
+       "seed", "obs", "controller", "config", "set", "step-timeout", "env-timeout"},
+      {"no-progress"}, kDemosUsage);
+  if (args.positional.size() != 1) throw UsageError("demos generate takes one TASK", kDemosUsage);
+  if (!args.options.count("policy")) throw UsageError("demos generate needs --policy", kDemosUsage);
+  if (!args.options.count("out")) throw UsageError("demos generate needs --out FILE.h5", kDemosUsage);
+  const std::string task = args.positional[0];
+  const std::string out = args.options.at("out");
+
+  GenerationOptions options;
+  EvaluationOptions& evaluation = options.evaluation;
+  evaluation.task = task;
+  evaluation.split = parseSplit(args, "train", kDemosUsage);
+  evaluation.seed = parseSeed(valueOr(args, "seed", "0"), kDemosUsage);
+  evaluation.workers = unsigned(std::min<uint64_t>(parseCount(args, "workers", 1), 256));
+  for (const char* option : {"step-timeout", "env-timeout"})
+    if (args.options.count(option)) {
+      char* end = nullptr;
+      const double seconds = std::strtod(args.options.at(option).c_str(), &end);
+      if (*end || !(seconds > 0)) throw UsageError(std::string("--") + option + " needs a positive number", kDemosUsage);
+      (std::string(option) == "step-timeout" ? evaluation.step_timeout : evaluation.environment_timeout) = seconds;
+    }
+  if (args.options.count("objects")) {
+    try {
+      evaluation.objects = parseIdList(args.options.at("objects"));
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(e.what(), kDemosUsage);
+    }
+  }
+  options.per_object = uint32_t(parseCount(args, "per-object", 1));
+  options.max_attempts = uint32_t(parseCount(args, "max-attempts", 10 * uint64_t(options.per_object)));
+  if (args.options.count("policy-config")) {
+    std::ifstream in(args.options.at("policy-config"));
+    if (!in) throw std::runtime_error("cannot read the policy configuration '" + args.options.at("policy-config") + "'");
+    std::stringstream text;
+    text << in.rdbuf();
+    evaluation.policy_config = text.str();
+  }
+
+  PluginRegistry registry;
+  loadPlugins(registry);
+  evaluation.policy = resolvePolicy(registry, args.options.at("policy"));
+  const PluginEntry& policy = registry.getEntry(PluginKind::Policy, evaluation.policy);
+  const TaskId task_id = resolveTaskId(registry, task);
+  const ConfigSources sources = getConfigSources(args, parseObservationMode(args, kDemosUsage));
+  for (const std::string& file : sources.files) evaluation.config_notes.push_back("--config " + file);
+  for (const std::string& set : sources.overrides) evaluation.config_notes.push_back("--set " + set);
+  const ConfigNode config = loadTaskConfig(registry, task, sources);
+  calcEnvironmentOptions(config);  // bad values fail here, before any worker
+
+  DemoFileInfo info;
+  info.manibench_version = getManibenchVersion();
+  info.task = task_id.task;
+  info.environment_id = task;
+  info.config = formatConfig(config);
+  info.plugins = describePlugins(registry);
+  const LoadedLibrary& policy_library = registry.getLibraries()[policy.library];
+  info.policy = evaluation.policy + " (" + policy_library.path + ", version " + policy_library.version + ")";
+  info.created = formatUtcNow();
+  info.command = joinCommand(argc, argv);
+
+  const EnvironmentFactory factory = [&registry, task, sources] {
+    return makeEnvironment(registry, task, sources, true);
+  };
+  const bool progress = !args.options.count("no-progress") && isatty(STDERR_FILENO);
+  GenerationHooks hooks;
+  if (progress)
+    hooks.on_progress = [](const GenerationProgress& p) {
+      std::string details = ", " + std::to_string(p.episodes) + " episodes";
+      if (p.failures) details += ", " + std::to_string(p.failures) + " failed";
+      drawProgressBar(p.kept, p.wanted, "trajectories", details, p.elapsed);
+    };
+  hooks.should_stop = [] { return StopSignals::isRequested(); };
+  std::cout << "generating " << options.per_object << " trajectory(ies) per object of " << task << " ("
+            << evaluation.split << " split) with policy " << evaluation.policy << ", "
+            << evaluation.workers << " worker(s), into " << out << "\n"
+            << std::flush;
+  GenerationResult result;
+  {
+    StopSignals stop_signals;
+    result = generateDemonstrations(registry, options, factory, out, info, hooks);
+  }
+  if (progress) std::cerr << "\n";
+  std::size_t short_objects = 0;
+  for (const GenerationObjectResult& o : result.objects) {
+    if (o.kept >= options.per_object) continue;
+    ++short_objects;
+    std::cout << "  object " << o.object_id << ": " << o.kept << " of " << options.per_object
+              << " after " << o.attempts << " episode(s)"
+              << (o.failures ? " (" + std::to_string(o.failures) + " failed)" : "") << "\n";
+  }
+  std::cout << "wrote " << result.trajectories << " trajectories of " << result.objects.size()
+            << " object(s) from " << result.episodes << " episodes in " << std::fixed
+            << std::setprecision(2) << result.seconds << " s (" << std::setprecision(1)
+            << (result.seconds > 0 ? double(result.episodes) / result.seconds : 0.0)
+            << " episodes/s) to " << out << " and " << getDemoJsonPath(out) << "\n";
+  std::cout.unsetf(std::ios::fixed);
+  if (result.interrupted) {
+    std::cerr << "manibench: generation stopped (" << result.stop_reason << "); " << out
+              << " holds the " << result.trajectories << " trajectories finished\n";
+    return 130;
+  }
+  if (short_objects) {
+    std::cerr << "manibench: " << short_objects << " object(s) got fewer than " << options.per_object
+              << " successful episodes within " << options.max_attempts << " attempts\n";
+    return 1;
+  }
+  return 0;
+}
+
+int replay(int argc, char** argv) {
+  const Arguments args = parseArguments(argc, argv, 3, {"trajectories"}, {"check"}, kDemosUsage);
+  const std::string path = onePositional(args, "replay");
+  const bool check = args.options.count("check") != 0;
+  const DemoReader reader(path);
+  std::vector<std::string> names = parseTrajectoryList(args);
+  if (names.empty()) names = reader.getTrajectoryNames();
+  PluginRegistry registry;
+  loadPlugins(registry);
+  const std::unique_ptr<Environment> env = makeDemoEnvironment(registry, reader.getInfo());
+  std::size_t identical = 0, differ = 0, unreadable = 0;
+  for (const std::string& name : names) {
+    std::cout << name << ": " << std::flush;
+    try {
+      const Trajectory t = reader.read(name);
+      std::cout << "object " << t.object_id << ", level " << t.level << ", seed " << t.seed << ", "
+                << t.steps << " steps: " << std::flush;
+      const ReplayResult r = replayTrajectory(*env, t, check);
+      if (!check) {
+        std::cout << "replayed " << r.steps << " steps\n";
+      } else if (r.matches) {
+        ++identical;
+        std::cout << "bit-identical\n";
+      } else {
+        ++differ;
+        std::cout << "DIFFERS at " << r.divergence << "\n";
+      }
+    } catch (const std::exception& e) {
+      ++unreadable;
+      std::cout << "error: " << e.what() << "\n";
+    }
+  }
+  std::cout << names.size() << " trajectories";
+  if (check) std::cout << ": " << identical << " bit-identical, " << differ << " differ";
+  if (unreadable) std::cout << ", " << unreadable << " could not be replayed";
+  std::cout << "\n";
+  return differ || unreadable ? 1 : 0;
+}
+
+int convert(int argc, char** argv) {
+  const Arguments args = parseArguments(argc, argv, 3, {"obs", "out", "workers", "trajectories", "set"},
+                                        {"no-progress"}, kDemosUsage);
+  const std::string path = onePositional(args, "convert");
+  const std::optional<ObservationMode> mode = parseObservationMode(args, kDemosUsage);
+  if (!mode) throw UsageError("demos convert needs --obs pointcloud|rgbd|state", kDemosUsage);
+  if (!args.options.count("out")) throw UsageError("demos convert needs --out FILE.h5", kDemosUsage);
+  const std::string out = args.options.at("out");
+  if (out == path) throw UsageError("--out must be another file than the input", kDemosUsage);
+  const unsigned workers = unsigned(std::min<uint64_t>(parseCount(args, "workers", 1), 256));
+  std::vector<std::string> overrides;
+  if (args.repeated.count("set")) overrides = args.repeated.at("set");
+  overrides.push_back(std::string("observation.mode=") + toString(*mode));
+
+  PluginRegistry registry;
+  loadPlugins(registry);
+  DemoFileInfo info;
+  {
+    const DemoReader reader(path);
+    info = reader.getInfo();
+  }
+  info.observation_mode = *mode;
+  info.config = formatConfig(calcDemoConfig(registry, info, overrides));
+  info.plugins = describePlugins(registry);
+  info.manibench_version = getManibenchVersion();
+  info.created = formatUtcNow();
+  info.command = joinCommand(argc, argv);
+  const bool progress = !args.options.count("no-progress") && isatty(STDERR_FILENO);
+  ConversionHooks hooks;
+  if (progress)
+    hooks.on_progress = [](std::size_t done, std::size_t total, double elapsed) {
+      drawProgressBar(done, total, "trajectories", "", elapsed);
+    };
+  hooks.should_stop = [] { return StopSignals::isRequested(); };
+  ConversionResult result;
+  {
+    StopSignals stop_signals;
+    result = convertDemonstrations(registry, path, out, overrides, parseTrajectoryList(args), workers,
+                                   info, hooks);
+  }
+  if (progress) std::cerr << "\n";
+  for (const std::string& failure : result.failed) std::cout << "not converted: " << failure << "\n";
+  std::cout << "wrote " << result.converted << " trajectories in " << toString(*mode) << " mode to "
+            << out << " in " << std::fixed << std::setprecision(2) << result.seconds << " s\n";
+  std::cout.unsetf(std::ios::fixed);
+  if (result.interrupted) return 130;
+  return result.failed.empty() ? 0 : 1;
+}
+
+int info(int argc, char** argv) {
+  const Arguments args = parseArguments(argc, argv, 3, {}, {"write-json"}, kDemosUsage);
+  const std::string path = onePositional(args, "info");
+  const DemoReader reader(path);
+  const DemoFileInfo& info = reader.getInfo();
+  std::cout << "file           " << path << "\n"
+            << "format         manibench-demonstrations, version " << info.format_version << "\n"
+            << "made by        manibench " << info.manibench_version << ", " << info.created << "\n"
+            << "command        " << info.command << "\n"
+            << "task           " << info.task << " (environment " << info.environment_id << ")\n"
+            << "controller     " << info.controller << "\n"
+            << "observations   " << toString(info.observation_mode) << "\n"
+            << "policy         " << info.policy << "\n";
+  std::cout << "conditions    ";
+  for (const std::string& c : info.condition_names) std::cout << " " << c;
+  std::cout << "\n";
+  struct PerObject {
+    std::size_t count = 0, successes = 0, steps = 0;
+    uint32_t shortest = UINT32_MAX, longest = 0;
+  };
+  std::map<std::string, PerObject> objects;
+  std::vector<Trajectory> summaries;
+  std::vector<std::string> names;  // of the summaries
+  uint64_t bytes = 0, steps = 0;
+  std::size_t unreadable = 0;
+  for (const std::string& name : reader.getTrajectoryNames()) {
+    try {
+      const Trajectory t = reader.readSummary(name);
+      bytes += reader.calcStorageBytes(name);
+      steps += t.steps;
+      PerObject& o = objects[t.object_id];
+      ++o.count;
+      o.successes += t.success;
+      o.steps += t.steps;
+      o.shortest = std::min(o.shortest, t.steps);
+      o.longest = std::max(o.longest, t.steps);
+      summaries.push_back(t);
+      names.push_back(name);
+    } catch (const DemoError& e) {
+      ++unreadable;
+      std::cout << "unreadable     " << e.what() << "\n";
+    }
+  }
+  std::cout << "trajectories   " << summaries.size() << " of " << objects.size() << " object(s), "
+            << steps << " steps";
+  if (unreadable) std::cout << " (" << unreadable << " unreadable: the file was cut short?)";
+  std::cout << "\n"
+            << "storage        " << bytes << " bytes, " << std::fixed << std::setprecision(0)
+            << (steps ? double(bytes) / double(steps) : 0.0) << " bytes per step\n\n";
+  std::cout << "object         trajectories  successful  steps (mean, min-max)\n";
+  for (const auto& [id, o] : objects)
+    std::cout << std::left << std::setw(15) << id << std::right << std::setw(12) << o.count
+              << std::setw(12) << o.successes << "  " << std::setprecision(1)
+              << double(o.steps) / double(o.count) << ", " << o.shortest << "-" << o.longest << "\n";
+  std::cout.unsetf(std::ios::fixed);
+  if (args.options.count("write-json")) {
+    const std::string json_path = getDemoJsonPath(path);
+    std::ofstream out(json_path);
+    out << formatDemoJson(info, names, summaries);
+    if (!out) throw std::runtime_error("cannot write '" + json_path + "'");
+    std::cout << "wrote " << json_path << "\n";
+  }
+  return unreadable ? 1 : 0;
+}
+
+}  // namespace
+
+int commandDemos(int argc, char** argv) {
+  const std::string sub = argc > 2 ? argv[2] : "";
+  if (sub.empty() || sub == "--help" || sub == "-h") {
+    std::cout << kDemosUsage;
+    return sub.empty() ? 2 : 0;
+  }
+  for (int i = 3; i < argc; ++i)
+    if (std::string(argv[i]) == "--help" || std::string(argv[i]) == "-h") {
+      std::cout << kDemosUsage;
+      return 0;
+    }
+  if (sub == "generate") return generate(argc, argv);
+  if (sub == "replay") return replay(argc, argv);
+  if (sub == "convert") return convert(argc, argv);
+  if (sub == "info") return info(argc, argv);
+  throw UsageError("unknown demos command '" + sub + "'", kDemosUsage);
+}
+
+}  // namespace manibench::cli

@@ -1,0 +1,162 @@
+// Demonstrations from a policy (supplement C.2): rounds of the evaluation
+// kit's episodes in worker processes, keeping the successful ones (each
+// ends at its first success: the environment stops on success) until every
+// object has its share.
+#include <manibench/demos.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+
+namespace manibench {
+namespace {
+
+// Takes the records of one round as they arrive and writes the successful
+// trajectories in episode-list order (object-major, levels ascending), so
+// that which trajectories are kept does not depend on which worker finished
+// first.
+class RoundWriter {
+ public:
+  RoundWriter(DemoWriter& writer, std::map<std::string, GenerationObjectResult*>& objects,
+              uint32_t per_object)
+      : writer_(writer), objects_(objects), per_object_(per_object) {}
+
+  void take(EpisodeRecord& record) {
+    pending_.emplace(record.spec.index, Pending{record.spec.object_id, record.failed(),
+                                                record.success, std::move(record.trajectory)});
+    while (!pending_.empty() && pending_.begin()->first == next_) {
+      write(pending_.begin()->second);
+      pending_.erase(pending_.begin());
+      ++next_;
+    }
+  }
+  // The rest, in order (a stopped round leaves gaps).
+  void finish() {
+    for (auto& [index, p] : pending_) write(p);
+    pending_.clear();
+  }
+
+ private:
+  struct Pending {
+    std::string object_id;
+    bool failed = false, success = false;
+    std::shared_ptr<const Trajectory> trajectory;
+  };
+
+  void write(const Pending& p) {
+    GenerationObjectResult& object = *objects_.at(p.object_id);
+    ++object.attempts;
+    if (p.failed) ++object.failures;
+    if (p.success && p.trajectory && object.kept < per_object_) {
+      writer_.append(*p.trajectory);
+      ++object.kept;
+    }
+  }
+
+  DemoWriter& writer_;
+  std::map<std::string, GenerationObjectResult*>& objects_;
+  const uint32_t per_object_;
+  std::map<std::size_t, Pending> pending_;
+  std::size_t next_ = 0;
+};
+
+}  // namespace
+
+bool GenerationResult::isComplete(uint32_t per_object) const {
+  return !interrupted && std::all_of(objects.begin(), objects.end(), [&](const GenerationObjectResult& o) {
+           return o.kept >= per_object;
+         });
+}
+
+GenerationResult generateDemonstrations(const PluginRegistry& registry,
+                                        const GenerationOptions& options,
+                                        const EnvironmentFactory& make_environment,
+                                        const std::string& path, const DemoFileInfo& info,
+                                        const GenerationHooks& hooks) {
+  if (options.per_object == 0) throw EvaluationError("the number of trajectories per object must be at least 1");
+  const uint32_t max_attempts = options.max_attempts ? options.max_attempts : 10 * options.per_object;
+  if (max_attempts < options.per_object)
+    throw EvaluationError("at most " + std::to_string(max_attempts) + " attempts per object cannot give " +
+                          std::to_string(options.per_object) + " trajectories");
+  const auto start = std::chrono::steady_clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+
+  GenerationResult result;
+  result.path = path;
+  std::unique_ptr<DemoWriter> writer;
+  std::map<std::string, GenerationObjectResult*> by_id;
+  std::size_t failures = 0;
+  uint64_t next_level = 0;
+  for (;;) {
+    // The objects that still need trajectories and may still try; the
+    // first round sets the list up from the workers' split.
+    std::vector<std::string> needy;
+    uint32_t most_needed = options.per_object;
+    if (result.rounds > 0) {
+      most_needed = 0;
+      for (const GenerationObjectResult& o : result.objects)
+        if (o.kept < options.per_object && o.attempts < max_attempts) {
+          needy.push_back(o.object_id);
+          most_needed = std::max(most_needed, options.per_object - o.kept);
+        }
+      if (needy.empty()) break;
+    }
+    EvaluationOptions round = options.evaluation;
+    round.record_successes = true;
+    if (!needy.empty()) round.objects = needy;
+    round.levels.clear();
+    const uint64_t count = std::min<uint64_t>(most_needed, max_attempts - next_level);
+    for (uint64_t level = next_level; level < next_level + count; ++level) round.levels.push_back(level);
+    next_level += count;
+
+    std::unique_ptr<RoundWriter> round_writer;
+    EvaluationHooks round_hooks;
+    round_hooks.should_stop = hooks.should_stop;
+    round_hooks.on_ready = [&](const EvaluationTaskInfo& task) {
+      if (!writer) {
+        DemoFileInfo complete = info;
+        complete.controller = task.controller;
+        complete.observation_mode = task.observation_mode;
+        complete.condition_names = task.condition_names;
+        writer = std::make_unique<DemoWriter>(path, complete);
+        const std::vector<std::string> objects =
+            options.evaluation.objects.empty() ? task.split_objects : options.evaluation.objects;
+        for (const std::string& id : objects) result.objects.push_back({id, 0, 0, 0});
+        for (GenerationObjectResult& o : result.objects) by_id[o.object_id] = &o;
+      }
+      round_writer = std::make_unique<RoundWriter>(*writer, by_id, options.per_object);
+    };
+    round_hooks.on_episode = [&](EpisodeRecord& record) {
+      ++result.episodes;
+      if (record.failed()) ++failures;
+      round_writer->take(record);
+    };
+    round_hooks.on_progress = [&](const EvaluationProgress&) {
+      if (!hooks.on_progress) return;
+      GenerationProgress p;
+      for (const GenerationObjectResult& o : result.objects) p.kept += std::min(o.kept, options.per_object);
+      p.wanted = std::size_t(options.per_object) * (result.objects.empty() ? 1 : result.objects.size());
+      p.episodes = result.episodes;
+      p.failures = failures;
+      p.elapsed = elapsed();
+      hooks.on_progress(p);
+    };
+    const EvaluationResult evaluation = evaluatePolicy(registry, round, make_environment, round_hooks);
+    if (round_writer) round_writer->finish();
+    ++result.rounds;
+    result.worker_restarts += evaluation.worker_restarts;
+    if (evaluation.interrupted) {
+      result.interrupted = true;
+      result.stop_reason = evaluation.stop_reason;
+      break;
+    }
+  }
+  if (writer) {
+    result.trajectories = writer->getCount();
+    writer->close();
+  }
+  result.seconds = elapsed();
+  return result;
+}
+
+}  // namespace manibench

@@ -1,0 +1,217 @@
+// Demonstration files on Reach-v0 (fast): generated in worker processes,
+// written, read back, replayed bit for bit; what a stopped run, a file cut
+// short and bad files give.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <fstream>
+
+#include "demos/hdf5.hpp"
+#include "demos_support.hpp"
+
+namespace manibench {
+namespace {
+
+using testing::catchMessage;
+using testing::DemoSetup;
+using testing::expectMentions;
+using testing::getBuildTreeRegistry;
+
+const DemoSetup kReach{"Reach-v0", "reach_expert", ""};
+
+template <class T>
+bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+class ReachDemos : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = testing::makeDemoDir("reach");
+    path_ = (dir_ / "reach.h5").string();
+    result_ = testing::generateDemoFile(kReach, path_, 2, 2, {"0", "1", "2", "3", "4"});
+  }
+  static void TearDownTestSuite() { std::filesystem::remove_all(dir_); }
+
+  static std::filesystem::path dir_;
+  static std::string path_;
+  static GenerationResult result_;
+};
+std::filesystem::path ReachDemos::dir_;
+std::string ReachDemos::path_;
+GenerationResult ReachDemos::result_;
+
+TEST_F(ReachDemos, TenTrajectoriesAreWrittenInObjectAndLevelOrder) {
+  ASSERT_TRUE(result_.isComplete(2));
+  EXPECT_EQ(result_.trajectories, 10u);
+  const DemoReader reader(path_);
+  EXPECT_EQ(reader.getInfo().task, "Reach-v0");
+  EXPECT_EQ(reader.getInfo().observation_mode, ObservationMode::State);
+  EXPECT_FALSE(reader.getInfo().controller.empty());
+  EXPECT_EQ(reader.getInfo().condition_names.back(), "success");
+  ASSERT_EQ(reader.getTrajectoryNames().size(), 10u);
+  for (std::size_t i = 0; i < 10; ++i) {
+    const Trajectory t = reader.read(reader.getTrajectoryNames()[i]);
+    EXPECT_EQ(t.object_id, std::to_string(i / 2));
+    EXPECT_EQ(t.level, i % 2);
+    EXPECT_EQ(t.seed, calcEpisodeSeed(0, t.object_id, t.level));
+    ASSERT_GT(t.steps, 0u);
+    EXPECT_TRUE(t.success);
+    // Each ends at its first success (C.2): success only at the last step.
+    EXPECT_EQ(t.success_flags.back(), 1);
+    EXPECT_EQ(t.terminated.back(), 1);
+    EXPECT_EQ(t.truncated.back(), 0);
+    for (uint32_t k = 0; k + 1 < t.steps; ++k) EXPECT_EQ(t.success_flags[k], 0) << "step " << k;
+    EXPECT_EQ(t.getObservationCount(), t.steps + 1);
+    EXPECT_EQ(t.getStateCount(), t.steps + 1);
+    EXPECT_EQ(t.actions.size(), std::size_t(t.steps) * t.action_dim);
+    double total = 0;
+    for (double r : t.rewards) total += r;
+    EXPECT_DOUBLE_EQ(total, t.total_reward);
+  }
+  // The sidecar lists them too.
+  std::ifstream json(getDemoJsonPath(path_));
+  std::stringstream text;
+  text << json.rdbuf();
+  expectMentions(text.str(), {"\"env_id\": \"Reach-v0\"", "\"traj_9\"", "\"elapsed_steps\""});
+}
+
+TEST_F(ReachDemos, EveryTrajectoryReplaysBitIdentically) {
+  const DemoReader reader(path_);
+  const auto env = makeDemoEnvironment(getBuildTreeRegistry(), reader.getInfo());
+  for (const std::string& name : reader.getTrajectoryNames()) {
+    const Trajectory t = reader.read(name);
+    const ReplayResult r = replayTrajectory(*env, t, true);
+    EXPECT_TRUE(r.matches) << name << ": " << r.divergence;
+    EXPECT_EQ(r.steps, t.steps) << name;
+  }
+}
+
+TEST_F(ReachDemos, TheFileDoesNotDependOnTheNumberOfWorkers) {
+  const std::string one = (dir_ / "one_worker.h5").string();
+  testing::generateDemoFile(kReach, one, 2, 1, {"0", "1", "2", "3", "4"});
+  const DemoReader a(path_), b(one);
+  ASSERT_EQ(a.getTrajectoryNames(), b.getTrajectoryNames());
+  for (const std::string& name : a.getTrajectoryNames()) {
+    const Trajectory x = a.read(name), y = b.read(name);
+    EXPECT_TRUE(sameBits(x.actions, y.actions)) << name;
+    const auto env = makeDemoEnvironment(getBuildTreeRegistry(), a.getInfo());
+    for (uint32_t k = 0; k < x.getStateCount() && k < y.getStateCount(); ++k) {
+      const std::string difference = env->findStateDifference(x.getEnvState(k), y.getEnvState(k));
+      EXPECT_EQ(difference, "") << name << ", state " << k;
+      if (!difference.empty()) break;
+    }
+    EXPECT_TRUE(sameBits(x.state, y.state)) << name;
+  }
+}
+
+TEST_F(ReachDemos, ReplayNamesTheFirstDifference) {
+  const DemoReader reader(path_);
+  Trajectory t = reader.read("traj_3");
+  ASSERT_GT(t.steps, 8u);
+  t.actions[5 * t.action_dim] += 0.25;  // the action of step 5
+  const auto env = makeDemoEnvironment(getBuildTreeRegistry(), reader.getInfo());
+  const ReplayResult r = replayTrajectory(*env, t, true);
+  EXPECT_FALSE(r.matches);
+  EXPECT_EQ(r.steps, 6u);
+  expectMentions(r.divergence, {"step 6"});
+}
+
+TEST_F(ReachDemos, AStateOfAnotherTaskIsRefusedNamingBoth) {
+  const DemoReader reader(path_);
+  const Trajectory t = reader.read("traj_0");
+  DemoFileInfo other = reader.getInfo();
+  Environment env(getBuildTreeRegistry(), "OpenCabinetDrawer-v0");
+  const std::string message = catchMessage<std::invalid_argument>([&] { replayTrajectory(env, t, true); });
+  expectMentions(message, {"Reach-v0", "OpenCabinetDrawer-v0"});
+}
+
+TEST_F(ReachDemos, AFileCutShortKeepsTheTrajectoriesBeforeTheCut) {
+  const std::string cut = (dir_ / "cut.h5").string();
+  std::filesystem::copy_file(path_, cut, std::filesystem::copy_options::overwrite_existing);
+  const auto size = std::filesystem::file_size(cut);
+  std::filesystem::resize_file(cut, size / 2);
+  const DemoReader reader(cut);
+  const auto env = makeDemoEnvironment(getBuildTreeRegistry(), reader.getInfo());
+  std::size_t readable = 0, unreadable = 0;
+  bool cut_seen = false;
+  for (const std::string& name : reader.getTrajectoryNames()) {
+    try {
+      const Trajectory t = reader.read(name);
+      EXPECT_FALSE(cut_seen) << name << " reads after an unreadable one";
+      EXPECT_TRUE(replayTrajectory(*env, t, true).matches) << name;
+      ++readable;
+    } catch (const DemoError& e) {
+      cut_seen = true;
+      ++unreadable;
+      expectMentions(e.what(), {cut, name});
+    }
+  }
+  EXPECT_GE(readable, 2u);
+  EXPECT_GE(unreadable, 1u);
+}
+
+TEST_F(ReachDemos, AStoppedGenerationKeepsEveryFinishedTrajectory) {
+  const std::string stopped = (dir_ / "stopped.h5").string();
+  std::size_t kept = 0;
+  GenerationHooks hooks;
+  hooks.on_progress = [&](const GenerationProgress& p) { kept = p.kept; };
+  hooks.should_stop = [&] { return kept >= 3; };
+  const GenerationResult result = testing::generateDemoFile(kReach, stopped, 30, 1, {"0", "1"}, hooks);
+  EXPECT_TRUE(result.interrupted);
+  EXPECT_GE(result.trajectories, 3u);
+  EXPECT_LT(result.trajectories, 60u);
+  const DemoReader reader(stopped);
+  EXPECT_EQ(reader.getTrajectoryNames().size(), result.trajectories);
+  const auto env = makeDemoEnvironment(getBuildTreeRegistry(), reader.getInfo());
+  for (const std::string& name : reader.getTrajectoryNames())
+    EXPECT_TRUE(replayTrajectory(*env, reader.read(name), true).matches) << name;
+}
+
+TEST_F(ReachDemos, BadFilesAreClearErrors) {
+  using namespace demos_detail;
+  const std::string missing = (dir_ / "missing.h5").string();
+  expectMentions(catchMessage<DemoError>([&] { DemoReader r(missing); }), {missing, "cannot be read"});
+  expectMentions(catchMessage<DemoError>([&] { DemoReader r(dir_.string()); }), {dir_.string(), "is a directory"});
+  const std::string text = (dir_ / "text.h5").string();
+  std::ofstream(text) << "trajectories, honestly\n";
+  expectMentions(catchMessage<DemoError>([&] { DemoReader r(text); }), {text, "not an HDF5 file"});
+
+  const std::string foreign = (dir_ / "foreign.h5").string();
+  {
+    Handle file = createFile(foreign);
+    writeAttribute(file, "title", std::string("someone else's data"));
+  }
+  expectMentions(catchMessage<DemoError>([&] { DemoReader r(foreign); }), {foreign, "not a manibench demonstration file"});
+
+  // A later format version, and a trajectory without its rewards.
+  const std::string edited = (dir_ / "edited.h5").string();
+  std::filesystem::copy_file(path_, edited, std::filesystem::copy_options::overwrite_existing);
+  {
+    Handle file(H5Fopen(edited.c_str(), H5F_ACC_RDWR, H5P_DEFAULT));
+    ASSERT_TRUE(file.valid());
+    ASSERT_GE(H5Ldelete(file.get(), "traj_1/rewards", H5P_DEFAULT), 0);
+  }
+  {
+    const DemoReader reader(edited);
+    expectMentions(catchMessage<DemoError>([&] { reader.read("traj_1"); }), {edited, "traj_1", "rewards"});
+    EXPECT_EQ(reader.read("traj_2").object_id, "1");  // the others still read
+    expectMentions(catchMessage<DemoError>([&] { reader.read("traj_77"); }), {edited, "traj_77", "no such trajectory"});
+  }
+  {
+    Handle file(H5Fopen(edited.c_str(), H5F_ACC_RDWR, H5P_DEFAULT));
+    writeAttribute(file, "format_version", uint64_t(7));
+  }
+  expectMentions(catchMessage<DemoError>([&] { DemoReader r(edited); }), {edited, "format version 7", "version 1"});
+
+  // A blob that is not an environment state.
+  const DemoReader reader(path_);
+  Trajectory t = reader.read("traj_0");
+  t.env_states.assign(t.env_states.size(), 0xAB);
+  const auto env = makeDemoEnvironment(getBuildTreeRegistry(), reader.getInfo());
+  EXPECT_FALSE(catchMessage<std::exception>([&] { replayTrajectory(*env, t, true); }).empty());
+}
+
+}  // namespace
+}  // namespace manibench
