@@ -277,8 +277,6 @@ int convert(int argc, char** argv) {
     const DemoReader reader(path);
     info = reader.getInfo();
   }
-  info.observation_mode = *mode;
-  info.config = formatConfig(calcDemoConfig(registry, info, overrides));
   info.plugins = describePlugins(registry);
   info.manibench_version = getManibenchVersion();
   info.created = formatUtcNow();

@@ -197,8 +197,10 @@ std::unique_ptr<Environment> makeDemoEnvironment(const PluginRegistry& registry,
 // into a new file at `out_path` whose observations are those of `env`'s
 // configuration with `overrides` (observation.mode=pointcloud, say), in
 // `workers` forked processes (each with its own environment and EGL
-// context). A trajectory that cannot be read or converted is reported in
-// `failed` and skipped; a stop keeps what was converted.
+// context). The output is described by `out_info_base` with the
+// configuration and observation mode the overrides make. A trajectory that
+// cannot be read or converted is reported in `failed` and skipped; a stop
+// keeps what was converted.
 struct ConversionResult {
   std::size_t converted = 0;
   std::vector<std::string> failed;  // "traj_3: why"

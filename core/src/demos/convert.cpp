@@ -78,15 +78,21 @@ ConversionResult convertDemonstrations(const PluginRegistry& registry, const std
                                        const std::string& out_path,
                                        const std::vector<std::string>& overrides,
                                        const std::vector<std::string>& selected, unsigned workers,
-                                       const DemoFileInfo& out_info, const ConversionHooks& hooks) {
+                                       const DemoFileInfo& out_info_base, const ConversionHooks& hooks) {
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   if (workers < 1 || workers > 256) throw DemoError("the number of workers must be 1 to 256");
   std::vector<std::string> names;
+  DemoFileInfo out_info = out_info_base;
   {
     // Read what is needed and close the file before forking: HDF5's handles
     // do not cross a fork.
     const DemoReader reader(in_path);
+    // The output's configuration is the input's with the overrides: what
+    // its replays build.
+    const ConfigNode config = calcDemoConfig(registry, reader.getInfo(), overrides);
+    out_info.config = formatConfig(config);
+    out_info.observation_mode = calcEnvironmentOptions(config).observation.mode;
     const std::vector<std::string>& all = reader.getTrajectoryNames();
     names = selected.empty() ? all : selected;
     for (const std::string& name : names)

@@ -113,6 +113,12 @@ Handle openForReading(const std::string& path) {
   // beyond the cut then fails on its own, trajectory by trajectory.
   hbool_t skip = 1;
   if (H5Pexist(fapl.get(), "skip_eof_check") > 0) H5Pset(fapl.get(), "skip_eof_check", &skip);
+  // A reader does not lock, and ignores the "open for writing" mark of a
+  // file still being generated or left by a killed run (what h5clear
+  // removes): it reads what was flushed.
+  check(H5Pset_file_locking(fapl.get(), false, true), "H5Pset_file_locking");
+  hbool_t clear = 1;
+  if (H5Pexist(fapl.get(), "clear_status_flags") > 0) H5Pset(fapl.get(), "clear_status_flags", &clear);
   H5Eclear2(H5E_DEFAULT);
   return Handle(check(H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.get()),
                       "cannot open '" + path + "' as an HDF5 file"));
