@@ -47,6 +47,8 @@ class JointVelocityStage {
   }
   double getMaxVelocity(std::size_t joint) const { return max_velocity_[joint]; }
   void reset() { filter_.reset(); }
+  void saveState(manibench::sdk::StateWriter& out) const { filter_.saveState(out); }
+  void restoreState(manibench::sdk::StateReader& in) { filter_.restoreState(in); }
   // `velocity` in joint units; writes one damping drive per joint.
   void apply(const Eigen::VectorXd& velocity, std::vector<DriveCommand>& drives) {
     const Eigen::VectorXd& filtered = filter_.filter(velocity);
@@ -66,7 +68,7 @@ std::vector<Segment> perJointSegments(const ControllerContext& context, const st
   return segments;
 }
 
-class JointVelocityController : public manibench::sdk::Controller {
+class JointVelocityController : public manibench::sdk::Controller, public manibench::sdk::Stateful {
  public:
   JointVelocityController(const Config& config, const ControllerContext& context)
       : context_(context), stage_(config, context) {}
@@ -83,13 +85,15 @@ class JointVelocityController : public manibench::sdk::Controller {
       velocity[j] = action[j] * stage_.getMaxVelocity(std::size_t(j));
     stage_.apply(velocity, drives);
   }
+  void saveState(manibench::sdk::StateWriter& out) const override { stage_.saveState(out); }
+  void restoreState(manibench::sdk::StateReader& in) override { stage_.restoreState(in); }
 
  private:
   ControllerContext context_;
   JointVelocityStage stage_;
 };
 
-class JointPositionController : public manibench::sdk::Controller {
+class JointPositionController : public manibench::sdk::Controller, public manibench::sdk::Stateful {
  public:
   JointPositionController(const Config& config, const ControllerContext& context)
       : context_(context),
@@ -132,6 +136,22 @@ class JointPositionController : public manibench::sdk::Controller {
     }
     first_step_ = false;
     stage_.apply(velocity, drives);
+  }
+  void saveState(manibench::sdk::StateWriter& out) const override {
+    stage_.saveState(out);
+    out.writeMatrix(integral_);
+    out.writeMatrix(previous_error_);
+    out.write<uint8_t>(first_step_);
+  }
+  void restoreState(manibench::sdk::StateReader& in) override {
+    stage_.restoreState(in);
+    const Eigen::Index joints = integral_.size();
+    in.readMatrix(integral_);
+    in.readMatrix(previous_error_);
+    first_step_ = in.read<uint8_t>() != 0;
+    if (integral_.size() != joints || previous_error_.size() != joints)
+      throw manibench::sdk::Error("joint_position state: PID terms for another number of joints",
+                                  MB_INVALID_ARGUMENT);
   }
 
  private:

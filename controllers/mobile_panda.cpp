@@ -37,7 +37,7 @@ using manibench::sdk::ControllerSpec;
 using manibench::sdk::DriveCommand;
 using manibench::sdk::SceneView;
 
-class MobilePandaController : public manibench::sdk::Controller {
+class MobilePandaController : public manibench::sdk::Controller, public manibench::sdk::Stateful {
  public:
   MobilePandaController(const Config& config, const ControllerContext& context)
       : context_(context), settings_(config, "mobile_panda"), joints_(context, "mobile_panda") {
@@ -84,6 +84,8 @@ class MobilePandaController : public manibench::sdk::Controller {
       setGripperDrives(arms[i], settings_, finger_targets[i], drives);
     }
   }
+  void saveState(manibench::sdk::StateWriter& out) const override { stage_->saveState(out); }
+  void restoreState(manibench::sdk::StateReader& in) override { stage_->restoreState(in); }
 
  private:
   ControllerContext context_;

@@ -83,7 +83,7 @@ Eigen::Matrix3d fromRotationVector(const Eigen::Vector3d& v) {
   return Eigen::AngleAxisd(angle, v / angle).toRotationMatrix();
 }
 
-class MobilePandaEeController : public manibench::sdk::Controller {
+class MobilePandaEeController : public manibench::sdk::Controller, public manibench::sdk::Stateful {
  public:
   MobilePandaEeController(const Config& config, const ControllerContext& context)
       : context_(context),
@@ -154,6 +154,24 @@ class MobilePandaEeController : public manibench::sdk::Controller {
       for (int j = 0; j < kPandaArmJoints; ++j)
         setDampingDrive(drives[arms[i].joints[j]], filtered[v++], settings_.arm_damping[j]);
       setGripperDrives(arms[i], settings_, finger_targets[i], drives);
+    }
+  }
+
+  // The filter and the integrated TCP targets (the links come from reset).
+  void saveState(manibench::sdk::StateWriter& out) const override {
+    stage_->saveState(out);
+    out.write<uint64_t>(targets_.size());
+    for (const Eigen::Isometry3d& target : targets_) out.writeMatrix(target.matrix());
+  }
+  void restoreState(manibench::sdk::StateReader& in) override {
+    stage_->restoreState(in);
+    if (in.read<uint64_t>() != targets_.size())
+      throw Error("mobile_panda_ee state: TCP targets for another number of arms",
+                  MB_INVALID_ARGUMENT);
+    for (Eigen::Isometry3d& target : targets_) {
+      Eigen::Matrix4d m;
+      in.readMatrix(m);
+      target.matrix() = m;
     }
   }
 

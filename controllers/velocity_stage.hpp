@@ -60,6 +60,16 @@ class VelocityStage {
     filtered_ = alpha_ * velocity + (1.0 - alpha_) * filtered_;
     return filtered_;
   }
+  // The filter's memory is episode state (sdk::Stateful).
+  void saveState(sdk::StateWriter& out) const { out.writeMatrix(filtered_); }
+  void restoreState(sdk::StateReader& in) {
+    const Eigen::Index size = filtered_.size();
+    in.readMatrix(filtered_);
+    if (filtered_.size() != size)
+      throw sdk::Error("controller state: a filter of " + std::to_string(filtered_.size()) +
+                           " values for " + std::to_string(size) + " joints",
+                       MB_INVALID_ARGUMENT);
+  }
 
  private:
   double alpha_;

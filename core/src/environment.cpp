@@ -1,8 +1,10 @@
 #include <manibench/environment.hpp>
+#include <manibench/sdk/state.hpp>
 #include <manibench/task_name.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -193,6 +195,12 @@ void Environment::observe() {
 }
 
 void Environment::reset(const std::string& object_id, uint64_t seed) {
+  startEpisode(object_id, seed);
+  observe();
+  episode_started_ = true;
+}
+
+void Environment::startEpisode(const std::string& object_id, uint64_t seed) {
   if (!fixed_objects_.empty() &&
       std::find(fixed_objects_.begin(), fixed_objects_.end(), object_id) == fixed_objects_.end()) {
     std::string objects;
@@ -219,8 +227,6 @@ void Environment::reset(const std::string& object_id, uint64_t seed) {
   bridge_->setStateChangesAllowed(false);
   drives_.assign(actuated_joints_.size(), DriveCommand{});
   scene_->setDriveCommands(robot_, actuated_joints_, drives_);
-  observe();
-  episode_started_ = true;
 }
 
 StepResult Environment::step(const Eigen::VectorXd& action) {
@@ -260,6 +266,115 @@ StepResult Environment::step(const Eigen::VectorXd& action) {
                 (options_.stop_on_success && result.success);
   observe();
   return result;
+}
+
+// --- episode state blobs ---------------------------------------------------------
+
+namespace {
+
+// Version 1, host byte order: "MBEN", version, task, object, seed, step,
+// then the scene's, the controller's (with its name) and the task's bytes,
+// each with its length.
+constexpr char kStateMagic[4] = {'M', 'B', 'E', 'N'};
+constexpr uint32_t kStateVersion = 1;
+
+void writeBlob(sdk::StateWriter& out, const std::vector<uint8_t>& bytes) {
+  out.write<uint64_t>(bytes.size());
+  out.writeBytes(bytes.data(), bytes.size());
+}
+
+std::vector<uint8_t> readBlob(sdk::StateReader& in) {
+  const uint64_t size = in.read<uint64_t>();
+  if (size > in.getRemaining())
+    throw std::invalid_argument("a part of " + std::to_string(size) + " bytes where " +
+                                std::to_string(in.getRemaining()) + " are left");
+  std::vector<uint8_t> bytes(size);
+  in.readBytes(bytes.data(), bytes.size());
+  return bytes;
+}
+
+Environment::StateHeader readHeader(sdk::StateReader& in) {
+  char magic[4];
+  in.readBytes(magic, sizeof magic);
+  if (std::memcmp(magic, kStateMagic, sizeof magic) != 0)
+    throw std::invalid_argument("not a manibench environment state (no MBEN header)");
+  Environment::StateHeader header;
+  header.version = in.read<uint32_t>();
+  if (header.version != kStateVersion)
+    throw std::invalid_argument("environment state version " + std::to_string(header.version) +
+                                ", this build reads version " + std::to_string(kStateVersion));
+  in.read(header.task);
+  in.read(header.object_id);
+  in.read(header.seed);
+  in.read(header.step);
+  return header;
+}
+
+}  // namespace
+
+std::vector<uint8_t> Environment::saveState() {
+  if (!episode_started_)
+    throw std::logic_error("Environment::saveState() before reset(): no episode to save");
+  sdk::StateWriter out;
+  out.writeBytes(kStateMagic, sizeof kStateMagic);
+  out.write(kStateVersion);
+  out.write(description_.name);
+  out.write(object_id_);
+  out.write(seed_);
+  out.write(elapsed_steps_);
+  writeBlob(out, scene_->encodeState(scene_->saveState()));
+  out.write(controller_->getDescription().name);
+  writeBlob(out, controller_->saveState());
+  writeBlob(out, task_->saveState());
+  return out.bytes();
+}
+
+Environment::StateHeader Environment::readStateHeader(const std::vector<uint8_t>& blob) {
+  try {
+    sdk::StateReader in(blob.data(), blob.size());
+    return readHeader(in);
+  } catch (const sdk::Error& e) {
+    throw std::invalid_argument(std::string("environment state cut short: ") + e.what());
+  }
+}
+
+void Environment::restoreState(const std::vector<uint8_t>& blob) {
+  StateHeader header;
+  std::vector<uint8_t> scene_bytes, controller_bytes, task_bytes;
+  std::string controller;
+  try {
+    sdk::StateReader in(blob.data(), blob.size());
+    header = readHeader(in);
+    if (header.task != description_.name)
+      throw std::invalid_argument("a state of task '" + header.task + "', this environment is '" +
+                                  description_.name + "'");
+    scene_bytes = readBlob(in);
+    in.read(controller);
+    controller_bytes = readBlob(in);
+    task_bytes = readBlob(in);
+    if (!in.atEnd())
+      throw std::invalid_argument(std::to_string(in.getRemaining()) + " bytes left over");
+  } catch (const sdk::Error& e) {
+    throw std::invalid_argument(std::string("environment state cut short: ") + e.what());
+  }
+  if (controller != controller_->getDescription().name)
+    throw std::invalid_argument("a state of controller '" + controller +
+                                "', this environment drives '" +
+                                controller_->getDescription().name + "'");
+  // A reset from the blob's seed makes every choice the episode's reset
+  // made (the task's randomization, its target, the controller's links);
+  // the bytes then give what changed since.
+  startEpisode(header.object_id, header.seed);
+  try {
+    scene_->restoreState(scene_->decodeState(scene_bytes.data(), scene_bytes.size()));
+  } catch (const SceneError& e) {
+    throw std::invalid_argument(e.what());
+  }
+  controller_->restoreState(controller_bytes);
+  task_->restoreState(task_bytes);
+  elapsed_steps_ = header.step;
+  observe();
+  episode_started_ = true;
 }
 
 }  // namespace manibench

@@ -22,6 +22,43 @@ void callPlugin(const char* kind, const std::string& name, const char* call, Fn 
   }
 }
 
+// ABI 1.2's get_state/set_state of a task or controller descriptor; an
+// older plugin lacks them.
+template <class Descriptor>
+void requireStateCalls(const Descriptor& d, const char* kind, const std::string& name,
+                       const std::string& library) {
+  if (!MB_HAS_FIELD(Descriptor, set_state, d.header.struct_size) || !d.get_state || !d.set_state)
+    throw PluginCallError(std::string(kind) + " '" + name + "' (" + library +
+                              ") cannot save or restore its state: it was built against an "
+                              "ABI older than 1.2, which adds get_state and set_state; "
+                              "rebuild it against this SDK",
+                          MB_UNSUPPORTED);
+}
+
+template <class Descriptor, class Handle>
+std::vector<uint8_t> callGetState(const Descriptor& d, Handle* handle, const char* kind,
+                                  const std::string& name, const std::string& library) {
+  requireStateCalls(d, kind, name, library);
+  std::vector<uint8_t> bytes(1024);
+  uint64_t size = 0;
+  callPlugin(kind, name, "get_state", d.get_state, handle, bytes.data(),
+             uint64_t(bytes.size()), &size);
+  if (size > bytes.size()) {  // asked again with room for it
+    bytes.resize(size);
+    callPlugin(kind, name, "get_state", d.get_state, handle, bytes.data(),
+               uint64_t(bytes.size()), &size);
+  }
+  bytes.resize(size);
+  return bytes;
+}
+
+template <class Descriptor, class Handle>
+void callSetState(const Descriptor& d, Handle* handle, const char* kind, const std::string& name,
+                  const std::string& library, const std::vector<uint8_t>& bytes) {
+  requireStateCalls(d, kind, name, library);
+  callPlugin(kind, name, "set_state", d.set_state, handle, bytes.data(), uint64_t(bytes.size()));
+}
+
 std::vector<SegmentDescription> toSegments(const mb_segment* segments, uint32_t count,
                                            uint32_t dim, const char* what,
                                            const std::string& owner) {
@@ -160,12 +197,22 @@ void TaskInstance::evaluateSuccess(SceneBridge& scene, std::vector<uint8_t>& fla
              static_cast<uint32_t>(n));
 }
 
+std::vector<uint8_t> TaskInstance::saveState() {
+  return callGetState(*descriptor_, handle_, "task", description_.name, library_path_);
+}
+
+void TaskInstance::restoreState(const std::vector<uint8_t>& bytes) {
+  callSetState(*descriptor_, handle_, "task", description_.name, library_path_, bytes);
+}
+
 // ---- controller ----------------------------------------------------------
 
 ControllerInstance::ControllerInstance(const PluginRegistry& registry, const std::string& name,
                                        const std::string& config_yaml,
                                        const mb_controller_context& context)
-    : descriptor_(&registry.getController(name)) {
+    : descriptor_(&registry.getController(name)),
+      library_path_(
+          registry.getLibraries()[registry.getEntry(PluginKind::Controller, name).library].path) {
   callPlugin("controller", name, "create", descriptor_->create, config_yaml.c_str(), &context,
              &handle_);
   if (handle_ == nullptr)
@@ -200,6 +247,14 @@ void ControllerInstance::compute(SceneBridge& scene, const Eigen::VectorXd& acti
              SceneBridge::getApi(), scene.getHandle(), action.data(),
              static_cast<uint32_t>(action.size()), drives.data(),
              static_cast<uint32_t>(drives.size()));
+}
+
+std::vector<uint8_t> ControllerInstance::saveState() {
+  return callGetState(*descriptor_, handle_, "controller", description_.name, library_path_);
+}
+
+void ControllerInstance::restoreState(const std::vector<uint8_t>& bytes) {
+  callSetState(*descriptor_, handle_, "controller", description_.name, library_path_, bytes);
 }
 
 // ---- policy ----------------------------------------------------------------

@@ -28,11 +28,13 @@ std::string abiString(unsigned major, unsigned minor) {
 }
 
 // The smallest struct a plugin may hand us for each kind: the size the
-// oldest accepted minor version (kRequiredAbiMinor) defined.
+// oldest accepted minor version (kRequiredAbiMinor) defined. ABI 1.2's
+// state functions are optional: an older plugin ends before them.
 std::size_t calcMinimumDescriptorSize(uint32_t kind) {
+  static_assert(kRequiredAbiMinor < 2, "raise the minimum sizes with kRequiredAbiMinor");
   switch (kind) {
-    case MB_KIND_TASK: return sizeof(mb_task_descriptor);
-    case MB_KIND_CONTROLLER: return sizeof(mb_controller_descriptor);
+    case MB_KIND_TASK: return offsetof(mb_task_descriptor, get_state);
+    case MB_KIND_CONTROLLER: return offsetof(mb_controller_descriptor, get_state);
     case MB_KIND_POLICY: return sizeof(mb_policy_descriptor);
     default: return 0;
   }

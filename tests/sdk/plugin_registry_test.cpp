@@ -223,7 +223,7 @@ std::vector<BrokenFixture> brokenFixtures() {
       {"fixture_small_manifest", {"manifest", "struct_size"}, {8, sizeof(mb_manifest)}},
       {"fixture_small_descriptor",
        {"struct_size", "task", "SmallDescriptor-v0"},
-       {sizeof(mb_descriptor), sizeof(mb_task_descriptor)},
+       {sizeof(mb_descriptor), offsetof(mb_task_descriptor, get_state)},  // ABI 1.0's size
        "SmallDescriptor-v0",
        PluginKind::Task},
       {"fixture_no_entry", {MB_ENTRY_POINT_NAME}, {}},

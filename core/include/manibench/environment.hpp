@@ -83,6 +83,29 @@ class Environment {
   const VisualObservation& getVisualObservation() const { return visual_; }
   ObservationMode getObservationMode() const { return options_.observation.mode; }
   const EnvironmentOptions& getOptions() const { return options_; }
+
+  // The whole episode state as one versioned blob (docs/demonstrations.md):
+  // task, object, seed and step, the scene (positions, speeds, friction
+  // anchors, drives), the controller's and the task's own state (ABI 1.2).
+  // restoreState resets the blob's object from the blob's seed (so the
+  // plugins choose again what their resets chose), then sets everything
+  // else, and observes: the steps that follow are bit-identical to those
+  // that followed the save (under implicit_euler; integrators with a step
+  // history restart at each save, see Scene::saveState). Throws
+  // std::invalid_argument for a blob of another task, of an unknown
+  // version, cut short, or made by another scene structure; PluginCallError
+  // when a plugin cannot save or restore (built against ABI < 1.2).
+  std::vector<uint8_t> saveState();
+  void restoreState(const std::vector<uint8_t>& blob);
+  // The task, object, seed and step a blob holds, without restoring it
+  // (throws as restoreState for a blob that is not one).
+  struct StateHeader {
+    uint32_t version = 0;
+    std::string task, object_id;
+    uint64_t seed = 0;
+    uint32_t step = 0;
+  };
+  static StateHeader readStateHeader(const std::vector<uint8_t>& blob);
   // The cameras, masks and renderer of the current scene: `render`, videos
   // and tests render through it in any mode (only then is a renderer made).
   const VisualObserver& getObserver() const { return *observer_; }
@@ -95,6 +118,9 @@ class Environment {
 
  private:
   void buildScene(const std::string& object_id);
+  // reset() but the first observation: the scene of `object_id` in its
+  // built state, the task's and controller's resets from `seed`.
+  void startEpisode(const std::string& object_id, uint64_t seed);
   // The options' per-body settings, on a scene the task has just built.
   void applySceneOptions(const std::string& object_id);
   std::string describeEpisode() const;

@@ -76,6 +76,11 @@ class TaskInstance {
   double computeReward(SceneBridge& scene, const Eigen::VectorXd& action);
   void evaluateSuccess(SceneBridge& scene, std::vector<uint8_t>& flags,
                        std::vector<double>& values);
+  // ABI 1.2 (abi.h, "state"): the task's episode state as bytes, and back.
+  // A plugin built against an older ABI throws a PluginCallError that says
+  // so (MB_UNSUPPORTED).
+  std::vector<uint8_t> saveState();
+  void restoreState(const std::vector<uint8_t>& bytes);
 
  private:
   const mb_task_descriptor* descriptor_;
@@ -97,10 +102,14 @@ class ControllerInstance {
   void reset(SceneBridge& scene);
   void compute(SceneBridge& scene, const Eigen::VectorXd& action,
                std::vector<DriveCommand>& drives);
+  // As TaskInstance's.
+  std::vector<uint8_t> saveState();
+  void restoreState(const std::vector<uint8_t>& bytes);
 
  private:
   const mb_controller_descriptor* descriptor_;
   mb_controller* handle_ = nullptr;
+  std::string library_path_;
   ControllerDescription description_;
 };
 

@@ -324,6 +324,13 @@ class Scene {
   // continues bit-identically to the uninterrupted one.
   SceneState saveState();
   void restoreState(const SceneState& state);
+  // A saved state as bytes and back (for Environment's state blobs and
+  // demonstrations): time, positions, speeds, friction anchors, drive
+  // commands and joint dynamics, in host byte order. decodeState throws
+  // SceneError for bytes of another version or of a scene of another
+  // structure (other articulations, joints or contact shapes).
+  std::vector<std::uint8_t> encodeState(const SceneState& state) const;
+  SceneState decodeState(const std::uint8_t* data, std::size_t size) const;
 
  private:
   struct Impl;

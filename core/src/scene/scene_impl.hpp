@@ -214,6 +214,10 @@ struct Scene::Impl {
   void finalize();
   void buildArticulation(Articulation& art, std::vector<ContactShape>& shapes);
 
+  // What a state's bytes must agree with (scene_state_bytes.cpp): names
+  // and counts, not values.
+  uint64_t calcStructureFingerprint() const;
+
   // --- stepping ---
   void advance(double dt);
   IntegratorStatistics calcIntegratorStatistics() const;

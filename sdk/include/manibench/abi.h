@@ -32,6 +32,14 @@
  *    C compute followed by one control tick of physics; T compute_reward;
  *    T evaluate_success exactly once; T observe. A step never comes before
  *    its episode's resets, and a failed call ends the episode.
+ *  - ABI 1.2, state: between steps the host may call T get_state and
+ *    C get_state. To restore an episode it resets it from the episode's
+ *    seed (T reset, C reset, so that everything a reset chose is chosen
+ *    again), sets the scene's state, then calls T set_state and C
+ *    set_state with the bytes they gave, then T observe. A plugin's state
+ *    is what changes during an episode outside the scene (filters,
+ *    integrators, counters); bytes it did not write are an error it
+ *    reports.
  *
  * Entry point: a plugin library exports one data symbol named
  * MB_ENTRY_POINT_NAME ("manibench_plugin_entry") of type `const void*`
@@ -49,7 +57,7 @@ extern "C" {
 #endif
 
 #define MB_ABI_MAJOR 1
-#define MB_ABI_MINOR 1
+#define MB_ABI_MINOR 2
 #define MB_ENTRY_POINT_NAME "manibench_plugin_entry"
 
 /* True when `field` of struct type `type` lies within `size` bytes. */
@@ -315,6 +323,14 @@ typedef struct mb_task_descriptor {
                                 mb_scene* scene, uint8_t* out_flags,
                                 double* out_values, uint32_t count,
                                 mb_error* err);
+
+  /* ---- ABI 1.2: episode state (see the contract above) ----------------- */
+  /* Writes the task's state into `out` if it fits in `capacity` bytes, and
+   * its size into *out_size either way (out may be NULL to ask the size). */
+  mb_status (*get_state)(mb_task* task, uint8_t* out, uint64_t capacity,
+                         uint64_t* out_size, mb_error* err);
+  mb_status (*set_state)(mb_task* task, const uint8_t* data, uint64_t size,
+                         mb_error* err);
 } mb_task_descriptor;
 
 /* ---- controller ------------------------------------------------------- */
@@ -359,6 +375,12 @@ typedef struct mb_controller_descriptor {
                        mb_scene* scene, const double* action,
                        uint32_t action_dim, mb_drive_command* out,
                        uint32_t joint_count, mb_error* err);
+
+  /* ---- ABI 1.2: episode state, as the task's ------------------------- */
+  mb_status (*get_state)(mb_controller* controller, uint8_t* out,
+                         uint64_t capacity, uint64_t* out_size, mb_error* err);
+  mb_status (*set_state)(mb_controller* controller, const uint8_t* data,
+                         uint64_t size, mb_error* err);
 } mb_controller_descriptor;
 
 /* ---- policy ----------------------------------------------------------- */

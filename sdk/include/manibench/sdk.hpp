@@ -8,4 +8,5 @@
 #include <manibench/sdk/policy.hpp>
 #include <manibench/sdk/registry.hpp>
 #include <manibench/sdk/scene_view.hpp>
+#include <manibench/sdk/state.hpp>
 #include <manibench/sdk/task.hpp>

@@ -104,6 +104,15 @@ void ContactForce::realizeTopology(SimTK::State& state) const {
       state, SimTK::Stage::Dynamics, new SimTK::Value<FrictionAnchorSet>(), SimTK::Stage::Velocity);
 }
 
+const FrictionAnchorSet& ContactForce::getAnchors(const SimTK::State& state) const {
+  return forces_.getDiscreteVariable(state, anchors_index_).getValue<FrictionAnchorSet>();
+}
+
+void ContactForce::setAnchors(SimTK::State& state, FrictionAnchorSet anchors) const {
+  forces_.updDiscreteVariable(state, anchors_index_).updValue<FrictionAnchorSet>() =
+      std::move(anchors);
+}
+
 ContactForce::PairMaterial ContactForce::combine(const ContactMaterial& a,
                                                  const ContactMaterial& b) {
   PairMaterial m;

@@ -94,6 +94,10 @@ class ContactForce : public SimTK::Force::Custom::Implementation, public Implici
   int getNumShapes() const { return static_cast<int>(shapes_.size()); }
   const ContactShape& getShape(int i) const { return shapes_[i]; }
 
+  // The friction anchors a state holds (part of what a saved state is).
+  const FrictionAnchorSet& getAnchors(const SimTK::State& state) const;
+  void setAnchors(SimTK::State& state, FrictionAnchorSet anchors) const;
+
   // One contact point's force, for queries (Ground frame).
   struct Report {
     int shape_a = -1, shape_b = -1;

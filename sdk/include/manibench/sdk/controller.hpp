@@ -6,6 +6,7 @@
 #include <manibench/sdk/common.hpp>
 #include <manibench/sdk/registry.hpp>
 #include <manibench/sdk/scene_view.hpp>
+#include <manibench/sdk/state.hpp>
 
 #include <memory>
 #include <string>
@@ -130,6 +131,32 @@ struct ControllerTrampolines {
       std::copy(h.drives.begin(), h.drives.end(), out);
     });
   }
+  // ABI 1.2: the last drive commands (a controller may leave some as they
+  // were), then the controller's Stateful part (state.hpp).
+  static mb_status getState(mb_controller* c, uint8_t* out, uint64_t capacity,
+                            uint64_t* out_size, mb_error* err) {
+    const ControllerHandle& h = *asController(c);
+    return saveState(
+        *h.controller,
+        [&](StateWriter& w) {
+          w.write<uint64_t>(h.drives.size());
+          w.writeBytes(h.drives.data(), h.drives.size() * sizeof(DriveCommand));
+        },
+        out, capacity, out_size, err);
+  }
+  static mb_status setState(mb_controller* c, const uint8_t* data, uint64_t size,
+                            mb_error* err) {
+    ControllerHandle& h = *asController(c);
+    return restoreState(
+        *h.controller,
+        [&](StateReader& r) {
+          if (r.read<uint64_t>() != h.drives.size())
+            throw Error("set_state: drive commands for another number of joints",
+                        MB_INVALID_ARGUMENT);
+          r.readBytes(h.drives.data(), h.drives.size() * sizeof(DriveCommand));
+        },
+        data, size, err);
+  }
 };
 
 template <class T>
@@ -142,6 +169,8 @@ bool registerController(const char* name, const char* summary) {
   d->get_info = &ControllerTrampolines<T>::getInfo;
   d->reset = &ControllerTrampolines<T>::reset;
   d->compute = &ControllerTrampolines<T>::compute;
+  d->get_state = &ControllerTrampolines<T>::getState;
+  d->set_state = &ControllerTrampolines<T>::setState;
   return true;
 }
 

@@ -8,6 +8,7 @@
 #include <manibench/sdk/common.hpp>
 #include <manibench/sdk/registry.hpp>
 #include <manibench/sdk/scene_view.hpp>
+#include <manibench/sdk/state.hpp>
 
 #include <map>
 #include <memory>
@@ -211,6 +212,19 @@ struct TaskTrampolines {
       }
     });
   }
+
+  // ABI 1.2: the hold count, then the task's Stateful part (state.hpp).
+  static mb_status getState(mb_task* t, uint8_t* out, uint64_t capacity, uint64_t* out_size,
+                            mb_error* err) {
+    const TaskHandle& h = *asTask(t);
+    return saveState(
+        *h.task, [&](StateWriter& w) { w.write(h.held_steps); }, out, capacity, out_size, err);
+  }
+  static mb_status setState(mb_task* t, const uint8_t* data, uint64_t size, mb_error* err) {
+    TaskHandle& h = *asTask(t);
+    return restoreState(
+        *h.task, [&](StateReader& r) { r.read(h.held_steps); }, data, size, err);
+  }
 };
 
 template <class T>
@@ -226,6 +240,8 @@ bool registerTask(const char* name, const char* summary) {
   d->observe = &TaskTrampolines<T>::observe;
   d->compute_reward = &TaskTrampolines<T>::computeReward;
   d->evaluate_success = &TaskTrampolines<T>::evaluateSuccess;
+  d->get_state = &TaskTrampolines<T>::getState;
+  d->set_state = &TaskTrampolines<T>::setState;
   return true;
 }
 
