@@ -30,15 +30,6 @@ struct SplitRange {
 constexpr SplitRange kDoorTrain{1000, 42}, kDoorTest{1100, 10};
 constexpr SplitRange kDrawerTrain{2000, 25}, kDrawerTest{2100, 10};
 
-uint64_t hashString(const std::string& s) {
-  uint64_t h = 0xcbf29ce484222325ULL;  // FNV-1a
-  for (unsigned char c : s) {
-    h ^= c;
-    h *= 0x100000001b3ULL;
-  }
-  return h;
-}
-
 struct IdInfo {
   TargetKind kind;
   bool test;

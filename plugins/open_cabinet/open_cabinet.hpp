@@ -8,6 +8,8 @@
 #pragma once
 
 #include <manibench/sdk.hpp>
+#include <manibench/sdk/mobile_panda.hpp>
+#include <manibench/sdk/random.hpp>
 
 #include <algorithm>
 #include <array>
@@ -23,24 +25,9 @@ namespace open_cabinet {
 
 enum class TargetKind { kDoor, kDrawer };
 
-// splitmix64: a tiny, fully specified generator (std::*_distribution output
-// differs between standard libraries; ours must not).
-class Random {
- public:
-  explicit Random(uint64_t seed) : state_(seed) {}
-  uint64_t next() {
-    uint64_t z = (state_ += 0x9E3779B97F4A7C15ULL);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    return z ^ (z >> 31);
-  }
-  double uniform(double lo, double hi) { return lo + (hi - lo) * double(next() >> 11) * 0x1.0p-53; }
-  int integer(int lo, int hi) { return lo + int(next() % uint64_t(hi - lo + 1)); }  // inclusive
-  bool chance(double p) { return uniform(0, 1) < p; }
-
- private:
-  uint64_t state_;
-};
+// The SDK's fully specified generator (splitmix64) and id hash (FNV-1a).
+using manibench::sdk::Random;
+using manibench::sdk::hashString;
 
 // A door or drawer the robot can be asked to open: a link with a handle
 // and a revolute (door) or prismatic (drawer) joint.
@@ -108,12 +95,15 @@ std::string toString(HandleType type);
 
 // ---- PartNet-Mobility (partnet_loader.cpp) ------------------------------------
 
-// Loads <folder>/<id>/mobility.urdf and semantics.txt. Handles are the
+// Loads <folder>/<id>/mobility.urdf and semantics.txt through the SDK's
+// PartNet reader (manibench/sdk/partnet.hpp). Handles are the
 // visuals whose name contains "handle"; targets are links with a handle
 // and a revolute/continuous (door) or prismatic (drawer) joint.
 CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id);
-// Sub-folders of `folder` holding a mobility.urdf, sorted.
+// Sub-folders of `folder` holding a mobility.urdf, sorted; with a split,
+// those of the split (`folder`/test.txt lists the test ids).
 std::vector<std::string> listPartNetCabinets(const std::string& folder);
+std::vector<std::string> listPartNetCabinets(const std::string& folder, const std::string& split);
 
 // ---- object ids ------------------------------------------------------------
 
@@ -207,16 +197,13 @@ class OpenCabinetTask : public manibench::sdk::Task {
   std::string robot_dir_;
   double static_speed_, static_angular_speed_;
   uint32_t hold_steps_;
-  // robot facts (assets/robots/mobile_panda_single.yaml)
-  std::vector<std::string> robot_joints_;
-  Eigen::VectorXd robot_initial_;
-  std::string camera_yaml_;
+  // the robot's facts (assets/robots/mobile_panda_single.yaml) and state
+  std::unique_ptr<manibench::sdk::mobile_panda::AgentState> robot_;
   mutable std::map<std::string, std::shared_ptr<CabinetModel>> cabinets_;
   // the scene
   std::shared_ptr<CabinetModel> cabinet_;
   const TargetLink* target_ = nullptr;
-  mb_id robot_ = -1, cabinet_id_ = -1, target_link_ = -1;
-  mb_id left_finger_ = -1, right_finger_ = -1, tcp_ = -1;
+  mb_id robot_id_ = -1, cabinet_id_ = -1, target_link_ = -1, tcp_ = -1;
   uint32_t target_joint_ = 0;
   double lower_ = 0, upper_ = 1;
   Eigen::Vector3d joint_axis_local_ = Eigen::Vector3d::UnitZ();

@@ -2,12 +2,12 @@
 // staged reward and success.
 #include "open_cabinet.hpp"
 
-#include <yaml-cpp/yaml.h>
+#include <manibench/sdk/mobile_panda.hpp>
+
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 
 #ifndef MANIBENCH_ROBOT_DIR
@@ -23,11 +23,10 @@ using manibench::sdk::Pose;
 using manibench::sdk::SceneView;
 using manibench::sdk::TaskSpec;
 using manibench::sdk::kPi;
+namespace mobile_panda = manibench::sdk::mobile_panda;
 
 namespace {
 
-// Finger pad centre in its finger's frame (the URDF's pad collision box).
-const Eigen::Vector3d kPadOffset(0.0, 0.0076, 0.045);
 
 enum Mask : uint32_t { kHandleMask = 0, kTargetLinkMask = 1, kRobotMask = 2 };
 
@@ -56,57 +55,22 @@ OpenCabinetTask::OpenCabinetTask(const Config& config, TargetKind kind)
                 MB_INVALID_ARGUMENT);
   if (!partnet_dir_.empty() && !std::filesystem::is_directory(partnet_dir_))
     throw Error(taskName(kind) + ": task.partnet_dir '" + partnet_dir_ + "' is not a folder", MB_INVALID_ARGUMENT);
-  const std::string yaml_path = robot_dir_ + "/mobile_panda_single.yaml";
-  YAML::Node facts;
-  try {
-    facts = YAML::LoadFile(yaml_path);
-  } catch (const YAML::Exception& e) {
-    throw Error(taskName(kind) + ": cannot read the robot facts " + yaml_path + " (set task.robot_dir): " + e.what(),
-                MB_NOT_FOUND);
-  }
-  robot_joints_ = facts["joints"].as<std::vector<std::string>>();
-  if (robot_joints_.size() != kRobotDof)
-    throw Error(yaml_path + ": expected " + std::to_string(kRobotDof) + " joints", MB_ERROR);
-  const YAML::Node init = facts["initial_configuration"];
-  std::vector<double> q = init["base"].as<std::vector<double>>();
-  const YAML::Node lift = facts["lift_height"][taskName(kind)];
-  q.push_back(lift ? lift.as<double>() : init["lift"].as<double>());
-  for (double x : init["arm"].as<std::vector<double>>()) q.push_back(x);
-  for (double x : init["fingers"].as<std::vector<double>>()) q.push_back(x);
-  if (q.size() != kRobotDof) throw Error(yaml_path + ": initial configuration has the wrong size", MB_ERROR);
-  robot_initial_ = Eigen::Map<const Eigen::VectorXd>(q.data(), Eigen::Index(q.size()));
-  // The three head cameras, as camera entries of the configuration.
-  const YAML::Node cams = facts["cameras"];
-  const YAML::Node heights = cams["mount_height"];
-  const double mount_z = heights[taskName(kind)] ? heights[taskName(kind)].as<double>() : heights["default"].as<double>();
-  std::ostringstream yaml;
-  yaml << "cameras:\n";
-  for (const YAML::Node& m : cams["mounts"]) {
-    const auto xyz = m["xyz"].as<std::vector<double>>();
-    const auto rpy = m["rpy"].as<std::vector<double>>();
-    yaml << "  - name: " << m["name"].as<std::string>() << "\n    articulation: robot\n    link: "
-         << m["parent_link"].as<std::string>() << "\n    pose: {position: [" << xyz[0] << ", " << xyz[1] << ", "
-         << mount_z << "], rpy: [" << rpy[0] << ", " << rpy[1] << ", " << rpy[2] << "]}\n    width: "
-         << cams["width"].as<int>() << "\n    height: " << cams["height"].as<int>() << "\n    fovy: "
-         << cams["fovy"].as<double>() << "\n    near: " << cams["near"].as<double>() << "\n    far: "
-         << cams["far"].as<double>() << "\n";
-  }
-  camera_yaml_ = yaml.str();
+  robot_ = std::make_unique<mobile_panda::AgentState>(
+      mobile_panda::loadFacts(robot_dir_, "mobile_panda_single", taskName(kind)));
+  if (robot_->getFacts().joints.size() != kRobotDof)
+    throw Error(taskName(kind) + ": expected " + std::to_string(kRobotDof) + " robot joints in " +
+                    robot_->getFacts().urdf,
+                MB_ERROR);
 }
 
 TaskSpec OpenCabinetTask::describe() const {
   TaskSpec spec;
   const char* what = kind_ == TargetKind::kDoor ? "door" : "drawer";
-  spec.observation = {
-      {"fingertip_positions", 6, "left, right finger pad centres, world (m)"},
-      {"fingertip_velocities", 6, "of the pad centres, world (m/s)"},
-      {"base_position", 2, "x, y of base_link, world (m)"},
-      {"base_yaw", 1, "heading (rad)"},
-      {"base_velocity", 2, "world x, y (m/s)"},
-      {"base_angular_velocity", 1, "yaw rate (rad/s)"},
-      {"joint_positions", kRobotDof, "robot q, actuated joint order"},
-      {"joint_velocities", kRobotDof, "robot qdot, actuated joint order"},
-      {"tcp_pose", 7, "gripper TCP (between the pads): position, quaternion wxyz, world"},
+  // The robot's own state (what the pointcloud and rgbd modes pass on),
+  // then the privileged object state.
+  spec.observation = robot_->describe();
+  spec.agent_state_dim = robot_->getDim();
+  const std::vector<manibench::sdk::Segment> object = {
       {"target_link_pose", 7, std::string("the target ") + what + ": position, quaternion wxyz, world"},
       {"target_joint", 4, "its joint: q, qdot, lower, upper (rad or m)"},
       {"target_joint_type", 1, "0 revolute (door), 1 prismatic (drawer)"},
@@ -116,18 +80,12 @@ TaskSpec OpenCabinetTask::describe() const {
       {"handle_half_length", 1, "half the grip length (m)"},
       {"cabinet_center", 3, "centre of the cabinet's bounding box, world (m)"},
   };
-  // Everything up to tcp_pose is the robot's own state: what the
-  // pointcloud and rgbd modes pass on (the rest is privileged).
-  spec.agent_state_dim = 0;
-  for (const auto& segment : spec.observation) {
-    spec.agent_state_dim += segment.size;
-    if (segment.name == "tcp_pose") break;
-  }
+  spec.observation.insert(spec.observation.end(), object.begin(), object.end());
   spec.success_conditions = {"open_enough", "static", "success"};
   spec.success_hold_steps = hold_steps_;
   spec.masks = {"handle", "target_link", "robot"};
   spec.robot_articulation = "robot";
-  spec.actuated_joints = robot_joints_;
+  spec.actuated_joints = robot_->getFacts().joints;
   spec.default_controller = "mobile_panda";
   spec.control_frequency = 100;
   spec.frame_skip = 5;
@@ -139,7 +97,7 @@ TaskSpec OpenCabinetTask::describe() const {
       - {articulation: cabinet, static_friction: 1.0, dynamic_friction: 1.0}
       - {articulation: robot, link: right_panda_leftfinger, static_friction: 2.0, dynamic_friction: 2.0}
       - {articulation: robot, link: right_panda_rightfinger, static_friction: 2.0, dynamic_friction: 2.0}
-)") + camera_yaml_;
+)") + robot_->getFacts().camera_yaml;
   return spec;
 }
 
@@ -152,20 +110,8 @@ const CabinetModel& OpenCabinetTask::getCabinet(const std::string& cabinet_id) c
 }
 
 std::vector<std::string> OpenCabinetTask::listObjects(const std::string& split) const {
-  std::vector<std::string> cabinets;
-  if (partnet_dir_.empty()) {
-    cabinets = listGeneratedCabinets(kind_, split);
-  } else {
-    if (split != "train" && split != "test")
-      throw Error("unknown split '" + split + "' (use train or test)", MB_INVALID_ARGUMENT);
-    // <dir>/test.txt lists the test cabinets, one id a line; the rest train.
-    std::vector<std::string> test;
-    if (std::ifstream in(partnet_dir_ + "/test.txt"); in)
-      for (std::string line; std::getline(in, line);)
-        if (!line.empty()) test.push_back(line);
-    for (const std::string& id : listPartNetCabinets(partnet_dir_))
-      if ((std::find(test.begin(), test.end(), id) != test.end()) == (split == "test")) cabinets.push_back(id);
-  }
+  const std::vector<std::string> cabinets =
+      partnet_dir_.empty() ? listGeneratedCabinets(kind_, split) : listPartNetCabinets(partnet_dir_, split);
   std::vector<std::string> ids;
   for (const std::string& c : cabinets)
     for (const TargetLink* t : getCabinet(c).getTargets(kind_)) ids.push_back(c + "_" + t->link);
@@ -184,10 +130,8 @@ void OpenCabinetTask::buildScene(SceneView& scene, const std::string& object_id)
                     (kind_ == TargetKind::kDoor ? "door" : "drawer") + " with a handle named " + link,
                 MB_NOT_FOUND);
   scene.addGround(0.0);
-  robot_ = scene.addUrdfFile(robot_dir_ + "/mobile_panda_single.urdf", "robot", Pose(), /*fixed_base=*/true);
-  for (std::size_t i = 0; i < robot_joints_.size(); ++i)
-    if (scene.findJoint(robot_, robot_joints_[i]) != i)
-      throw Error(taskName(kind_) + ": robot joint " + robot_joints_[i] + " is not at index " + std::to_string(i));
+  robot_id_ = scene.addUrdfFile(robot_->getFacts().urdf, "robot", Pose(), /*fixed_base=*/true);
+  robot_->bind(scene, robot_id_);
   Pose placement;
   placement.position = cabinet_->placement;
   cabinet_id_ = scene.addUrdfString(cabinet_->urdf, cabinet_->base_dir, "cabinet", placement, /*fixed_base=*/true);
@@ -201,12 +145,10 @@ void OpenCabinetTask::buildScene(SceneView& scene, const std::string& object_id)
   if (!(upper_ > lower_))
     throw Error(taskName(kind_) + ": joint " + target_->joint + " of cabinet " + cabinet_id + " has no range");
   cabinet_joint_count_ = scene.getJointCount(cabinet_id_);
-  left_finger_ = scene.findLink(robot_, "right_panda_leftfinger");
-  right_finger_ = scene.findLink(robot_, "right_panda_rightfinger");
-  tcp_ = scene.findLink(robot_, "right_panda_tcp");
+  tcp_ = robot_->getTcps().front();
   scene.addLinkToMask(kHandleMask, cabinet_id_, target_link_, "handle");
   scene.addLinkToMask(kTargetLinkMask, cabinet_id_, target_link_);
-  scene.addArticulationToMask(kRobotMask, robot_);
+  scene.addArticulationToMask(kRobotMask, robot_id_);
 }
 
 void OpenCabinetTask::reset(SceneView& scene, uint64_t seed) {
@@ -217,12 +159,12 @@ void OpenCabinetTask::reset(SceneView& scene, uint64_t seed) {
   const double distance = rng.uniform(1.6, 1.8);
   const double around = rng.uniform(0.9 * kPi, 1.1 * kPi);
   const double heading = around + kPi + rng.uniform(-0.05 * kPi, 0.05 * kPi);
-  Eigen::VectorXd q = robot_initial_;
+  Eigen::VectorXd q = robot_->getFacts().initial;
   q[0] = centre.x() + distance * std::cos(around);
   q[1] = centre.y() + distance * std::sin(around);
   q[2] = std::remainder(heading, 2 * kPi);
-  scene.setJointPositions(robot_, q);
-  scene.setJointVelocities(robot_, Eigen::VectorXd::Zero(q.size()));
+  scene.setJointPositions(robot_id_, q);
+  scene.setJointVelocities(robot_id_, Eigen::VectorXd::Zero(q.size()));
   // every door and drawer closed, joint friction and damping drawn anew
   scene.setJointPositions(cabinet_id_, Eigen::VectorXd::Zero(cabinet_joint_count_));
   scene.setJointVelocities(cabinet_id_, Eigen::VectorXd::Zero(cabinet_joint_count_));
@@ -247,28 +189,11 @@ Eigen::Vector3d OpenCabinetTask::calcGripperPoint(const SceneView& scene) const 
 
 void OpenCabinetTask::observe(const SceneView& scene, Eigen::Map<Eigen::VectorXd> out) {
   using L = ObservationLayout;
-  int k = 0;
-  for (const mb_id finger : {left_finger_, right_finger_}) {
-    const Pose pose = scene.getLinkPose(finger);
-    const manibench::sdk::Twist twist = scene.getLinkTwist(finger);
-    const Eigen::Vector3d r = pose.orientation * kPadOffset;
-    out.segment<3>(L::kFingertipPositions + 3 * k) = pose.position + r;
-    out.segment<3>(L::kFingertipVelocities + 3 * k) = twist.linear + twist.angular.cross(r);
-    ++k;
-  }
-  const Eigen::VectorXd q = scene.getJointPositions(robot_);
-  const Eigen::VectorXd qd = scene.getJointVelocities(robot_);
-  out.segment<2>(L::kBasePosition) = q.head<2>();
-  out[L::kBaseYaw] = q[2];
-  out.segment<2>(L::kBaseVelocity) = qd.head<2>();
-  out[L::kBaseAngularVelocity] = qd[2];
-  out.segment<kRobotDof>(L::kJointPositions) = q;
-  out.segment<kRobotDof>(L::kJointVelocities) = qd;
+  robot_->observe(scene, out);
   auto putPose = [&out](uint32_t at, const Pose& p) {
     out.segment<3>(at) = p.position;
     out.segment<4>(at + 3) << p.orientation.w(), p.orientation.x(), p.orientation.y(), p.orientation.z();
   };
-  putPose(L::kTcpPose, scene.getLinkPose(tcp_));
   const Pose link = scene.getLinkPose(target_link_);
   putPose(L::kTargetLinkPose, link);
   out.segment<4>(L::kTargetJoint) << scene.getJointPositions(cabinet_id_)[target_joint_],

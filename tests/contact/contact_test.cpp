@@ -274,6 +274,44 @@ TEST_P(FrictionTest, LightObjectsComeToRestToo) {
   }
 }
 
+// A caster's wheel: 20 g, 7.2e-6 kg m^2, pressed on the floor by a 1.5 kg
+// carriage on a vertical slider and spun at 48 rad/s. Its sliding friction
+// (0.5 x 14.9 N at 3 cm) stops it within one 2 ms step; stepped as a
+// constant capped force it overshot and flipped the wheel between about
+// +48 and 0 rad/s every step for ever (the stick law's anchor, moved for
+// the slide, kicked it back). implicit_euler checks at the step's end
+// whether the point sticks.
+TEST(ContactTest, ALightWheelPressedOnTheFloorStopsSpinningWithoutChatter) {
+  const double r = 0.03;
+  const std::string urdf =
+      "<?xml version='1.0'?><robot name='caster'><link name='rig'/>"
+      "<joint name='drop' type='prismatic'><parent link='rig'/><child link='carriage'/>"
+      "<axis xyz='0 0 1'/><limit lower='-0.1' upper='0.1' effort='1000' velocity='10'/></joint>"
+      "<link name='carriage'>" +
+      inertial(1.5, 1e-3) +
+      "</link><joint name='axle' type='continuous'><parent link='carriage'/><child link='wheel'/>"
+      "<axis xyz='0 1 0'/></joint>"
+      "<link name='wheel'>" +
+      inertial(0.02, 0.4 * 0.02 * r * r) + collision(sphere(r)) + "</link></robot>";
+  Scene scene;
+  scene.addGround(0);
+  const int caster = scene.addUrdfString(urdf, "", "caster", at(0, 0, r - 1e-4), true);
+  ContactMaterial ground;
+  ground.static_friction = ground.dynamic_friction = 0.5;
+  scene.setGroundMaterial(ground);
+  scene.finalize();
+  for (int k = 0; k < 20; ++k) scene.advance(0.01);  // settles on the floor
+  scene.setJointVelocities(caster, Eigen::Vector2d(0, 48));
+  double most = 0;
+  for (int k = 0; k < 50; ++k) {
+    scene.advance(0.002);
+    if (k >= 2) most = std::max(most, std::abs(scene.getJointVelocities(caster)[1]));
+  }
+  std::printf("light wheel: fastest after 4 ms %.3g rad/s\n", most);
+  EXPECT_LT(most, 0.1);
+  EXPECT_NEAR(scene.calcContactForce(scene.findLink(caster, "wheel"), -1).z(), 1.52 * kG, 0.01 * 1.52 * kG);
+}
+
 // --- filtering -----------------------------------------------------------------------
 
 // A fixed base with a box beside x = 0.3; link l1 turns about z at the

@@ -259,6 +259,28 @@ TEST(SceneTest, JointDampingAndFrictionSlowASpinningLink) {
   }
 }
 
+// A light link whose Coulomb friction stops it well within one 2 ms step
+// (f h / I = 10 rad/s against 1 rad/s): it must stop and stay stopped, not
+// chatter from +u to -u each step (a caster's swivel: 1e-5 kg m^2 under
+// 0.05 N m). The implicit step decides, as for a drive's effort limit,
+// whether friction saturates or holds at the step's end.
+TEST(SceneTest, CoulombFrictionStopsALightLinkWithoutChatter) {
+  Scene scene;
+  const int s = scene.addUrdfString(spinnerUrdf(1e-5, ""), "", "s", Pose(), true);
+  scene.finalize();
+  scene.setJointDynamics(s, 0, 0.0, 0.05);
+  scene.setJointVelocities(s, Eigen::VectorXd::Constant(1, 1.0));
+  const double q0 = scene.getJointPositions(s)[0];
+  double most = 0;
+  for (int k = 0; k < 50; ++k) {
+    scene.advance(0.002);
+    if (k > 0) most = std::max(most, std::abs(scene.getJointVelocities(s)[0]));
+  }
+  EXPECT_LT(most, 1e-3) << "stopped after the first step";
+  // It had 1 rad/s and stops within a step: it turns less than 2 mrad.
+  EXPECT_LT(std::abs(scene.getJointPositions(s)[0] - q0), 2e-3);
+}
+
 // --- contact -------------------------------------------------------------------
 
 TEST(SceneTest, FloatingSphereComesToRestOnTheGround) {

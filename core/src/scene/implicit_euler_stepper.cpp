@@ -224,6 +224,7 @@ class ImplicitEulerStepper final : public Stepper {
         base_rhs_[local] -= h * h * terms_.stiffness[u] * local_u_[local];
       }
     }
+    sliding_count_ = 0;
     for (int index : island.points) {
       const PointCoupling& p = terms_.points[index];
       point_jacobian_.setZero(3, n);
@@ -233,6 +234,12 @@ class ImplicitEulerStepper final : public Stepper {
       base_matrix_.noalias() += point_jacobian_.transpose() * weighted_;
       const Eigen::Vector3d stretch_rate = p.stiffness * (point_jacobian_ * local_u_);
       base_rhs_.noalias() -= (h * h) * (point_jacobian_.transpose() * stretch_rate);
+      if (p.sliding) {  // kept for the check at the step's end
+        if (sliding_.size() <= sliding_count_) sliding_.emplace_back();
+        sliding_[sliding_count_].index = index;
+        sliding_[sliding_count_].jacobian = point_jacobian_;
+        ++sliding_count_;
+      }
     }
     solveWithSaturation(island, h);
     for (std::size_t i = 0; i < island.trees.size(); ++i) {
@@ -260,7 +267,9 @@ class ImplicitEulerStepper final : public Stepper {
   // force acts linearly in the solve if its law stays within the limit at
   // the step's end, else as its limit; the sides are guessed from the start
   // and corrected until consistent (an active-set iteration, at most
-  // kMaxSaturationSolves factorizations).
+  // kMaxSaturationSolves factorizations). Sliding contact points likewise:
+  // a point slides (its capped force) unless its stick law is within mu fn
+  // at the step's end; it then sticks (the stick law, implicit).
   void solveWithSaturation(const Island& island, double h) {
     const std::size_t count = island.saturating.size();
     side_.assign(count, 0);
@@ -271,9 +280,21 @@ class ImplicitEulerStepper final : public Stepper {
       if (f.unclamped > f.limit) side_[i] = 1;
       if (f.unclamped < -f.limit) side_[i] = -1;
     }
+    stuck_.assign(sliding_count_, 0);
     for (int solve = 1;; ++solve) {
       matrix_ = base_matrix_;
       rhs_ = base_rhs_;
+      for (std::size_t j = 0; j < sliding_count_; ++j) {
+        if (!stuck_[j]) continue;
+        // The stick law in place of the capped force and its linearization.
+        const PointCoupling& p = terms_.points[sliding_[j].index];
+        const auto& jacobian = sliding_[j].jacobian;
+        const Eigen::Matrix3d extra_stiffness = p.stick_stiffness - p.stiffness;
+        weighted_.noalias() = (h * (p.stick_damping - p.damping) + h * h * extra_stiffness) * jacobian;
+        matrix_.noalias() += jacobian.transpose() * weighted_;
+        const Eigen::Vector3d change = h * (p.stick_force - p.slide_force) - h * h * (extra_stiffness * (jacobian * local_u_));
+        rhs_.noalias() += jacobian.transpose() * change;
+      }
       for (std::size_t i = 0; i < count; ++i) {
         const SaturatingForce& f = terms_.saturating[island.saturating[i]];
         const int k = saturating_index_[i];
@@ -295,8 +316,25 @@ class ImplicitEulerStepper final : public Stepper {
         local_du_ = matrix_.partialPivLu().solve(rhs_);
       }
       ++statistics_.iterations;
-      if (count == 0 || solve == kMaxSaturationSolves) return;
+      if ((count == 0 && sliding_count_ == 0) || solve == kMaxSaturationSolves) return;
       bool consistent = true;
+      for (std::size_t j = 0; j < sliding_count_; ++j) {
+        // The stick law at the step's end. A sliding point whose law no
+        // longer exceeds mu fn along its capped force (within the limit,
+        // or turned against it: the capped force overshot, reversing the
+        // slip) sticks; a sticking one whose law exceeds mu fn slides
+        // again.
+        const PointCoupling& p = terms_.points[sliding_[j].index];
+        const auto& jacobian = sliding_[j].jacobian;
+        const Eigen::Vector3d dv = jacobian * local_du_, v_end = jacobian * local_u_ + dv;
+        const Eigen::Vector3d law = p.stick_force - p.tangent_damping * dv - h * (p.tangent_stiffness * v_end);
+        const char stuck = stuck_[j] ? (law.norm() <= p.limit ? 1 : 0)
+                                     : (law.dot(p.slide_force) < p.limit * p.slide_force.norm() ? 1 : 0);
+        if (stuck != stuck_[j]) {
+          stuck_[j] = stuck;
+          consistent = false;
+        }
+      }
       for (std::size_t i = 0; i < count; ++i) {
         const SaturatingForce& f = terms_.saturating[island.saturating[i]];
         const int k = saturating_index_[i];
@@ -352,6 +390,13 @@ class ImplicitEulerStepper final : public Stepper {
   Eigen::VectorXd base_rhs_, rhs_, local_u_, local_du_;
   Eigen::Matrix<double, 3, Eigen::Dynamic> point_jacobian_, weighted_;
   std::vector<int> side_, saturating_index_;
+  struct SlidingPoint {
+    int index = 0;  // into terms_.points
+    Eigen::Matrix<double, 3, Eigen::Dynamic> jacobian;  // island-local
+  };
+  std::vector<SlidingPoint> sliding_;  // the island's first sliding_count_ are live
+  std::size_t sliding_count_ = 0;
+  std::vector<char> stuck_;
   Eigen::LLT<Eigen::MatrixXd> solve_;
 };
 

@@ -44,10 +44,27 @@ struct SaturatingForce {
 // A contact point's force law, linearized: the force on B changes by
 // -damping v - stiffness x for a velocity v and a displacement x of B's
 // material point at `point` relative to A's (Ground frame).
+//
+// A point whose friction slides at the step's start (its stick law, a
+// tangential spring to the anchor and a damper on the slip, beyond mu fn)
+// applied the capped force, constant along its direction: the stepper
+// checks, as for a SaturatingForce, whether the stick law is back within
+// the limit at the step's end (the capped force would have stopped or
+// reversed the slip: a light body, a caster wheel of 7e-6 kg m^2, else
+// chatters between +-48 rad/s) and then steps the point as sticking.
 struct PointCoupling {
   SimTK::MobilizedBodyIndex body_a, body_b;
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
   Eigen::Matrix3d damping, stiffness;  // symmetric, positive semidefinite
+  bool sliding = false;
+  // Sliding points only: the tangential forces on B at the start, capped
+  // (applied) and of the stick law; the stick law's tangential damping and
+  // stiffness (its linearization is damping/stiffness plus these outside
+  // the capped direction: stick_damping, stick_stiffness in full); mu fn.
+  Eigen::Vector3d slide_force = Eigen::Vector3d::Zero(), stick_force = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d stick_damping = Eigen::Matrix3d::Zero(), stick_stiffness = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d tangent_damping = Eigen::Matrix3d::Zero(), tangent_stiffness = Eigen::Matrix3d::Zero();
+  double limit = 0;
 };
 
 struct ImplicitTerms {

@@ -114,9 +114,22 @@ void JointForces::addImplicitTerms(const SimTK::State& state, ImplicitTerms& ter
     const StopForce stop = calcStopForce(slot, qi, ui);
     double damping = stop.damping + c.damping[i];
     double stiffness = stop.stiffness;
-    if (c.friction[i] != 0) {
-      const double t = std::tanh(ui / kFrictionSpeed);
-      damping += c.friction[i] / kFrictionSpeed * (1 - t * t);
+    if (c.friction[i] > 0) {
+      // Coulomb friction saturates at +-friction, as a drive at its effort
+      // limit: linearized at the step's start (as the slope of tanh), a
+      // sliding joint's friction would be explicit, and on a light link
+      // one step's impulse h f / I can exceed its speed: it then flips the
+      // speed's sign every step instead of stopping (a caster's swivel,
+      // 1e-5 kg m^2 under 0.05 N m: +-1.4 rad/s for ever). As a saturating
+      // force the step decides at its end whether friction slides (+-f)
+      // or holds (the stiff linear law of slope f / kFrictionSpeed).
+      SaturatingForce friction;
+      friction.u = k;
+      friction.applied = -c.friction[i] * std::tanh(ui / kFrictionSpeed);
+      friction.unclamped = -c.friction[i] / kFrictionSpeed * ui;
+      friction.damping = c.friction[i] / kFrictionSpeed;
+      friction.limit = c.friction[i];
+      terms.saturating.push_back(friction);
     }
     if (c.driven[i]) {
       const DriveCommand& d = c.drives[i];

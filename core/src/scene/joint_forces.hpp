@@ -16,8 +16,10 @@
 namespace manibench {
 namespace scene_detail {
 
-// Coulomb friction is tanh(qdot / kFrictionSpeed) * friction: a joint
-// loaded below its friction creeps at well under this speed (rad/s or m/s).
+// Coulomb friction is tanh(qdot / kFrictionSpeed) * friction (implicit_euler
+// steps it as the linear law of the same slope, saturating at +-friction):
+// a joint loaded below its friction creeps at well under this speed (rad/s
+// or m/s).
 // Smaller values stiffen the ODE (slope friction / kFrictionSpeed); 1e-2
 // keeps it within what the drive dampings already demand of CPodes.
 constexpr double kFrictionSpeed = 1e-2;
@@ -68,8 +70,8 @@ class JointForces : public SimTK::Force::Custom::Implementation, public Implicit
   SimTK::Real calcPotentialEnergy(const SimTK::State&) const override {
     return 0;
   }
-  // Drives (saturating ones as SaturatingForce), damping, friction and
-  // stops, each on its own joint: diagonal entries only.
+  // Drives (saturating ones as SaturatingForce), damping, friction (as
+  // SaturatingForce) and stops, each on its own joint: diagonal entries only.
   void addImplicitTerms(const SimTK::State& state, ImplicitTerms& terms) const override;
 
  private:

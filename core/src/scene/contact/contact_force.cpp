@@ -358,6 +358,17 @@ double ContactForce::evaluate(const SimTK::State& state, Mode mode,
         point.damping = (1.5 * k * material.c * c.depth) * normal + (tangent_scale * ct) * tangent;
         point.stiffness = (k * (1 + 1.5 * material.c * approach)) * normal +
                           (tangent_scale * kt) * tangent;
+        if (sliding && ft_norm > 0) {
+          const Eigen::Matrix3d full_tangent = Eigen::Matrix3d::Identity() - normal;
+          point.sliding = true;
+          point.stick_force = Eigen::Vector3d(ft[0], ft[1], ft[2]);
+          point.slide_force = (limit / ft_norm) * point.stick_force;
+          point.tangent_damping = ct * full_tangent;
+          point.tangent_stiffness = kt * full_tangent;
+          point.stick_damping = (1.5 * k * material.c * c.depth) * normal + point.tangent_damping;
+          point.stick_stiffness = (k * (1 + 1.5 * material.c * approach)) * normal + point.tangent_stiffness;
+          point.limit = limit;
+        }
       }
       if (sliding) {
         // Sliding: cap the force, and move the anchor so that the spring
