@@ -33,15 +33,6 @@ struct SplitRange {
 constexpr SplitRange kTrain{3000, 30}, kTest{3100, 10};
 constexpr int kRoundSides = 20;  // facets of round and oval outlines (a multiple of 4)
 
-uint64_t hashString(const std::string& s) {
-  uint64_t h = 0xcbf29ce484222325ULL;  // FNV-1a
-  for (unsigned char c : s) {
-    h ^= c;
-    h *= 0x100000001b3ULL;
-  }
-  return h;
-}
-
 std::optional<bool> classifyId(const std::string& id) {  // test split?
   if (id.size() != 4 || !std::all_of(id.begin(), id.end(), ::isdigit)) return std::nullopt;
   const int n = std::stoi(id);

@@ -5,6 +5,8 @@
 #pragma once
 
 #include <manibench/sdk.hpp>
+#include <manibench/sdk/mobile_panda.hpp>
+#include <manibench/sdk/random.hpp>
 
 #include <array>
 #include <cmath>
@@ -17,24 +19,10 @@
 
 namespace move_bucket {
 
-// splitmix64: a tiny, fully specified generator (std::*_distribution output
-// differs between standard libraries; ours must not).
-class Random {
- public:
-  explicit Random(uint64_t seed) : state_(seed) {}
-  uint64_t next() {
-    uint64_t z = (state_ += 0x9E3779B97F4A7C15ULL);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    return z ^ (z >> 31);
-  }
-  double uniform(double lo, double hi) { return lo + (hi - lo) * double(next() >> 11) * 0x1.0p-53; }
-  int integer(int lo, int hi) { return lo + int(next() % uint64_t(hi - lo + 1)); }  // inclusive
-  bool chance(double p) { return uniform(0, 1) < p; }
-
- private:
-  uint64_t state_;
-};
+// The SDK's fully specified generator and id hash (same numbers on every
+// platform, so the same id gives the same bucket).
+using manibench::sdk::hashString;
+using manibench::sdk::Random;
 
 // ---- geometry (bucket_geometry.cpp) -----------------------------------------
 
@@ -231,20 +219,16 @@ class MoveBucketTask : public manibench::sdk::Task {
  private:
   const BucketModel& getBucket(const std::string& bucket_id) const;
   RewardInputs measure(const manibench::sdk::SceneView& scene, double action_norm) const;
-  std::array<Eigen::Vector3d, 4> calcPadCentres(const manibench::sdk::SceneView& scene) const;
 
   std::string partnet_dir_, robot_dir_, cache_dir_;
   uint32_t hold_steps_;
-  std::vector<std::string> robot_joints_;
-  Eigen::VectorXd robot_initial_;
-  std::string camera_yaml_;
+  // the robot's facts (assets/robots/mobile_panda_dual.yaml) and state
+  std::unique_ptr<manibench::sdk::mobile_panda::AgentState> robot_state_;
   mutable std::map<std::string, std::shared_ptr<BucketModel>> buckets_;
   // the scene
   std::shared_ptr<BucketModel> bucket_;
   mb_id robot_ = -1, bucket_id_ = -1, ball_id_ = -1, platform_id_ = -1;
   mb_id body_link_ = -1, ball_link_ = -1;
-  std::array<mb_id, 4> fingers_{};  // right arm left, right; left arm left, right
-  std::array<mb_id, 2> tcps_{};     // right, left
   int bail_index_ = -1;             // in the bucket's joint vector
   uint32_t bucket_joint_count_ = 0;
   double initial_height_ = 0;       // root height at reset

@@ -2,8 +2,6 @@
 // observation, reward and success.
 #include "move_bucket.hpp"
 
-#include <manibench/sdk/robot_facts.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -26,7 +24,6 @@ using manibench::sdk::TaskSpec;
 
 namespace {
 
-const Eigen::Vector3d kPadOffset(0.0, 0.0076, 0.045);  // finger pad centre in its finger's frame
 constexpr uint32_t kRobotMask = 0;
 constexpr const char* kTaskName = "MoveBucket";
 
@@ -72,28 +69,20 @@ MoveBucketTask::MoveBucketTask(const Config& config)
   if (!partnet_dir_.empty())  // the loader is not written yet
     throw Error("MoveBucket: task.partnet_dir: PartNet-Mobility buckets are not supported yet", MB_UNSUPPORTED);
   if (cache_dir_.empty()) cache_dir_ = getDefaultCacheRoot();
-  const std::string yaml_path = robot_dir_ + "/mobile_panda_dual.yaml";
-  manibench::sdk::RobotFacts facts = manibench::sdk::readRobotFacts(yaml_path, kTaskName);
-  if (facts.joints.size() != kRobotDof)
-    throw Error(yaml_path + ": expected " + std::to_string(kRobotDof) + " joints (the dual-arm robot)", MB_ERROR);
-  robot_joints_ = std::move(facts.joints);
-  robot_initial_ = std::move(facts.initial);
-  camera_yaml_ = std::move(facts.camera_config);
+  robot_state_ = std::make_unique<manibench::sdk::mobile_panda::AgentState>(
+      manibench::sdk::mobile_panda::loadFacts(robot_dir_, "mobile_panda_dual", kTaskName));
+  // The observation layout (ObservationLayout) and the expert assume the
+  // dual-arm robot's 22 joints and 88-value agent vector.
+  if (robot_state_->getFacts().joints.size() != kRobotDof || robot_state_->getDim() != ObservationLayout::kAgentDim)
+    throw Error(robot_dir_ + "/mobile_panda_dual.yaml: expected " + std::to_string(kRobotDof) +
+                    " joints and two arms (the dual-arm robot)",
+                MB_ERROR);
 }
 
 TaskSpec MoveBucketTask::describe() const {
   TaskSpec spec;
-  spec.observation = {
-      {"fingertip_positions", 12, "pad centres: right arm's left, right finger, left arm's left, right (m)"},
-      {"fingertip_velocities", 12, "of the pad centres, world (m/s)"},
-      {"base_position", 2, "x, y of base_link, world (m)"},
-      {"base_yaw", 1, "heading (rad)"},
-      {"base_velocity", 2, "world x, y (m/s)"},
-      {"base_angular_velocity", 1, "yaw rate (rad/s)"},
-      {"joint_positions", kRobotDof, "robot q, actuated joint order"},
-      {"joint_velocities", kRobotDof, "robot qdot, actuated joint order"},
-      {"right_tcp_pose", 7, "right gripper TCP: position, quaternion wxyz, world"},
-      {"left_tcp_pose", 7, "left gripper TCP: position, quaternion wxyz, world"},
+  spec.observation = robot_state_->describe();
+  const std::vector<manibench::sdk::Segment> objects = {
       {"bucket_pose", 7, "bucket frame (centre of the bottom's underside, z up): position, quaternion wxyz"},
       {"bucket_velocity", 3, "of the bucket frame's origin, world (m/s)"},
       {"bucket_ang_velocity", 3, "world (rad/s)"},
@@ -105,12 +94,13 @@ TaskSpec MoveBucketTask::describe() const {
       {"bucket_rim", 4, "rim height above the bucket frame; outer and inner half width along its y; outer half "
                         "width along its x (m)"},
   };
-  spec.agent_state_dim = ObservationLayout::kAgentDim;
+  spec.observation.insert(spec.observation.end(), objects.begin(), objects.end());
+  spec.agent_state_dim = robot_state_->getDim();
   spec.success_conditions = {"on_platform", "upright", "static", "ball_inside", "success"};
   spec.success_hold_steps = hold_steps_;
   spec.masks = {"robot"};
   spec.robot_articulation = "robot";
-  spec.actuated_joints = robot_joints_;
+  spec.actuated_joints = robot_state_->getFacts().joints;
   spec.default_controller = "mobile_panda";
   // The Panda hand squeezes with up to 70 N; the controllers' default
   // finger stiffness (1000 N/m) would press 7-12 N on a 14-24 mm rim,
@@ -131,7 +121,7 @@ TaskSpec MoveBucketTask::describe() const {
     for (const char* finger : {"leftfinger", "rightfinger"})
       config << "      - {articulation: robot, link: " << arm << "_panda_" << finger
              << ", static_friction: 2.0, dynamic_friction: 2.0}\n";
-  spec.default_config = config.str() + camera_yaml_;
+  spec.default_config = config.str() + robot_state_->getFacts().camera_yaml;
   return spec;
 }
 
@@ -153,10 +143,8 @@ void MoveBucketTask::buildScene(SceneView& scene, const std::string& object_id) 
   getBucket(object_id);
   bucket_ = buckets_.at(object_id);
   scene.addGround(0.0);
-  robot_ = scene.addUrdfFile(robot_dir_ + "/mobile_panda_dual.urdf", "robot", Pose(), /*fixed_base=*/true);
-  for (std::size_t i = 0; i < robot_joints_.size(); ++i)
-    if (scene.findJoint(robot_, robot_joints_[i]) != i)
-      throw Error("MoveBucket: robot joint " + robot_joints_[i] + " is not at index " + std::to_string(i));
+  robot_ = scene.addUrdfFile(robot_state_->getFacts().urdf, "robot", Pose(), /*fixed_base=*/true);
+  robot_state_->bind(scene, robot_);
   bucket_id_ = scene.addUrdfString(bucket_->urdf, bucket_->base_dir, "bucket", Pose(), /*fixed_base=*/false);
   body_link_ = scene.findLink(bucket_id_, bucket_->body_link);
   bucket_joint_count_ = scene.getJointCount(bucket_id_);
@@ -166,10 +154,6 @@ void MoveBucketTask::buildScene(SceneView& scene, const std::string& object_id) 
   Pose platform;
   platform.position = platform_centre_;
   platform_id_ = scene.addUrdfString(writePlatformUrdf(), "", "platform", platform, /*fixed_base=*/true);
-  const char* fingers[4] = {"right_panda_leftfinger", "right_panda_rightfinger", "left_panda_leftfinger",
-                            "left_panda_rightfinger"};
-  for (int i = 0; i < 4; ++i) fingers_[std::size_t(i)] = scene.findLink(robot_, fingers[i]);
-  tcps_ = {scene.findLink(robot_, "right_panda_tcp"), scene.findLink(robot_, "left_panda_tcp")};
   scene.addArticulationToMask(kRobotMask, robot_);
 }
 
@@ -190,7 +174,7 @@ void MoveBucketTask::reset(SceneView& scene, uint64_t seed) {
   initial_height_ = bucket.position.z();
   const double robot_distance = rng.uniform(0.6, 0.8);
   const double around = theta + rng.uniform(-0.4 * kPi, 0.4 * kPi);
-  Eigen::VectorXd q = robot_initial_;
+  Eigen::VectorXd q = robot_state_->getFacts().initial;
   q[0] = bucket.position.x() + robot_distance * std::cos(around);
   q[1] = bucket.position.y() + robot_distance * std::sin(around);
   q[2] = std::remainder(around - kPi + rng.uniform(-0.05 * kPi, 0.05 * kPi), 2 * kPi);
@@ -215,34 +199,9 @@ void MoveBucketTask::reset(SceneView& scene, uint64_t seed) {
   scene.setRootPose(ball_id_, ball);
 }
 
-std::array<Eigen::Vector3d, 4> MoveBucketTask::calcPadCentres(const SceneView& scene) const {
-  std::array<Eigen::Vector3d, 4> pads;
-  for (std::size_t i = 0; i < 4; ++i) {
-    const Pose pose = scene.getLinkPose(fingers_[i]);
-    pads[i] = pose.position + pose.orientation * kPadOffset;
-  }
-  return pads;
-}
-
 void MoveBucketTask::observe(const SceneView& scene, Eigen::Map<Eigen::VectorXd> out) {
   using L = ObservationLayout;
-  for (std::size_t i = 0; i < 4; ++i) {
-    const Pose pose = scene.getLinkPose(fingers_[i]);
-    const manibench::sdk::Twist twist = scene.getLinkTwist(fingers_[i]);
-    const Eigen::Vector3d r = pose.orientation * kPadOffset;
-    out.segment<3>(L::kFingertipPositions + 3 * i) = pose.position + r;
-    out.segment<3>(L::kFingertipVelocities + 3 * i) = twist.linear + twist.angular.cross(r);
-  }
-  const Eigen::VectorXd q = scene.getJointPositions(robot_);
-  const Eigen::VectorXd qd = scene.getJointVelocities(robot_);
-  out.segment<2>(L::kBasePosition) = q.head<2>();
-  out[L::kBaseYaw] = q[2];
-  out.segment<2>(L::kBaseVelocity) = qd.head<2>();
-  out[L::kBaseAngularVelocity] = qd[2];
-  out.segment<kRobotDof>(L::kJointPositions) = q;
-  out.segment<kRobotDof>(L::kJointVelocities) = qd;
-  putPose(out, L::kRightTcpPose, scene.getLinkPose(tcps_[0]));
-  putPose(out, L::kLeftTcpPose, scene.getLinkPose(tcps_[1]));
+  robot_state_->observe(scene, out.head(L::kAgentDim));
   const Pose bucket = scene.getLinkPose(body_link_);
   const manibench::sdk::Twist twist = scene.getLinkTwist(body_link_);
   putPose(out, L::kBucketPose, bucket);
@@ -266,7 +225,7 @@ RewardInputs MoveBucketTask::measure(const SceneView& scene, double action_norm)
   RewardInputs in;
   const Pose bucket = scene.getLinkPose(body_link_);
   const Eigen::Matrix3d R = bucket.orientation.toRotationMatrix();
-  const std::array<Eigen::Vector3d, 4> pads = calcPadCentres(scene);
+  const std::vector<Eigen::Vector3d> pads = robot_state_->calcPadPositions(scene);
   double total = 0;
   for (const Eigen::Vector3d& pad : pads) {
     const Eigen::Vector3d local = R.transpose() * (pad - bucket.position);

@@ -160,7 +160,9 @@ TEST(MoveBucketPhysics, WallsStopTheBallAtTaskSpeeds) {
           // than a spring of 1e5 N/m takes its kinetic energy
           EXPECT_LT(r.reach, r.inner - 0.02) << what_;
           EXPECT_LT(r.penetration, speed * std::sqrt(kBallMass / 1e5) + 0.002) << what_;
-          if (speed <= 3) EXPECT_TRUE(r.inside_at_end) << what_ << (fixed ? " fixed" : " free");
+          if (speed <= 3) {
+            EXPECT_TRUE(r.inside_at_end) << what_ << (fixed ? " fixed" : " free");
+          }
           if (id == "3000" && fixed)
             std::cout << what_ << ": the ball's surface " << 1000 * r.penetration << " mm into the wall\n";
         }
