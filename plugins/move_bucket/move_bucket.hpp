@@ -1,7 +1,8 @@
 // MoveBucket: the dual-arm mobile Panda lifts a bucket with a ball inside and
 // sets it upright on a platform (ManiSkill v1, supplement B.2-B.4, B.9,
 // C.1.3). Buckets come from a procedural generator (bucket_generator.cpp,
-// convex pieces it knows exactly, bucket_geometry.cpp).
+// convex pieces it knows exactly, bucket_geometry.cpp) or from a
+// PartNet-Mobility folder (partnet_loader.cpp).
 #pragma once
 
 #include <manibench/sdk.hpp>
@@ -85,7 +86,7 @@ struct BucketModel {
   // included) and inner half extents; x: the outer half extent.
   double rim_height = 0, rim_outer_y = 0, rim_inner_y = 0, rim_outer_x = 0;
   double floor_height = 0;  // the inside bottom above the bucket frame, m
-  double mass = 0;  // body and bail, kg
+  double mass = 0;  // body and bail, kg (0 for PartNet buckets: the host computes it)
   // Points on the body's surface (bucket frame) for the reward's
   // gripper-bucket distance (ManiSkill samples the bucket's meshes too).
   std::vector<Eigen::Vector3d> surface_points;
@@ -124,6 +125,15 @@ BucketModel generateBucket(const std::string& bucket_id, const BucketParams& par
 // Generated bucket ids of a split ("train" or "test").
 std::vector<std::string> listGeneratedBuckets(const std::string& split);
 std::string toString(BucketShape shape);
+
+// ---- PartNet-Mobility buckets (partnet_loader.cpp) --------------------------
+
+// <folder>/<id>/mobility.urdf, the split from <folder>/test.txt (sdk/partnet.hpp).
+std::vector<std::string> listPartNetBuckets(const std::string& folder, const std::string& split);
+// Loads a PartNet-Mobility bucket with every length multiplied by `scale`:
+// body, rim, floor and handle joint measured on its meshes, the URDF given
+// a root link in the bucket frame. Errors name the file and what is wrong.
+BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, double scale);
 
 // Writes a model's mesh files under `cache_root` (a folder per bucket and
 // content hash, written atomically so that parallel workers agree) and
@@ -221,6 +231,7 @@ class MoveBucketTask : public manibench::sdk::Task {
   RewardInputs measure(const manibench::sdk::SceneView& scene, double action_norm) const;
 
   std::string partnet_dir_, robot_dir_, cache_dir_;
+  double partnet_scale_;
   uint32_t hold_steps_;
   // the robot's facts (assets/robots/mobile_panda_dual.yaml) and state
   std::unique_ptr<manibench::sdk::mobile_panda::AgentState> robot_state_;

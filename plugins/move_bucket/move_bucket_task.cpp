@@ -64,10 +64,13 @@ MoveBucketTask::MoveBucketTask(const Config& config)
     : partnet_dir_(config.get<std::string>("partnet_dir", "")),
       robot_dir_(config.get<std::string>("robot_dir", MANIBENCH_ROBOT_DIR)),
       cache_dir_(config.get<std::string>("cache_dir", "")),
+      partnet_scale_(config.get<double>("partnet_scale", 0.3)),
       hold_steps_(config.get<uint32_t>("hold_steps", 10)) {
   if (hold_steps_ == 0) throw Error("MoveBucket: task.hold_steps must be positive", MB_INVALID_ARGUMENT);
-  if (!partnet_dir_.empty())  // the loader is not written yet
-    throw Error("MoveBucket: task.partnet_dir: PartNet-Mobility buckets are not supported yet", MB_UNSUPPORTED);
+  if (!partnet_dir_.empty() && !std::filesystem::is_directory(partnet_dir_))
+    throw Error("MoveBucket: task.partnet_dir '" + partnet_dir_ + "' is not a folder", MB_INVALID_ARGUMENT);
+  if (!(partnet_scale_ > 0) || !std::isfinite(partnet_scale_))
+    throw Error("MoveBucket: task.partnet_scale must be positive", MB_INVALID_ARGUMENT);
   if (cache_dir_.empty()) cache_dir_ = getDefaultCacheRoot();
   robot_state_ = std::make_unique<manibench::sdk::mobile_panda::AgentState>(
       manibench::sdk::mobile_panda::loadFacts(robot_dir_, "mobile_panda_dual", kTaskName));
@@ -128,7 +131,9 @@ TaskSpec MoveBucketTask::describe() const {
 const BucketModel& MoveBucketTask::getBucket(const std::string& bucket_id) const {
   auto& slot = buckets_[bucket_id];
   if (!slot) {
-    auto model = std::make_shared<BucketModel>(generateBucket(bucket_id));
+    auto model = std::make_shared<BucketModel>(partnet_dir_.empty()
+                                                   ? generateBucket(bucket_id)
+                                                   : loadPartNetBucket(partnet_dir_, bucket_id, partnet_scale_));
     writeMeshFiles(*model, cache_dir_);
     slot = model;
   }
@@ -136,7 +141,7 @@ const BucketModel& MoveBucketTask::getBucket(const std::string& bucket_id) const
 }
 
 std::vector<std::string> MoveBucketTask::listObjects(const std::string& split) const {
-  return listGeneratedBuckets(split);
+  return partnet_dir_.empty() ? listGeneratedBuckets(split) : listPartNetBuckets(partnet_dir_, split);
 }
 
 void MoveBucketTask::buildScene(SceneView& scene, const std::string& object_id) {
