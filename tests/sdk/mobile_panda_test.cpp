@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+
 namespace {
 
 namespace mobile_panda = manibench::sdk::mobile_panda;
@@ -49,6 +52,33 @@ TEST(MobilePanda, MissingFactsNameTheFile) {
   } catch (const manibench::sdk::Error& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/mobile_panda_dual.yaml"), std::string::npos) << e.what();
   }
+}
+
+// Malformed facts: an error naming the file and what is wrong, never a read
+// past a short list.
+TEST(MobilePanda, MalformedFactsNameTheFileAndTheProblem) {
+  const std::string dir = ::testing::TempDir() + "mobile_panda_malformed";
+  std::filesystem::create_directories(dir);
+  const std::string path = dir + "/mobile_panda_single.yaml";
+  const auto expectError = [&](const std::string& text, const std::string& what) {
+    std::ofstream(path) << text;
+    try {
+      mobile_panda::loadFacts(dir, "mobile_panda_single", "X");
+      FAIL() << "no error for " << what;
+    } catch (const manibench::sdk::Error& e) {
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  const std::string arms =
+      "arms:\n  - {side: right, tcp_link: t, finger_links: [l, r]}\n"
+      "initial_configuration: {base: [0, 0, 0], lift: 0.1, arm: [], fingers: []}\n";
+  expectError("joints: [a, b]\n" + arms, "(4 values)");
+  expectError("joints: [a, b, c, d]\n" + arms +
+                  "cameras: {width: 4, height: 4, fovy: 1, near: 0.1, far: 10, mount_height: {default: 1},\n"
+                  "  mounts: [{name: head, parent_link: base_link, xyz: [0, 0], rpy: [0, 0, 0]}]}\n",
+              "camera mount head needs xyz and rpy of 3 values");
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -70,6 +70,9 @@ inline Facts loadFacts(const std::string& robot_dir, const std::string& robot, c
     for (const YAML::Node& m : cams["mounts"]) {
       const auto xyz = m["xyz"].as<std::vector<double>>();
       const auto rpy = m["rpy"].as<std::vector<double>>();
+      if (xyz.size() != 3 || rpy.size() != 3)  // (indexing a short list would read past it)
+        throw Error(path + ": camera mount " + m["name"].as<std::string>("?") + " needs xyz and rpy of 3 values",
+                    MB_INVALID_ARGUMENT);
       yaml << "  - name: " << m["name"].as<std::string>() << "\n    articulation: robot\n    link: "
            << m["parent_link"].as<std::string>() << "\n    pose: {position: [" << xyz[0] << ", " << xyz[1] << ", "
            << mount_z << "], rpy: [" << rpy[0] << ", " << rpy[1] << ", " << rpy[2] << "]}\n    width: "

@@ -1,0 +1,227 @@
+// PartNet-Mobility buckets (ManiSkill v1's 29 + 10) over the SDK's PartNet
+// reader (manibench/sdk/partnet.hpp: folders, splits, mobility.urdf, OBJ
+// vertices). What this family adds is what a bucket is:
+//   - the body: every link rigidly attached to the root (through fixed
+//     joints); the bail: the revolute or continuous joint whose child
+//     semantics.txt labels a handle (else the first such joint);
+//   - the bucket frame the task and the expert work in (BucketModel): the
+//     body's bounding box, bottom centre as origin, z up. A new root link
+//     carries that frame, fixed to PartNet's root, so that the frame is a
+//     link of the articulation like a generated bucket's;
+//   - the rim and the floor measured on the body's mesh vertices (PartNet
+//     meshes are not closed: no volumes, no rays); the reward's surface
+//     points sampled on its triangles.
+// Collision is the URDF's: ManiSkill's buckets come as hand-made convex
+// pieces (supplement B.9), each a <collision> the host takes as a hull.
+// Links without <inertial> get mass from those hulls at the default
+// density (1000, the facts'), so the model's mass is left at 0.
+#include "move_bucket.hpp"
+
+#include <manibench/sdk/partnet.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <optional>
+#include <set>
+#include <sstream>
+
+namespace move_bucket {
+
+using manibench::sdk::Error;
+namespace partnet = manibench::sdk::partnet;
+
+namespace {
+
+constexpr const char* kFrameLink = "move_bucket_frame";
+
+// The links held to the root by fixed joints only, the root included.
+std::set<std::string> findBodyLinks(const partnet::Object& object) {
+  std::set<std::string> body = {object.getRoot().name};
+  for (const partnet::Link& link : object.links) {  // parents come first
+    const partnet::Joint* joint = object.findParentJoint(link.name);
+    if (joint != nullptr && joint->type == "fixed" && body.count(joint->parent) > 0) body.insert(link.name);
+  }
+  return body;
+}
+
+const partnet::Joint* findBail(const partnet::Object& object) {
+  const partnet::Joint* first = nullptr;
+  for (const partnet::Joint& j : object.joints) {
+    if (j.type != "revolute" && j.type != "continuous") continue;
+    const partnet::Semantic* s = object.findSemantic(j.child);
+    if (s != nullptr && s->label.find("handle") != std::string::npos) return &j;
+    if (first == nullptr) first = &j;
+  }
+  return first;
+}
+
+// The triangles of an OBJ file's 'f' lines (polygons fanned; 'a/b/c'
+// indices, negative ones counting back from the last vertex so far) over
+// the vertices the SDK reads, multiplied by `scale`.
+TriangleMesh readObjMesh(const std::string& path, const Eigen::Vector3d& scale) {
+  TriangleMesh mesh;
+  mesh.vertices = partnet::readObjVertices(path, scale);
+  std::ifstream in(path);
+  long seen = 0;  // vertices so far
+  int number = 0;
+  for (std::string line; std::getline(in, line);) {
+    ++number;
+    const bool blank = line.size() > 1 && (line[1] == ' ' || line[1] == '\t');
+    if (blank && line[0] == 'v') ++seen;
+    if (!blank || line[0] != 'f') continue;
+    std::istringstream tokens(line.substr(2));
+    std::vector<uint32_t> face;
+    for (std::string token; tokens >> token;) {
+      long i = std::strtol(token.c_str(), nullptr, 10);
+      if (i < 0) i += seen + 1;
+      if (i < 1 || i > long(mesh.vertices.size()))
+        throw Error("PartNet: " + path + ":" + std::to_string(number) + ": bad face index '" + token + "'",
+                    MB_INVALID_ARGUMENT);
+      face.push_back(uint32_t(i - 1));
+    }
+    for (std::size_t k = 1; k + 1 < face.size(); ++k) mesh.triangles.push_back({face[0], face[k], face[k + 1]});
+  }
+  return mesh;
+}
+
+// Where the inside of the rim crosses the axis `side` * y, from rim
+// vertices (x, y): on each side of the axis the vertices nearest to it in
+// angle (within 0.15 rad of the nearest) and of those the one nearest the
+// centre (the inside, not the outside at the same angle); the crossing
+// is on the chord between the two. Exact for polygonal rims, within
+// r (1 - cos 0.15) for round ones.
+std::optional<double> findInnerCrossing(const std::vector<Eigen::Vector2d>& rim, double side) {
+  std::optional<Eigen::Vector2d> nearest[2];  // x < 0, x >= 0
+  for (int half = 0; half < 2; ++half) {
+    double min_angle = 1e9;
+    for (const Eigen::Vector2d& p : rim)
+      if (side * p.y() > 0 && (p.x() >= 0) == (half == 1))
+        min_angle = std::min(min_angle, std::atan2(std::abs(p.x()), side * p.y()));
+    for (const Eigen::Vector2d& p : rim)
+      if (side * p.y() > 0 && (p.x() >= 0) == (half == 1) &&
+          std::atan2(std::abs(p.x()), side * p.y()) <= min_angle + 0.15 && (!nearest[half] || p.norm() < nearest[half]->norm()))
+        nearest[half] = p;
+  }
+  if (!nearest[0] && !nearest[1]) return std::nullopt;
+  if (!nearest[0] || !nearest[1]) return side * (nearest[0] ? *nearest[0] : *nearest[1]).y();
+  const Eigen::Vector2d a = *nearest[0], b = *nearest[1];
+  const double t = b.x() - a.x() > 1e-12 ? -a.x() / (b.x() - a.x()) : 0.5;
+  return side * (a.y() + t * (b.y() - a.y()));
+}
+
+}  // namespace
+
+std::vector<std::string> listPartNetBuckets(const std::string& folder, const std::string& split) {
+  return partnet::listObjectIds(folder, split);
+}
+
+BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, double scale) {
+  const partnet::Object object = partnet::loadObject(folder, id, scale);
+  const std::string path = object.dir + "/mobility.urdf";
+  if (object.findLink(kFrameLink) != nullptr)
+    throw Error("PartNet: " + path + ": link name '" + kFrameLink + "' is taken (MoveBucket adds it)",
+                MB_INVALID_ARGUMENT);
+  const std::map<std::string, Eigen::Isometry3d> pose = object.calcLinkPoses();
+  const std::set<std::string> body_links = findBodyLinks(object);
+  std::vector<Eigen::Vector3d> points;  // the body's visual vertices, object frame
+  partnet::Bounds box;
+  for (const partnet::Link& link : object.links) {
+    if (body_links.count(link.name) == 0) continue;
+    for (const partnet::Shape& v : link.visuals)
+      for (const Eigen::Vector3d& p : object.calcShapePoints(v)) {
+        points.push_back(pose.at(link.name) * p);
+        box.add(points.back());
+      }
+  }
+  if (box.empty() || !(box.extent().minCoeff() > 0))
+    throw Error("PartNet: " + path + ": the bucket body (the links fixed to the root) has no visual geometry",
+                MB_INVALID_ARGUMENT);
+  // The bucket frame: origin at the bottom centre of the body's box.
+  const Eigen::Vector3d origin(box.center().x(), box.center().y(), box.lo.z());
+  for (Eigen::Vector3d& p : points) p -= origin;
+
+  BucketModel model;
+  model.id = id;
+  model.base_dir = object.dir;
+  model.body_link = kFrameLink;
+  model.lower = box.lo - origin;
+  model.upper = box.hi - origin;
+  const double height = model.upper.z();
+  model.rim_height = height;
+  // The rim: vertices in the top 8 % of the height. Outer: their farthest
+  // reach along x and y; inner: where the rim's inside crosses the y axis
+  // (where the expert grips), on either side.
+  const double band = height - 0.08 * height;
+  std::vector<Eigen::Vector2d> rim;
+  for (const Eigen::Vector3d& p : points)
+    if (p.z() >= band) {
+      rim.push_back(p.head<2>());
+      model.rim_outer_y = std::max(model.rim_outer_y, std::abs(p.y()));
+      model.rim_outer_x = std::max(model.rim_outer_x, std::abs(p.x()));
+    }
+  double inner = 0;
+  for (const double side : {1.0, -1.0}) {
+    const std::optional<double> y = findInnerCrossing(rim, side);
+    if (!y || !(*y < model.rim_outer_y - 1e-4) || !(*y > 0))
+      throw Error("PartNet: " + path + ": cannot find the rim's inside where it crosses the bucket's " +
+                      (side > 0 ? "+" : "-") + "y axis (no wall vertices in the top 8 % of the body inside its rim)",
+                  MB_INVALID_ARGUMENT);
+    inner += *y / 2;
+  }
+  model.rim_inner_y = inner;
+  // The floor: the lowest vertex level above the underside (the bottom
+  // slab's top face and the walls' feet) in the lower quarter; the ball is
+  // set on it.
+  model.floor_height = height;
+  for (const Eigen::Vector3d& p : points)
+    if (p.z() > 1e-3 && p.z() < height / 4) model.floor_height = std::min(model.floor_height, p.z());
+  if (!(model.floor_height < height / 4))
+    throw Error("PartNet: " + path + ": no bottom found (no body vertices between 1 mm and a quarter of the height)",
+                MB_INVALID_ARGUMENT);
+  // Surface points for the reward, area-weighted on the body's mesh
+  // triangles (as ManiSkill samples its meshes); bodies of primitives only
+  // get their vertices.
+  TriangleMesh surface;
+  for (const partnet::Link& link : object.links)
+    if (body_links.count(link.name) > 0)
+      for (const partnet::Shape& v : link.visuals)
+        if (v.geometry.kind == partnet::Geometry::Kind::kMesh) {
+          TriangleMesh mesh = readObjMesh((std::filesystem::path(object.dir) / v.geometry.filename).string(),
+                                          v.geometry.scale);
+          for (Eigen::Vector3d& p : mesh.vertices) p = pose.at(link.name) * (v.origin * p) - origin;
+          surface.append(mesh);
+        }
+  model.surface_points =
+      surface.calcArea() > 0 ? sampleSurface(surface, 1024, hashString("surface:partnet:" + id)) : points;
+
+  if (const partnet::Joint* bail = findBail(object)) {
+    model.bail_joint = bail->name;
+    if (bail->limited && bail->type == "revolute") {
+      model.bail_lower = bail->lower;
+      model.bail_upper = bail->upper;
+    }
+  }
+  // The new root: the bucket frame, PartNet's root fixed in it.
+  std::ostringstream frame;
+  frame << std::setprecision(17) << "\n  <link name=\"" << kFrameLink << "\"/>\n  <joint name=\"" << kFrameLink
+        << "_joint\" type=\"fixed\"><parent link=\"" << kFrameLink << "\"/><child link=\"" << object.getRoot().name
+        << "\"/><origin xyz=\"" << -origin.x() << " " << -origin.y() << " " << -origin.z() << "\"/></joint>";
+  model.urdf = object.urdf;
+  const std::size_t robot = model.urdf.find("<robot");
+  const std::size_t open_end = robot == std::string::npos ? robot : model.urdf.find('>', robot);
+  if (open_end == std::string::npos) throw Error("PartNet: " + path + ": no <robot> element", MB_INVALID_ARGUMENT);
+  model.urdf.insert(open_end + 1, frame.str());
+
+  std::ostringstream summary;
+  summary << std::fixed << std::setprecision(2) << "PartNet-Mobility " << id << ", " << height << " m tall, rim "
+          << 2 * model.rim_outer_x << " x " << 2 * model.rim_outer_y << " m"
+          << (model.bail_joint.empty() ? "" : ", handle on " + model.bail_joint);
+  model.summary = summary.str();
+  return model;
+}
+
+}  // namespace move_bucket
