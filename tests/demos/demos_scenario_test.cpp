@@ -62,7 +62,8 @@ std::string nameSetup(const ::testing::TestParamInfo<DemoSetup>& info) {
 INSTANTIATE_TEST_SUITE_P(Experts, FamilyDemos,
                          ::testing::Values(DemoSetup{"Reach-v0", "reach_expert", ""},
                                            DemoSetup{"OpenCabinetDoor-v0", "open_cabinet_expert", "mobile_panda_ee"},
-                                           DemoSetup{"OpenCabinetDrawer-v0", "open_cabinet_expert", "mobile_panda_ee"}),
+                                           DemoSetup{"OpenCabinetDrawer-v0", "open_cabinet_expert", "mobile_panda_ee"},
+                                           DemoSetup{"MoveBucket-v0", "move_bucket_expert", "mobile_panda_ee"}),
                          nameSetup);
 
 TEST(DemoConversion, PointCloudsOfAConvertedSetAreThoseOfALiveEpisode) {
