@@ -11,6 +11,8 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cstdio>
+#include <filesystem>
 #include <ctime>
 #include <fstream>
 #include <iomanip>
@@ -20,6 +22,7 @@
 #include <sstream>
 
 #include "cli.hpp"
+#include "video.hpp"
 
 namespace manibench::cli {
 namespace {
@@ -44,10 +47,12 @@ const char* kDemosUsage = R"(usage: manibench demos generate|replay|convert|info
         --controller NAME, --config FILE, --set KEY=VALUE
         --step-timeout SEC, --env-timeout SEC   as for eval
         --no-progress          no progress bar
-  replay FILE.h5 [--trajectories traj_0,traj_3] [--check]
+  replay FILE.h5 [--trajectories traj_0,traj_3] [--check] [--video DIR]
       Re-simulates each trajectory from its first state with its actions;
       --check compares every step's state, observation, reward and flags
       with the recording, bit for bit, and reports the first difference.
+      --video DIR writes DIR/traj_N.mp4 per trajectory (third-person
+      camera, needs ffmpeg; --video-size WxH, default 640x480).
       Exit status 1 when any trajectory differs or cannot be read.
   convert FILE.h5 --obs pointcloud|rgbd --out FILE2.h5 [--workers N]
           [--trajectories LIST] [--set KEY=VALUE]... [--no-progress]
@@ -218,9 +223,24 @@ int generate(int argc, char** argv) {
 }
 
 int replay(int argc, char** argv) {
-  const Arguments args = parseArguments(argc, argv, 3, {"trajectories"}, {"check"}, kDemosUsage);
+  const Arguments args =
+      parseArguments(argc, argv, 3, {"trajectories", "video", "video-size"}, {"check"}, kDemosUsage);
   const std::string path = onePositional(args, "replay");
   const bool check = args.options.count("check") != 0;
+  const std::string video_dir = valueOr(args, "video", "");
+  int video_width = 640, video_height = 480;
+  if (args.options.count("video-size")) {
+    char x = 0;
+    if (std::sscanf(args.options.at("video-size").c_str(), "%d%c%d", &video_width, &x, &video_height) != 3 ||
+        x != 'x' || video_width < 16 || video_height < 16 || video_width > 8192 || video_height > 8192 ||
+        video_width % 2 || video_height % 2)
+      throw UsageError("--video-size must be WxH, even numbers from 16 to 8192", kDemosUsage);
+  }
+  if (!video_dir.empty()) {
+    std::error_code error;
+    std::filesystem::create_directories(video_dir, error);
+    if (error) throw std::runtime_error("cannot create " + video_dir + ": " + error.message());
+  }
   const DemoReader reader(path);
   std::vector<std::string> names = parseTrajectoryList(args);
   if (names.empty()) names = reader.getTrajectoryNames();
@@ -234,7 +254,16 @@ int replay(int argc, char** argv) {
       const Trajectory t = reader.read(name);
       std::cout << "object " << t.object_id << ", level " << t.level << ", seed " << t.seed << ", "
                 << t.steps << " steps: " << std::flush;
-      const ReplayResult r = replayTrajectory(*env, t, check);
+      std::unique_ptr<EpisodeVideo> video;
+      if (!video_dir.empty())
+        video = std::make_unique<EpisodeVideo>(*env, (std::filesystem::path(video_dir) / (name + ".mp4")).string(),
+                                               video_width, video_height);
+      const ReplayResult r = replayTrajectory(*env, t, check, [&](uint32_t step) {
+        if (!video) return;
+        if (step == 0) video->aimAtRobot();
+        video->record();
+      });
+      if (video) video->close();
       if (!check) {
         std::cout << "replayed " << r.steps << " steps\n";
       } else if (r.matches) {
@@ -372,10 +401,11 @@ int info(int argc, char** argv) {
 
 int commandDemos(int argc, char** argv) {
   const std::string sub = argc > 2 ? argv[2] : "";
-  if (sub.empty() || sub == "--help" || sub == "-h") {
+  if (sub == "--help" || sub == "-h") {
     std::cout << kDemosUsage;
-    return sub.empty() ? 2 : 0;
+    return 0;
   }
+  if (sub.empty()) throw UsageError("demos needs a command: generate, replay, convert or info", kDemosUsage);
   for (int i = 3; i < argc; ++i)
     if (std::string(argv[i]) == "--help" || std::string(argv[i]) == "-h") {
       std::cout << kDemosUsage;

@@ -19,6 +19,7 @@
 
 #include "cli.hpp"
 #include "image_io.hpp"
+#include "video.hpp"
 
 namespace manibench::cli {
 namespace {
@@ -77,92 +78,20 @@ void writeCamera(const std::filesystem::path& dir, const CameraImages& image, co
   }
 }
 
-std::string shellQuote(const std::string& text) {
-  std::string out = "'";
-  for (char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
-// Pipes raw RGB frames into ffmpeg, which encodes them to `path`.
-class VideoWriter {
- public:
-  VideoWriter(const std::string& path, int width, int height, double fps) : path_(path) {
-    if (std::system("command -v ffmpeg >/dev/null 2>&1") != 0)
-      throw std::runtime_error("--video needs the ffmpeg program (Debian package ffmpeg; "
-                               "scripts/install-deps installs it)");
-    // A dead ffmpeg must give a write error here, not kill this process.
-    std::signal(SIGPIPE, SIG_IGN);
-    const std::string command =
-        "ffmpeg -loglevel error -y -f rawvideo -pix_fmt rgb24 -s " + std::to_string(width) + "x" +
-        std::to_string(height) + " -r " + std::to_string(fps) +
-        " -i - -an -pix_fmt yuv420p " + shellQuote(path);
-    pipe_ = popen(command.c_str(), "w");
-    if (pipe_ == nullptr) throw std::runtime_error("cannot start ffmpeg: " + std::string(std::strerror(errno)));
-  }
-  ~VideoWriter() {
-    if (pipe_) pclose(pipe_);
-  }
-  void write(const CameraImages& image) {
-    const std::size_t pixels = std::size_t(image.width) * std::size_t(image.height);
-    frame_.resize(3 * pixels);
-    for (std::size_t p = 0; p < pixels; ++p)
-      for (std::size_t c = 0; c < 3; ++c) frame_[3 * p + c] = image.rgba[4 * p + c];
-    if (std::fwrite(frame_.data(), 1, frame_.size(), pipe_) != frame_.size())
-      throw std::runtime_error("ffmpeg stopped taking frames for " + path_);
-    ++frames_;
-  }
-  void close() {
-    const int status = pclose(pipe_);
-    pipe_ = nullptr;
-    if (status != 0)
-      throw std::runtime_error("ffmpeg failed to write " + path_ + " (exit status " +
-                               std::to_string(status) + ")");
-  }
-  int getFrameCount() const { return frames_; }
-
- private:
-  std::string path_;
-  std::FILE* pipe_ = nullptr;
-  std::vector<std::uint8_t> frame_;
-  int frames_ = 0;
-};
-
 void recordVideo(PluginRegistry& registry, Environment& env, const std::string& policy_arg,
                  const std::string& object, uint64_t seed, const std::string& path, int width,
                  int height) {
   const std::string policy_name = resolvePolicy(registry, policy_arg);
   PolicyInstance policy(registry, policy_name, "", env.calcPolicyLayout());
-  const TaskDescription& task = env.getTaskDescription();
-  CameraSpec camera;
-  camera.name = "third_person";
-  camera.width = width;
-  camera.height = height;
-  camera.fovy = 1.0;
-  camera.far = 20;
-  Pose pose;
-  VideoWriter video(path, width, height, task.control_frequency / task.frame_skip);
-  CameraImages frame;
-  auto record = [&] {
-    env.updObserver().updRenderer().render(camera, pose, frame);
-    video.write(frame);
-  };
+  EpisodeVideo video(env, path, width, height);
   // A frame of every state a policy sees, then of the last one.
   EpisodeHooks hooks;
-  hooks.on_phase = [&](EpisodePhase phase, uint32_t step) {
-    if (phase == EpisodePhase::PolicyReset) {
-      // Third person: from the front-right, above, looking at the robot's
-      // root where the reset put it.
-      const Scene& scene = env.getScene();
-      const int robot = scene.findArticulation(task.robot_articulation);
-      const Eigen::Vector3d target =
-          (robot >= 0 ? scene.getRootPose(robot).position : Eigen::Vector3d::Zero()) +
-          Eigen::Vector3d(0, 0, 0.6);
-      pose = calcLookAtPose(target + Eigen::Vector3d(2.5, -2.5, 1.6), target);
-    }
-    if (phase == EpisodePhase::PolicyAct) record();
+  hooks.on_phase = [&](EpisodePhase phase, uint32_t) {
+    if (phase == EpisodePhase::PolicyReset) video.aimAtRobot();
+    if (phase == EpisodePhase::PolicyAct) video.record();
   };
   runEpisode(env, policy, object, seed, hooks);
-  record();
+  video.record();
   video.close();
   std::cout << "wrote " << path << ": " << video.getFrameCount() << " frames, "
             << env.getElapsedSteps() << " steps of policy " << policy_name << "\n";

@@ -40,7 +40,7 @@ TEST(Cli, HelpAndUsageErrors) {
   const auto help = runCli({"--help"});
   EXPECT_EQ(help.exit_code, 0);
   EXPECT_TRUE(contains(help.out, "usage: manibench"));
-  for (const char* command : {"list", "info", "run", "bench", "config", "demo", "eval", "render", "objects"}) {
+  for (const char* command : {"list", "info", "run", "bench", "config", "demo", "demos", "eval", "render", "objects"}) {
     const auto r = runCli({command, "--help"});
     EXPECT_EQ(r.exit_code, 0) << command;
     EXPECT_TRUE(contains(r.out, std::string("usage: manibench ") + command)) << r.out;
@@ -145,6 +145,11 @@ TEST(Cli, UsageErrorsPrintTheCommandsOwnUsage) {
       {{"config", "Reach-v0", "Other-v0"}, "usage: manibench config"},
       {{"config", "--bogus"}, "usage: manibench config"},
       {{"demo", "now"}, "usage: manibench demo"},
+      {{"demos"}, "usage: manibench demos"},
+      {{"demos", "record"}, "usage: manibench demos"},
+      {{"demos", "generate", "Reach-v0", "--out", "x.h5"}, "usage: manibench demos"},
+      {{"demos", "replay"}, "usage: manibench demos"},
+      {{"demos", "convert", "x.h5", "--out", "y.h5"}, "usage: manibench demos"},
   };
   for (const Case& c : cases) {
     const auto r = runCli(c.arguments);

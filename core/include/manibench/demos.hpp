@@ -167,7 +167,7 @@ std::string getDemoJsonPath(const std::string& h5_path);
 // first state, then steps its actions. With `check`, compares every step's
 // state blob, observation, reward and flags with the recorded ones, bit for
 // bit, and stops at the first difference. `on_step` (may be empty) sees
-// each step after it is taken.
+// the first state (0) and each step after it is taken (1, 2, ...).
 struct ReplayResult {
   uint32_t steps = 0;
   bool matches = true;

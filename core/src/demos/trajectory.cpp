@@ -206,6 +206,7 @@ ReplayResult replayTrajectory(Environment& env, const Trajectory& t, bool check,
     throw DemoError("the trajectory has " + std::to_string(t.getStateCount()) + " states for " +
                     std::to_string(t.steps) + " steps");
   env.restoreState(t.getEnvState(0));
+  if (on_step) on_step(0);
   const std::vector<SegmentDescription>& segments = env.calcPolicyLayout().observation_segments;
   auto differ = [&](uint32_t step, const std::string& what) {
     result.matches = false;
