@@ -335,6 +335,28 @@ TEST(Eval, CrashedWorkersAreReplacedAndTheOthersGoOn) {
   EXPECT_TRUE(contains(json, "\"failures\": {\"crash\": " + std::to_string(crashed) + "}")) << json;
 }
 
+// An environment error ends its worker (a fresh process rather than a scene
+// in an unknown state); the episode handed out next must run in a fresh
+// worker, not be recorded as that worker's crash.
+TEST(Eval, EnvironmentErrorsFailOnlyTheirEpisodes) {
+  TempDir out;
+  const auto r = runEval(out,
+                         {"FailingSlider-v0", "--policy", "zero", "--levels", "0-2", "--workers", "1"},
+                         {kFixturePath});
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  const auto episodes = checkFilesAgree(out);
+  ASSERT_EQ(episodes.size(), 12u);
+  for (const auto& e : episodes) {
+    if (e.at("object") == "1") {
+      EXPECT_EQ(e.at("failure"), failure::kEnvironmentError) << e.at("message");
+      EXPECT_TRUE(contains(e.at("message"), "fails on object 1 at step 3")) << e.at("message");
+    } else {
+      EXPECT_EQ(e.at("failure"), "") << e.at("object") << ": " << e.at("message");
+      EXPECT_EQ(e.at("steps"), "8");
+    }
+  }
+}
+
 TEST(Eval, UnloadablePolicyLibraryStopsBeforeStarting) {
   for (const auto& [library, expected] : std::vector<std::pair<std::string, std::string>>{
            {kFixtureDir + "/libfixture_wrong_abi_major.so", "ABI 99.0"},
@@ -384,7 +406,11 @@ TEST(Eval, UsageErrorsAndUnknownObjects) {
   EXPECT_TRUE(contains(policy.err, "no_such_policy")) << policy.err;
 }
 
-TEST(Eval, InterruptWritesPartialResults) {
+// Ctrl-C, and what cluster schedulers send on preemption (SIGTERM) or a
+// closed terminal (SIGHUP): partial results written, workers reaped.
+class EvalStop : public ::testing::TestWithParam<int> {};
+
+TEST_P(EvalStop, WritesPartialResults) {
   TempDir out;
   const std::string log = (out / "stdout.txt").string();
   const pid_t pid = fork();
@@ -408,7 +434,7 @@ TEST(Eval, InterruptWritesPartialResults) {
   for (int i = 0; i < 600 && !contains(readFile(log), "evaluating"); ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   std::this_thread::sleep_for(std::chrono::milliseconds(1000));
-  kill(pid, SIGINT);
+  kill(pid, GetParam());
   int status = 0;
   waitpid(pid, &status, 0);
   ASSERT_TRUE(WIFEXITED(status));
@@ -421,6 +447,8 @@ TEST(Eval, InterruptWritesPartialResults) {
   EXPECT_LT(episodes.size(), 2000u);
   for (const auto& e : episodes) EXPECT_EQ(e.at("failure"), "") << e.at("message");
 }
+
+INSTANTIATE_TEST_SUITE_P(Signals, EvalStop, ::testing::Values(SIGINT, SIGTERM, SIGHUP));
 
 }  // namespace
 }  // namespace manibench

@@ -75,6 +75,7 @@ struct Worker {
   std::string buffer;    // bytes received, not yet a whole message
   int64_t episode = -1;  // index of the episode it runs, -1 when idle
   bool ready = false;
+  bool leaving = false;  // said it leaves after its episode: gets no other
   const char* kill_reason = nullptr;  // set when the coordinator killed it
   std::string kill_message;
 };
@@ -257,7 +258,7 @@ void Coordinator::plan(EvaluationTaskInfo info) {
 
 void Coordinator::dispatch(std::size_t i) {
   Worker& w = pool_.workers()[i];
-  if (!planned_ || !w.ready || w.episode >= 0 || next_ >= result_.planned.size()) return;
+  if (!planned_ || !w.ready || w.leaving || w.episode >= 0 || next_ >= result_.planned.size()) return;
   const EpisodeSpec& spec = result_.planned[next_++];
   w.episode = static_cast<int64_t>(spec.index);
   Writer m;
@@ -293,6 +294,7 @@ bool Coordinator::handleMessage(std::size_t i, const std::string& payload) {
       transferTrajectory(in, *trajectory);
       r.trajectory = std::move(trajectory);
     }
+    w.leaving = in.u8() != 0;
     const std::size_t index = r.spec.index;
     if (w.episode < 0 || uint64_t(w.episode) != index)
       throw EvaluationError("worker reported episode " + std::to_string(index) +

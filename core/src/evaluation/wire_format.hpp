@@ -162,7 +162,7 @@ void transferResult(Stream& s, Record& r) {
 }
 
 // After kResult's record: a recorded trajectory (a u8 says whether one
-// follows).
+// follows), then a u8: whether the worker leaves after this episode.
 template <class Stream, class Recorded>
 void transferTrajectory(Stream& s, Recorded& t) {
   s.fields(t.object_id, t.level, t.seed, t.steps, t.success, t.total_reward, t.action_dim,

@@ -184,6 +184,9 @@ void runWorker(int fd, Slot& slot, const WorkerContext& context) {
       transferResult(w.u8(kResult), record);
       w.u8(record.trajectory ? 1 : 0);
       if (record.trajectory) transferTrajectory(w, *record.trajectory);
+      // Whether this worker leaves after the episode (the coordinator then
+      // hands the next episode to a fresh one, not to this one).
+      w.u8(after == After::kLeave ? 1 : 0);
       if (!sendMessage(fd, w) || after == After::kLeave) break;
       if (after == After::kNewPolicy) {
         enterPhase(slot, kSetup);
