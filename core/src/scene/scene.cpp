@@ -5,6 +5,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 
 #include <algorithm>
@@ -100,6 +101,9 @@ void Scene::addGround(double height) {
 int Scene::addUrdfFile(const std::string& path, const std::string& name,
                        const Pose& root, bool fixed_base) {
   impl_->requireBuilding("addUrdfFile");
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error))
+    throw SceneError("URDF '" + path + "': is a directory, not a URDF file");
   std::ifstream in(path, std::ios::binary);
   if (!in)
     throw SceneError("URDF '" + path + "': cannot open the file: " + std::strerror(errno));

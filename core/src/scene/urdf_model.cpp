@@ -211,8 +211,7 @@ struct Builder {
                        std::to_string(scale[2]) + "; every factor must be finite and non-zero");
     const std::string path = findMeshFile(mesh.filename, base_dir);
     if (path.empty())
-      fail(source, "link '" + link.name + "': collision mesh '" + mesh.filename +
-                       "' not found (relative paths start at '" + base_dir + "')");
+      fail(source, "link '" + link.name + "': collision mesh " + describeMissingMesh(mesh.filename, base_dir));
     try {
       return loadConvexHull(path, scale);
     } catch (const FlatHullError& e) {
@@ -281,8 +280,7 @@ struct Builder {
                        std::to_string(scale[2]) + "; every factor must be finite and non-zero");
     path = findMeshFile(mesh.filename, base_dir);
     if (path.empty())
-      fail(source, what + ": visual mesh '" + mesh.filename +
-                       "' not found (relative paths start at '" + base_dir + "')");
+      fail(source, what + ": visual mesh " + describeMissingMesh(mesh.filename, base_dir));
     try {
       return loadVisualMeshes(path, scale);
     } catch (const std::exception& e) {
@@ -561,9 +559,113 @@ bool rewriteCapsules(TiXmlDocument& doc, std::set<std::pair<std::string, int>>& 
   return changed;
 }
 
+// "line 12: " for people, from TinyXML's row.
+std::string formatLine(const TiXmlElement& e) {
+  return e.Row() > 0 ? "line " + std::to_string(e.Row()) + ": " : "";
+}
+
+// Where an element sits, for people: "<origin> of <collision> of link 'l'".
+std::string describeElement(const TiXmlElement& e) {
+  std::string text = "<" + std::string(e.Value()) + ">";
+  for (const TiXmlNode* p = e.Parent(); p && p->ToElement(); p = p->Parent()) {
+    const TiXmlElement& parent = *p->ToElement();
+    const char* name = parent.Attribute("name");
+    if (std::string(parent.Value()) == "robot") break;
+    text += " of <" + std::string(parent.Value()) + ">";
+    if (name) {
+      text += " '" + std::string(name) + "'";
+      break;
+    }
+  }
+  return text;
+}
+
+// Numbers urdfdom would take as they are: NaN and infinities make shapes
+// vanish and inertias blow up only later, as a divergence naming another
+// link. Every numeric attribute of the file must be finite.
+void checkNumbersAreFinite(const TiXmlElement& element, const std::string& source) {
+  static const std::set<std::string> numeric = {
+      "xyz", "rpy", "value", "ixx", "ixy", "ixz", "iyy", "iyz", "izz", "radius", "length", "size",
+      "scale", "lower", "upper", "effort", "velocity", "damping", "friction", "multiplier", "offset",
+      "rgba"};
+  for (const TiXmlAttribute* a = element.FirstAttribute(); a; a = a->Next()) {
+    if (!numeric.count(a->Name())) continue;
+    std::istringstream words(a->Value());
+    std::string word;
+    while (words >> word) {
+      char* end = nullptr;
+      const double v = std::strtod(word.c_str(), &end);
+      if (end != word.c_str() && *end == '\0' && !std::isfinite(v))
+        fail(source, formatLine(element) + describeElement(element) + ": " + a->Name() + " = \"" +
+                         a->Value() + "\" is not a finite number");
+    }
+  }
+  for (const TiXmlElement* child = element.FirstChildElement(); child; child = child->NextSiblingElement())
+    checkNumbersAreFinite(*child, source);
+}
+
+// The joint graph must be a tree: urdfdom accepts a link with two parents
+// and a joint from a link to itself, and a cycle below the root sends the
+// builder into endless recursion.
+void checkJointTree(const TiXmlElement& robot, const std::string& source) {
+  struct Edge {
+    std::string joint, parent;
+    int line = 0;
+  };
+  std::map<std::string, Edge> parent_of;  // child link -> its joint
+  for (const TiXmlElement* j = robot.FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
+    const char* name = j->Attribute("name");
+    const TiXmlElement* parent = j->FirstChildElement("parent");
+    const TiXmlElement* child = j->FirstChildElement("child");
+    const char* parent_link = parent ? parent->Attribute("link") : nullptr;
+    const char* child_link = child ? child->Attribute("link") : nullptr;
+    if (!name || !parent_link || !child_link) continue;  // urdfdom says what is missing
+    if (std::string(parent_link) == child_link)
+      fail(source, formatLine(*j) + "joint '" + name + "' connects link '" + child_link + "' to itself");
+    const auto [it, added] = parent_of.emplace(child_link, Edge{name, parent_link, j->Row()});
+    if (!added)
+      fail(source, formatLine(*j) + "link '" + child_link + "' has two parent joints: '" + it->second.joint +
+                       "' (line " + std::to_string(it->second.line) + ") and '" + name + "'");
+  }
+  for (const auto& [link, edge] : parent_of) {
+    // Up the parents: a walk longer than the number of joints is a cycle.
+    std::string at = link;
+    std::vector<std::string> joints;
+    for (std::size_t steps = 0; steps <= parent_of.size(); ++steps) {
+      const auto up = parent_of.find(at);
+      if (up == parent_of.end()) break;
+      joints.push_back(up->second.joint);
+      at = up->second.parent;
+      if (at == link) {
+        std::string cycle;
+        for (const std::string& j : joints) cycle += (cycle.empty() ? "'" : ", '") + j + "'";
+        fail(source, "the joints " + cycle + " form a cycle through link '" + link + "' (a URDF is a tree)");
+      }
+    }
+  }
+}
+
+// <limit> without effort or velocity (PartNet-Mobility and many published
+// files write lower/upper only; urdfdom refuses them): completed with 0,
+// which manibench reads as "not limited" (docs/urdf.md). Returns true if
+// anything changed.
+bool completeLimits(TiXmlElement& robot) {
+  bool changed = false;
+  for (TiXmlElement* j = robot.FirstChildElement("joint"); j; j = j->NextSiblingElement("joint"))
+    if (TiXmlElement* limit = j->FirstChildElement("limit")) {
+      for (const char* attribute : {"effort", "velocity"})
+        if (!limit->Attribute(attribute)) {
+          limit->SetAttribute(attribute, "0");
+          changed = true;
+        }
+    }
+  return changed;
+}
+
 }  // namespace
 
-std::string findMeshFile(const std::string& filename, const std::string& base_dir) {
+std::string findMeshFile(const std::string& filename, const std::string& base_dir,
+                         std::vector<std::string>* tried) {
   const std::string dir = base_dir.empty() ? "." : base_dir;
   std::vector<std::string> candidates;
   const std::string file_scheme = "file://", package_scheme = "package://";
@@ -589,15 +691,27 @@ std::string findMeshFile(const std::string& filename, const std::string& base_di
       if (cut == std::string::npos || cut == 0) break;
       ancestor.resize(cut);
     }
+    // PyBullet-style folders write package://meshes/x.obj for
+    // <urdf dir>/meshes/x.obj.
+    candidates.push_back(dir + "/" + rest);
     candidates.push_back(dir + "/" + inside);
   } else if (!filename.empty() && filename[0] == '/') {
     candidates.push_back(filename);
   } else {
     candidates.push_back(dir + "/" + filename);
   }
+  if (tried) *tried = candidates;
   for (const std::string& candidate : candidates)
     if (isFile(candidate)) return candidate;
   return "";
+}
+
+std::string describeMissingMesh(const std::string& filename, const std::string& base_dir) {
+  std::vector<std::string> tried;
+  findMeshFile(filename, base_dir, &tried);
+  std::string text = "'" + filename + "' not found; tried";
+  for (std::size_t i = 0; i < tried.size(); ++i) text += (i ? ", '" : " '") + tried[i] + "'";
+  return text;
 }
 
 ArticulationModel buildArticulationModel(const std::string& urdf_xml,
@@ -609,6 +723,11 @@ ArticulationModel buildArticulationModel(const std::string& urdf_xml,
   TiXmlDocument doc;
   doc.Parse(urdf_xml.c_str());
   if (doc.Error()) {
+    // TinyXML says "Error document empty" for anything without an element,
+    // random bytes included.
+    if (urdf_xml.find('<') == std::string::npos || urdf_xml.find('\0') != std::string::npos)
+      fail(source, "not an XML file (no XML elements" +
+                       std::string(urdf_xml.find('\0') != std::string::npos ? ", binary data" : "") + ")");
     std::ostringstream s;
     s << "malformed XML";
     if (doc.ErrorRow() > 0) s << " at line " << doc.ErrorRow() << ", column " << doc.ErrorCol();
@@ -616,7 +735,11 @@ ArticulationModel buildArticulationModel(const std::string& urdf_xml,
     fail(source, s.str());
   }
   std::map<std::string, int> joint_file_order;
-  if (const TiXmlElement* robot = doc.FirstChildElement("robot")) {
+  bool limits_completed = false;
+  if (TiXmlElement* robot = doc.FirstChildElement("robot")) {
+    checkNumbersAreFinite(*robot, source);
+    checkJointTree(*robot, source);
+    limits_completed = completeLimits(*robot);
     for (const TiXmlElement* j = robot->FirstChildElement("joint"); j != nullptr;
          j = j->NextSiblingElement("joint")) {
       if (const char* name = j->Attribute("name"))
@@ -625,7 +748,7 @@ ArticulationModel buildArticulationModel(const std::string& urdf_xml,
   }
   std::set<std::pair<std::string, int>> capsules, visual_capsules;
   std::string urdf_text;
-  if (rewriteCapsules(doc, capsules, visual_capsules)) {
+  if (rewriteCapsules(doc, capsules, visual_capsules) || limits_completed) {
     TiXmlPrinter printer;
     doc.Accept(&printer);
     urdf_text = printer.CStr();

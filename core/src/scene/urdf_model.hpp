@@ -85,9 +85,14 @@ ArticulationModel buildArticulationModel(const std::string& urdf_xml,
 
 // Where a URDF mesh filename points: an absolute path, file://,
 // package://NAME/rest (looked up in ROS_PACKAGE_PATH, then in an ancestor
-// of `base_dir` named NAME, then as base_dir/rest), or a path relative to
-// `base_dir`. Returns the first existing candidate, or "" if none exists.
-std::string findMeshFile(const std::string& filename, const std::string& base_dir);
+// of `base_dir` named NAME, then as base_dir/NAME/rest, PyBullet's
+// convention, then as base_dir/rest), or a path relative to `base_dir`
+// (docs/urdf.md). Returns the first existing candidate, or "" if none
+// exists; `tried` (may be null) gets every candidate in order.
+std::string findMeshFile(const std::string& filename, const std::string& base_dir,
+                         std::vector<std::string>* tried = nullptr);
+// "not found; tried: a, b, c" for a mesh that findMeshFile did not find.
+std::string describeMissingMesh(const std::string& filename, const std::string& base_dir);
 
 }  // namespace scene_detail
 }  // namespace manibench

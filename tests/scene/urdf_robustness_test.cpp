@@ -1,0 +1,132 @@
+// URDF files as users meet them: graphs that are not trees, numbers that
+// are not finite, files that are not XML, <limit> without effort or
+// velocity, PyBullet-style package:// paths. Each loads and is sane, or is
+// refused naming the file, the element and the reason; none crashes.
+#include <manibench/scene.hpp>
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "test_support.hpp"
+
+namespace manibench {
+namespace {
+
+using testing::catchMessage;
+using testing::expectMentions;
+
+std::string robot(const std::string& body) { return "<?xml version=\"1.0\"?>\n<robot name=\"r\">\n" + body + "</robot>\n"; }
+
+std::string link(const std::string& name, const std::string& inner = "") {
+  return "  <link name=\"" + name + "\">" + inner + "</link>\n";
+}
+std::string inertial(const std::string& ixx = "1e-3") {
+  return "<inertial><mass value=\"1\"/><inertia ixx=\"" + ixx +
+         "\" ixy=\"0\" ixz=\"0\" iyy=\"1e-3\" iyz=\"0\" izz=\"1e-3\"/></inertial>";
+}
+std::string joint(const std::string& name, const std::string& parent, const std::string& child,
+                  const std::string& limit = "<limit lower=\"-1\" upper=\"1\" effort=\"10\" velocity=\"1\"/>") {
+  return "  <joint name=\"" + name + "\" type=\"revolute\"><parent link=\"" + parent + "\"/><child link=\"" + child +
+         "\"/><axis xyz=\"0 0 1\"/>" + limit + "</joint>\n";
+}
+
+std::string loadError(const std::string& urdf) {
+  return catchMessage<SceneError>([&] {
+    Scene scene;
+    scene.addUrdfString(urdf, "", "robot", Pose(), true);
+    scene.finalize();
+  });
+}
+
+TEST(UrdfRobustness, GraphsThatAreNotTreesAreRefusedNamingTheJoints) {
+  // A cycle below a valid root: b -> c -> b, root a.
+  expectMentions(loadError(robot(link("a", inertial()) + link("b", inertial()) + link("c", inertial()) +
+                                 joint("ab", "a", "b") + joint("bc", "b", "c") + joint("cb", "c", "b"))),
+                 {"link 'b' has two parent joints", "'ab'", "'cb'"});
+  expectMentions(loadError(robot(link("a", inertial()) + link("b", inertial()) + link("c", inertial()) +
+                                 joint("bc", "b", "c") + joint("cb", "c", "b"))),
+                 {"form a cycle", "'bc'", "'cb'"});
+  expectMentions(loadError(robot(link("a", inertial()) + link("b", inertial()) + joint("ab", "a", "b") +
+                                 joint("bb", "b", "b"))),
+                 {"joint 'bb' connects link 'b' to itself", "line"});
+}
+
+TEST(UrdfRobustness, NumbersThatAreNotFiniteAreRefusedNamingTheElement) {
+  const std::string box = "<geometry><box size=\"0.1 0.1 0.1\"/></geometry>";
+  expectMentions(loadError(robot(link("a", inertial() + "<visual><origin xyz=\"0 nan 0\"/>" + box + "</visual>"))),
+                 {"<origin> of <visual> of <link> 'a'", "xyz", "not a finite number", "line"});
+  expectMentions(loadError(robot(link("a", inertial() + "<collision><origin rpy=\"inf 0 0\"/>" + box + "</collision>"))),
+                 {"<origin> of <collision> of <link> 'a'", "rpy"});
+  expectMentions(loadError(robot(link("a", inertial("nan")))), {"<inertia>", "'a'", "ixx"});
+}
+
+TEST(UrdfRobustness, FilesThatAreNotUrdfSayWhatTheyAre) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("manibench_urdf_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string random = (dir / "random.urdf").string();
+  {
+    std::ofstream out(random, std::ios::binary);
+    uint64_t x = 88172645463325252ull;
+    for (int i = 0; i < 100000; ++i) {
+      x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+      out.put(char(x & 0xff));
+    }
+  }
+  auto load = [](const std::string& path) {
+    return catchMessage<SceneError>([&] {
+      Scene scene;
+      scene.addUrdfFile(path, "robot", Pose(), true);
+    });
+  };
+  expectMentions(load(random), {random, "not an XML file"});
+  expectMentions(load(dir.string()), {dir.string(), "is a directory"});
+  std::filesystem::remove_all(dir);
+}
+
+TEST(UrdfRobustness, LimitsWithoutEffortOrVelocityLoadUnlimited) {
+  Scene scene;
+  const int r = scene.addUrdfString(robot(link("a", inertial()) + link("b", inertial()) +
+                                          joint("ab", "a", "b", "<limit lower=\"-0.5\" upper=\"0.5\"/>")),
+                                    "", "robot", Pose(), true);
+  scene.finalize();
+  ASSERT_EQ(scene.getJoints(r).size(), 1u);
+  const JointDescription& j = scene.getJoints(r)[0];
+  EXPECT_EQ(j.effort_limit, 0.0);  // not limited
+  EXPECT_EQ(j.lower, -0.5);        // the position limits apply
+  EXPECT_EQ(j.upper, 0.5);
+}
+
+TEST(UrdfRobustness, PyBulletStylePackagePathsAndMissingMeshesListTheCandidates) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("manibench_pybullet_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir / "meshes");
+  std::ofstream(dir / "meshes" / "cube.obj") << "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\nv 0.1 0.1 0\n"
+                                                "v 0.1 0 0.1\nv 0 0.1 0.1\nv 0.1 0.1 0.1\n"
+                                                "f 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 5 6\nf 3 5 7\nf 4 6 7\nf 5 6 8\nf 6 7 8\n";
+  auto write = [&](const std::string& file, const std::string& mesh) {
+    std::ofstream(dir / file) << robot(link("a", inertial() + "<collision><geometry><mesh filename=\"" + mesh +
+                                                   "\"/></geometry></collision>"));
+    return (dir / file).string();
+  };
+  {
+    Scene scene;
+    const int r = scene.addUrdfFile(write("ok.urdf", "package://meshes/cube.obj"), "robot", Pose(), true);
+    scene.finalize();
+    EXPECT_GE(r, 0);
+  }
+  const std::string missing = write("missing.urdf", "package://meshes/sphere.obj");
+  const std::string message = catchMessage<SceneError>([&] {
+    Scene scene;
+    scene.addUrdfFile(missing, "robot", Pose(), true);
+  });
+  expectMentions(message, {missing, "link 'a'", "sphere.obj' not found; tried", (dir / "meshes" / "sphere.obj").string(),
+                           (dir / "sphere.obj").string()});
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace manibench
