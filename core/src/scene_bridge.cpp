@@ -72,6 +72,11 @@ void requireCount(const Scene& scene, mb_id articulation, uint32_t count) {
 void requirePointer(const void* p, const char* what) {
   if (p == nullptr) throw SceneError(std::string(what) + " is null");
 }
+// An array of `count` values: null is fine when there are none (an empty
+// Eigen vector's data() is null: a rigid object has no joints).
+void requireArray(const void* p, uint32_t count, const char* what) {
+  if (count > 0) requirePointer(p, what);
+}
 
 // A pose from a plugin, which must be there and have a unit quaternion.
 Pose toCheckedPose(const mb_pose* p) {
@@ -169,7 +174,7 @@ mb_status getJointPositions(mb_scene* s, mb_id articulation, double* out, uint32
                             mb_error* err) {
   return guarded(s, err, [&](mb_scene& m) {
     requireCount(*m.scene, articulation, count);
-    requirePointer(out, "output array");
+    requireArray(out, count, "output array");
     Eigen::Map<Eigen::VectorXd>(out, count) = m.scene->getJointPositions(articulation);
   });
 }
@@ -177,7 +182,7 @@ mb_status getJointVelocities(mb_scene* s, mb_id articulation, double* out, uint3
                              mb_error* err) {
   return guarded(s, err, [&](mb_scene& m) {
     requireCount(*m.scene, articulation, count);
-    requirePointer(out, "output array");
+    requireArray(out, count, "output array");
     Eigen::Map<Eigen::VectorXd>(out, count) = m.scene->getJointVelocities(articulation);
   });
 }
@@ -215,7 +220,7 @@ mb_status setJointPositions(mb_scene* s, mb_id articulation, const double* q, ui
   return guarded(s, err, [&](mb_scene& m) {
     requireStateChanges(m, "set_joint_positions");
     requireCount(*m.scene, articulation, count);
-    requirePointer(q, "positions");
+    requireArray(q, count, "positions");
     m.scene->setJointPositions(articulation, Eigen::Map<const Eigen::VectorXd>(q, count));
   });
 }
@@ -224,7 +229,7 @@ mb_status setJointVelocities(mb_scene* s, mb_id articulation, const double* v, u
   return guarded(s, err, [&](mb_scene& m) {
     requireStateChanges(m, "set_joint_velocities");
     requireCount(*m.scene, articulation, count);
-    requirePointer(v, "velocities");
+    requireArray(v, count, "velocities");
     m.scene->setJointVelocities(articulation, Eigen::Map<const Eigen::VectorXd>(v, count));
   });
 }

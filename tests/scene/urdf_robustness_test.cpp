@@ -3,6 +3,8 @@
 // velocity, PyBullet-style package:// paths. Each loads and is sane, or is
 // refused naming the file, the element and the reason; none crashes.
 #include <manibench/scene.hpp>
+#include <manibench/scene_bridge.hpp>
+#include <manibench/sdk/scene_view.hpp>
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -126,6 +128,18 @@ TEST(UrdfRobustness, PyBulletStylePackagePathsAndMissingMeshesListTheCandidates)
   expectMentions(message, {missing, "link 'a'", "sphere.obj' not found; tried", (dir / "meshes" / "sphere.obj").string(),
                            (dir / "sphere.obj").string()});
   std::filesystem::remove_all(dir);
+}
+
+// A rigid object (no movable joint) through the plugin's view: empty joint
+// vectors, not an "output array is null" error.
+TEST(UrdfRobustness, ARigidObjectHasEmptyJointVectorsInThePluginsView) {
+  Scene scene;
+  const int box = scene.addUrdfString(robot(link("a", inertial())), "", "box", Pose(), false);
+  scene.finalize();
+  SceneBridge bridge(scene);
+  const sdk::SceneView view(SceneBridge::getApi(), bridge.getHandle());
+  EXPECT_EQ(view.getJointPositions(box).size(), 0);
+  EXPECT_EQ(view.getJointVelocities(box).size(), 0);
 }
 
 }  // namespace
