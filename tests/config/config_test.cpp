@@ -116,6 +116,31 @@ TEST(Config, UnreadableFileIsAClearError) {
   EXPECT_EQ(message, "cannot read configuration file '/nonexistent/dir/my.yaml': No such file or directory");
 }
 
+// Hostile files end quickly with the reason: an alias bomb ("billion
+// laughs", 10 levels of 9 aliases: 3.9e8 values expanded), 3000-deep
+// nesting, a directory.
+TEST(Config, HostileFilesAreRefusedQuicklyWithTheReason) {
+  std::string bomb = "a0: &a0 [x, x, x, x, x, x, x, x, x]\n";
+  for (int i = 1; i < 10; ++i) {
+    bomb += "a" + std::to_string(i) + ": &a" + std::to_string(i) + " [";
+    for (int k = 0; k < 9; ++k) bomb += (k ? ", *a" : "*a") + std::to_string(i - 1);
+    bomb += "]\n";
+  }
+  bomb += "task: {bomb: *a9}\n";
+  const TempFile bomb_file(bomb);
+  const std::string expanded = getConfigError([&] { loadConfigFile(bomb_file.path()); });
+  EXPECT_TRUE(startsWith(expanded, bomb_file.path() + ":")) << expanded;
+  EXPECT_TRUE(contains(expanded, "more than 100000 values")) << expanded;
+
+  const TempFile deep("task: " + std::string(3000, '[') + std::string(3000, ']') + "\n");
+  const std::string nested = getConfigError([&] { loadConfigFile(deep.path()); });
+  EXPECT_TRUE(startsWith(nested, deep.path() + ":1:")) << nested;
+  EXPECT_TRUE(contains(nested, "nested deeper than 64 levels")) << nested;
+
+  const std::string directory = getConfigError([] { loadConfigFile("/tmp"); });
+  EXPECT_EQ(directory, "configuration file '/tmp' is a directory");
+}
+
 TEST(Config, EmptyFileIsAnEmptyLayer) {
   const TempFile file("# nothing yet\n");
   EXPECT_TRUE(isSameConfig(calcWithFile(file), calcConfig(nullptr, {})));

@@ -4,12 +4,14 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cassert>
 #include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <regex>
 #include <sstream>
@@ -58,10 +60,31 @@ int getLine(const YAML::Mark& mark, int fallback) {
   return mark.line >= 0 ? mark.line + 1 : fallback;
 }
 
-ConfigNode convertNode(const YAML::Node& node, const ConfigOrigin& parent) {
+// What a configuration may hold: no real one comes near, and an alias
+// bomb ("billion laughs": aliases repeating aliases) would otherwise expand
+// for minutes.
+constexpr std::size_t kMaxValues = 100000;
+constexpr int kMaxDepth = 64;
+
+struct Budget {
+  std::size_t values = 0;
+  int depth = 0;
+};
+
+ConfigNode convertNode(const YAML::Node& node, const ConfigOrigin& parent, Budget& budget) {
   ConfigNode out;
   out.origin = parent;
   out.origin.line = getLine(node.Mark(), parent.line);
+  if (++budget.values > kMaxValues)
+    throw ConfigError(out.origin.describe() + ": the configuration expands to more than " +
+                      std::to_string(kMaxValues) + " values (aliases repeating aliases?)");
+  if (budget.depth >= kMaxDepth)
+    throw ConfigError(out.origin.describe() + ": nested deeper than " + std::to_string(kMaxDepth) + " levels");
+  struct Deeper {
+    Budget& b;
+    explicit Deeper(Budget& budget) : b(budget) { ++b.depth; }
+    ~Deeper() { --b.depth; }
+  } deeper(budget);
   switch (node.Type()) {
     case YAML::NodeType::Undefined:
     case YAML::NodeType::Null:
@@ -75,7 +98,7 @@ ConfigNode convertNode(const YAML::Node& node, const ConfigOrigin& parent) {
       break;
     case YAML::NodeType::Sequence:
       out.kind = ConfigNode::Kind::Sequence;
-      for (const YAML::Node& item : node) out.items.push_back(convertNode(item, out.origin));
+      for (const YAML::Node& item : node) out.items.push_back(convertNode(item, out.origin, budget));
       break;
     case YAML::NodeType::Map:
       out.kind = ConfigNode::Kind::Map;
@@ -88,7 +111,7 @@ ConfigNode convertNode(const YAML::Node& node, const ConfigOrigin& parent) {
         const std::string key = it->first.Scalar();
         if (out.find(key) != nullptr)
           throw ConfigError(key_origin.describe() + ": duplicate key '" + key + "'");
-        out.entries.push_back({key, key_origin, convertNode(it->second, key_origin)});
+        out.entries.push_back({key, key_origin, convertNode(it->second, key_origin, budget)});
       }
       break;
   }
@@ -116,6 +139,15 @@ ConfigNode parseConfig(const std::string& yaml_text, const std::string& source, 
   try {
     documents = YAML::LoadAll(yaml_text);
   } catch (const YAML::ParserException& e) {
+    // yaml-cpp gives up on deep flow nesting with "bad file": say why.
+    int depth = 0, deepest = 0;
+    for (char c : yaml_text) {
+      if (c == '[' || c == '{') deepest = std::max(deepest, ++depth);
+      if (c == ']' || c == '}') --depth;
+    }
+    if (deepest > kMaxDepth)
+      throw ConfigError(ConfigOrigin{layer, source, e.mark.line + 1}.describe() + ": nested deeper than " +
+                        std::to_string(kMaxDepth) + " levels (" + std::to_string(deepest) + " brackets)");
     throw ConfigError(ConfigOrigin{layer, source, e.mark.line + 1}.describe() +
                       ": malformed YAML: " + e.msg);
   } catch (const YAML::Exception& e) {
@@ -127,10 +159,14 @@ ConfigNode parseConfig(const std::string& yaml_text, const std::string& source, 
     throw ConfigError(origin.describe() + ": a configuration is one YAML document, this is the second");
   }
   if (documents.empty()) return ConfigNode{ConfigNode::Kind::Null, "", false, {}, {}, origin};
-  return convertNode(documents.front(), origin);
+  Budget budget;
+  return convertNode(documents.front(), origin, budget);
 }
 
 ConfigNode loadConfigFile(const std::string& path) {
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error))
+    throw ConfigError("configuration file '" + path + "' is a directory");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ConfigError("cannot read configuration file '" + path + "': " + std::strerror(errno));
   std::ostringstream text;
