@@ -142,5 +142,20 @@ TEST(UrdfRobustness, ARigidObjectHasEmptyJointVectorsInThePluginsView) {
   EXPECT_EQ(view.getJointVelocities(box).size(), 0);
 }
 
+// A free body with no collision shape falls through the ground: the scene
+// says so, naming the link, instead of letting it fall for ever.
+TEST(UrdfRobustness, ABodyFallingThroughTheGroundIsADivergenceNamingIt) {
+  Scene scene;
+  scene.addGround(0);
+  Pose above;
+  above.position.z() = 0.5;
+  scene.addUrdfString(robot(link("ghost", inertial())), "", "ghost", above, false);
+  scene.finalize();
+  const std::string message = catchMessage<SimulationDiverged>([&] {
+    for (int i = 0; i < 400; ++i) scene.advance(0.01);
+  });
+  expectMentions(message, {"link 'ghost'", "fell through the ground"});
+}
+
 }  // namespace
 }  // namespace manibench

@@ -23,6 +23,9 @@ namespace {
 constexpr double kMinMeanStepSize = 1e-6;  // s
 constexpr int kMinStepBudget = 10000;
 constexpr int kStepsPerCall = 1000;
+// How far below the ground a body's origin may go before the scene says it
+// fell through (a divergence naming the link).
+constexpr double kFallThroughDepth = 10;  // m
 
 std::unique_ptr<scene_detail::Stepper> makeStepper(const SimTK::MultibodySystem& system,
                                                    const SimTK::State& initial,
@@ -129,6 +132,23 @@ bool Scene::Impl::findDivergence(const SimTK::State& s,
       }
       return true;
     }
+  // A body far below the ground fell through it (a shape that lost its
+  // collision, a contact that gave way): nothing a task wants, and nothing
+  // the speed check sees, since a fall stays slow for a long time.
+  if (has_ground) {
+    system.realize(s, SimTK::Stage::Position);
+    const SimTK::SimbodyMatterSubsystem& matter = system.getMatterSubsystem();
+    for (SimTK::MobilizedBodyIndex b(1); b < matter.getNumBodies(); ++b) {
+      const double z = matter.getMobilizedBody(b).getBodyOriginLocation(s)[2];
+      if (z < ground_height - kFallThroughDepth) {
+        mobod = b;
+        std::ostringstream m;
+        m << "fell through the ground (" << ground_height - z << " m below it)";
+        what = m.str();
+        return true;
+      }
+    }
+  }
   return false;
 }
 
