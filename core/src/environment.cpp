@@ -35,9 +35,16 @@ Environment::Environment(const PluginRegistry& registry, const std::string& envi
     buildScene(fixed_objects_.front());
     return;
   }
-  if (train.empty())
-    throw PluginCallError("task '" + task.name + "' lists no train objects", MB_ERROR);
-  buildScene(train.front());
+  if (!train.empty()) {
+    buildScene(train.front());
+    return;
+  }
+  // A user's PartNet folder may hold test objects only: build the first of
+  // those, so that the test split still runs.
+  const std::vector<std::string> test = task_->listObjects("test");
+  if (test.empty())
+    throw PluginCallError("task '" + task.name + "' lists no objects in either split", MB_ERROR);
+  buildScene(test.front());
 }
 
 Environment::~Environment() {

@@ -3,6 +3,10 @@
 // objects and on the PartNet-Mobility fixture (tests/fixtures/partnet_mini).
 // The full success-rate sweep is docs/tasks/open_cabinet.md's table.
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
 
 #include <manibench/config.hpp>
 #include <manibench/environment.hpp>
@@ -81,6 +85,23 @@ TEST(OpenCabinetScenario, PartNetFolderReplacesTheGenerator) {
   EXPECT_NEAR(o[76], 0.08, 1e-6) << "half the grip length";
   expectExpertSucceeds(s, "100001_link_1", 1);
   expectExpertSucceeds(d, "100001_link_0", 0);  // 3 of seeds 0-5 succeed: mesh handles slip more
+}
+
+// A user's folder with test objects only (every id in test.txt): the test
+// split runs; only the train split is empty.
+TEST(OpenCabinetScenario, APartNetFolderOfTestObjectsOnlyRuns) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("manibench_partnet_test_only_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::copy(std::string(MANIBENCH_TEST_SOURCE_DIR) + "/tests/fixtures/partnet_mini", dir,
+                        std::filesystem::copy_options::recursive);
+  std::ofstream(dir / "test.txt") << "100001\n100002\n";
+  ExpertSetup s = makeExpertSetup("OpenCabinetDrawer-v0", {"task.partnet_dir=" + dir.string()});
+  EXPECT_TRUE(s.env->listObjects("train").empty());
+  EXPECT_EQ(s.env->listObjects("test"), (std::vector<std::string>{"100001_link_1", "100002_link_1"}));
+  s.env->reset("100002_link_1", 0);
+  EXPECT_EQ(s.env->getObjectId(), "100002_link_1");
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
