@@ -137,6 +137,13 @@ TEST(Config, HostileFilesAreRefusedQuicklyWithTheReason) {
   EXPECT_TRUE(startsWith(nested, deep.path() + ":1:")) << nested;
   EXPECT_TRUE(contains(nested, "nested deeper than 64 levels")) << nested;
 
+  // yaml-cpp 0.7 never returns from these (found by tests/fuzz).
+  for (const char* text : {",\n", "# a comment\n  , 2, 3]\n", "a: 1\n---\n, x\n"}) {
+    const TempFile comma(text);
+    const std::string message = getConfigError([&] { loadConfigFile(comma.path()); });
+    EXPECT_TRUE(contains(message, "a document cannot start with ','")) << message;
+  }
+
   const std::string directory = getConfigError([] { loadConfigFile("/tmp"); });
   EXPECT_EQ(directory, "configuration file '/tmp' is a directory");
 }

@@ -132,9 +132,35 @@ bool isKeyCharacter(char c) {
   return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-';
 }
 
+// yaml-cpp 0.7 never returns from a document whose first token is ','
+// (it allocates nodes until memory runs out; found by tests/fuzz): the line
+// of such a document's start, or 0.
+int findCommaStartingADocument(const std::string& text) {
+  bool at_document_start = true;
+  int line = 0;
+  std::istringstream lines(text);
+  std::string content;
+  while (std::getline(lines, content)) {
+    ++line;
+    if (content.rfind("---", 0) == 0) {
+      at_document_start = true;
+      content = content.substr(3);
+    }
+    if (!at_document_start) continue;
+    const std::size_t first = content.find_first_not_of(" \t\r");
+    if (first == std::string::npos || content[first] == '#' || content[first] == '%') continue;
+    if (content[first] == ',') return line;
+    at_document_start = false;
+  }
+  return 0;
+}
+
 }  // namespace
 
 ConfigNode parseConfig(const std::string& yaml_text, const std::string& source, ConfigLayer layer) {
+  if (const int line = findCommaStartingADocument(yaml_text))
+    throw ConfigError(ConfigOrigin{layer, source, line}.describe() +
+                      ": malformed YAML: a document cannot start with ','");
   std::vector<YAML::Node> documents;
   try {
     documents = YAML::LoadAll(yaml_text);
