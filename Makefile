@@ -7,7 +7,7 @@ CTEST_FLAGS ?=
 BENCH_FLAGS ?=
 JOBS ?= $(shell nproc)
 
-.PHONY: all deps configure build test demo bench clean
+.PHONY: all deps configure build test demo bench sanitize clean
 
 all: build
 
@@ -33,5 +33,21 @@ bench: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS) --target manibench_physics_bench
 	$(BUILD_DIR)/bin/manibench_physics_bench $(BENCH_FLAGS)
 
+# The whole suite under AddressSanitizer and UndefinedBehaviorSanitizer, in
+# its own build folder (docs/robustness.md: what it found, how long it
+# takes). Leak checking is off: Mesa's EGL keeps allocations for the
+# process's life.
+SANITIZE_DIR ?= build-sanitize
+SANITIZE_FLAGS = -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
+sanitize: deps
+	cmake -S . -B $(SANITIZE_DIR) -G Ninja $(CMAKE_FLAGS) \
+	  -DCMAKE_C_FLAGS="$(SANITIZE_FLAGS)" -DCMAKE_CXX_FLAGS="$(SANITIZE_FLAGS)" \
+	  -DCMAKE_EXE_LINKER_FLAGS="$(SANITIZE_FLAGS)" -DCMAKE_SHARED_LINKER_FLAGS="$(SANITIZE_FLAGS)" \
+	  -DCMAKE_MODULE_LINKER_FLAGS="$(SANITIZE_FLAGS)"
+	cmake --build $(SANITIZE_DIR) -j $(JOBS)
+	cd $(SANITIZE_DIR) && ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 \
+	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+	  ctest --output-on-failure -j $(JOBS) $(CTEST_FLAGS)
+
 clean:
-	rm -rf $(BUILD_DIR)
+	rm -rf $(BUILD_DIR) $(SANITIZE_DIR)
