@@ -403,6 +403,7 @@ TEST(Config, BuiltinDefaultsMatchPhysicsSettingsAndCoverTheSchema) {
   EXPECT_EQ(material.viscous_friction, expected.default_material.viscous_friction);
   EXPECT_EQ(options.physics.default_density, expected.default_density);
   EXPECT_EQ(options.physics.divergence_speed_limit, expected.divergence_speed_limit);
+  EXPECT_EQ(options.physics.default_joint_damping, expected.default_joint_damping);
   // Nothing asks to change the task's timing, controller or configuration.
   EXPECT_FALSE(options.control_frequency);
   EXPECT_FALSE(options.frame_skip);

@@ -130,6 +130,24 @@ TEST(UrdfRobustness, PyBulletStylePackagePathsAndMissingMeshesListTheCandidates)
   std::filesystem::remove_all(dir);
 }
 
+// physics.default_joint_damping: joints without <dynamics> get it, the
+// others keep theirs.
+TEST(UrdfRobustness, JointsWithoutDynamicsGetTheDefaultDamping) {
+  PhysicsSettings settings;
+  settings.default_joint_damping = 2.5;
+  Scene scene(settings);
+  const std::string damped = "<dynamics damping=\"0.5\"/></joint>";
+  std::string with_dynamics = joint("bc", "b", "c");
+  with_dynamics.replace(with_dynamics.find("</joint>"), 8, damped);
+  const int r = scene.addUrdfString(robot(link("a", inertial()) + link("b", inertial()) + link("c", inertial()) +
+                                          joint("ab", "a", "b") + with_dynamics),
+                                    "", "robot", Pose(), true);
+  scene.finalize();
+  ASSERT_EQ(scene.getJoints(r).size(), 2u);
+  EXPECT_EQ(scene.getJoints(r)[0].damping, 2.5);
+  EXPECT_EQ(scene.getJoints(r)[1].damping, 0.5);
+}
+
 // A rigid object (no movable joint) through the plugin's view: empty joint
 // vectors, not an "output array is null" error.
 TEST(UrdfRobustness, ARigidObjectHasEmptyJointVectorsInThePluginsView) {

@@ -134,6 +134,10 @@ struct PhysicsSettings {
   double default_density = 1000;
   // Any generalized speed above this (rad/s or m/s) counts as divergence.
   double divergence_speed_limit = 1e3;
+  // Damping of joints whose URDF has no <dynamics> (N m s/rad or N s/m):
+  // published hands and arms often have none, and their light links are
+  // then undamped.
+  double default_joint_damping = 0;
 };
 
 // Counters of integrator work (Simbody's Integrator statistics, summed).

@@ -42,6 +42,7 @@ physics:
       viscous_friction: 0.0
     ground: {}
     bodies: []
+  default_joint_damping: 0
 lights:
   ambient: [0.3, 0.3, 0.3]
   directional:
@@ -315,6 +316,7 @@ EnvironmentOptions calcEnvironmentOptions(const ConfigNode& config) {
   physics.friction_damping = getNumber(config, "physics.friction_damping");
   physics.default_density = getNumber(config, "physics.default_density");
   physics.divergence_speed_limit = getNumber(config, "physics.divergence_speed_limit");
+  physics.default_joint_damping = getNumber(config, "physics.default_joint_damping");
   const ConfigNode& default_material = getPath(config, "physics.contact.default");
   physics.default_material = calcMaterial(default_material, ContactMaterial{});
   // The ground: the default material unless a field says otherwise.

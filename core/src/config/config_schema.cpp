@@ -171,6 +171,9 @@ std::vector<ConfigKey> makeSchema() {
   k.push_back(Key("physics.divergence_speed_limit", T::Number,
                   "any joint speed above this (rad/s or m/s) stops the episode as diverged")
                   .above(0));
+  k.push_back(Key("physics.default_joint_damping", T::Number,
+                  "N m s/rad or N s/m; damping of joints whose URDF has no <dynamics>")
+                  .atLeast(0));
   k.push_back(Key("physics.self_collision", T::Map,
                   "articulation name -> whether its links touch each other (default: no; links "
                   "joined by a joint never do)"));

@@ -74,11 +74,12 @@ Scene::Scene(PhysicsSettings settings) {
       !positive(settings.implicit_step) ||
       !std::isfinite(settings.gravity_z) || !positive(settings.friction_stiffness) ||
       !non_negative(settings.friction_damping) || !positive(settings.default_density) ||
-      !positive(settings.divergence_speed_limit))
+      !positive(settings.divergence_speed_limit) || !non_negative(settings.default_joint_damping))
     throw SceneError(
         "PhysicsSettings: accuracy, fixed_step, implicit_step, friction_stiffness, "
         "default_density and "
-        "divergence_speed_limit must be positive, friction_damping non-negative, "
+        "divergence_speed_limit must be positive, friction_damping and default_joint_damping "
+        "non-negative, "
         "gravity_z finite");
   const ContactMaterial& material = settings.default_material;
   const std::string problem = checkMaterial(material);

@@ -43,7 +43,8 @@ int Scene::Impl::addArticulation(const std::string& xml,
   art.name = name;
   art.source = {xml, base_dir, root, fixed_base};
   art.model = scene_detail::buildArticulationModel(xml, source, base_dir,
-                                                   settings.default_density);
+                                                   settings.default_density,
+                                                   settings.default_joint_damping);
   art.link_materials.assign(art.model.links.size(), settings.default_material);
   art.base_dir = base_dir;
   art.X_root = toTransform(root);

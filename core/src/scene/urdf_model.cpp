@@ -150,6 +150,7 @@ struct Builder {
   const std::string& source;
   const std::string& base_dir;
   double density;
+  double default_damping;  // of joints without <dynamics>
   std::map<std::string, int> joint_file_order;
   // (link name, collision ordinal) of each <capsule>, which urdfdom saw as
   // a cylinder of the same radius and length.
@@ -497,6 +498,7 @@ struct Builder {
         description.upper = limits.upper;
       }
     }
+    description.damping = default_damping;
     if (joint.dynamics) {
       if (!(joint.dynamics->damping >= 0) || !(joint.dynamics->friction >= 0))
         fail(source, "joint '" + joint.name + "' has negative damping or friction");
@@ -717,7 +719,8 @@ std::string describeMissingMesh(const std::string& filename, const std::string& 
 ArticulationModel buildArticulationModel(const std::string& urdf_xml,
                                          const std::string& source,
                                          const std::string& base_dir,
-                                         double default_density) {
+                                         double default_density,
+                                         double default_joint_damping) {
   // TinyXML first: it says where malformed XML breaks, and it gives the
   // joints' file order, which urdfdom does not keep.
   TiXmlDocument doc;
@@ -770,6 +773,7 @@ ArticulationModel buildArticulationModel(const std::string& urdf_xml,
                   source,
                   base_dir,
                   default_density,
+                  default_joint_damping,
                   std::move(joint_file_order),
                   std::move(capsules),
                   std::move(visual_capsules),

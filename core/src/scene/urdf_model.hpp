@@ -81,7 +81,8 @@ struct ArticulationModel {
 ArticulationModel buildArticulationModel(const std::string& urdf_xml,
                                          const std::string& source,
                                          const std::string& base_dir,
-                                         double default_density);
+                                         double default_density,
+                                         double default_joint_damping = 0);
 
 // Where a URDF mesh filename points: an absolute path, file://,
 // package://NAME/rest (looked up in ROS_PACKAGE_PATH, then in an ancestor
