@@ -28,9 +28,9 @@ namespace {
 constexpr double kBaseSpeed = 0.5, kYawSpeed = 3.14, kLiftSpeed = 0.5;  // per unit action
 constexpr double kEeSpeed = 0.5, kEeAngularSpeed = 1.57;
 constexpr double kHandForward = 0.55;   // m: TCPs ahead of the base centre
-constexpr double kHandSide = 0.16;      // m: each TCP off the base's middle line
+constexpr double kHandSide = 0.28;      // m: each TCP off the base's middle line
 constexpr double kBelowSeatTop = 0.04;  // m: the hands' height under the cushion's top
-constexpr double kOrbitRadius = 1.0;   // m: base to chair centre while going round it (hands 0.45 m off)
+constexpr double kOrbitRadius = kHandForward + 0.45;  // m: base to chair centre while going round it (hands 0.45 m off)
 constexpr double kOrbitSpeed = 0.7;    // m/s round the chair
 constexpr double kPushSpeed = 0.5;      // m/s at most
 constexpr double kPushGain = 1.2;       // 1/s: push speed per m of the chair's distance to go
@@ -156,7 +156,7 @@ Eigen::VectorXd PushChairExpert::act(const Observation& observation) {
         // they are in the plane counts)
         const double hand_error =
             std::max((tcp[0] - hand_goal[0]).head<2>().norm(), (tcp[1] - hand_goal[1]).head<2>().norm());
-        if (((goal - base).norm() < 0.08 && yaw_error < 0.15 && hand_error < 0.06) || phase_steps_ > 100)
+        if (((goal - base).norm() < 0.12 && yaw_error < 0.2 && hand_error < 0.1) || phase_steps_ > 100)
           next(Phase::kPush);
       }
       break;
@@ -173,7 +173,7 @@ Eigen::VectorXd PushChairExpert::act(const Observation& observation) {
         yaw_goal = yaw;
         base_velocity = speed * unit(yaw);
       }
-      if (distance < kReleaseDistance || (distance < 0.15 && chair_velocity.dot(d) < 0.02 && phase_steps_ > 10) ||
+      if (distance < kReleaseDistance || (distance < 0.09 && chair_velocity.dot(d) < 0.02 && phase_steps_ > 10) ||
           offset.dot(d) > 0)
         next(Phase::kRelease);
       break;
