@@ -224,6 +224,7 @@ class PushChairExpert : public manibench::sdk::Policy {
   std::array<Eigen::Matrix3d, 2> nominal_rotation_{};  // TCP orientation in the base frame at the start
   double nominal_height_ = 0;  // the TCPs' mean height above the lift at the start
   int orbit_sign_ = 0;         // the way round the chair, chosen once when it is a half turn
+  bool orbiting_ = false;      // going round the chair (last step's choice: the hands ride higher)
 };
 
 }  // namespace push_chair

@@ -6,8 +6,9 @@
 // its TCP at a fixed place in the base frame (ahead of the body, one each
 // side of the middle, at the height of the seat cushion) and keeps the
 // orientation it started with; the base and the lift do the rest. Phases:
-// approach (round the chair at a safe radius, facing it, to the side away
-// from the target, lowering the hands to the cushion), push (along the line
+// approach (round the chair at a safe radius, hands above the seat, to the
+// side away from the target; the hands go down to the cushion for the last
+// stretch), push (along the line
 // from the chair to the target, re-aimed every step at the chair's current
 // position, slowing down as the chair nears the target so that it coasts
 // to a stop there), release (back away and wait while the chair settles).
@@ -31,6 +32,7 @@ constexpr double kHandForward = 0.55;   // m: TCPs ahead of the base centre
 constexpr double kHandSide = 0.28;      // m: each TCP off the base's middle line
 constexpr double kBelowSeatTop = 0.04;  // m: the hands' height under the cushion's top
 constexpr double kOrbitRadius = kHandForward + 0.45;  // m: base to chair centre while going round it (hands 0.45 m off)
+constexpr double kOrbitHandRise = 0.22;  // m: hands above their push height while going round (clear of legs and seat)
 constexpr double kOrbitSpeed = 0.7;    // m/s round the chair
 constexpr double kPushSpeed = 0.5;      // m/s at most
 constexpr double kPushGain = 1.2;       // 1/s: push speed per m of the chair's distance to go
@@ -88,6 +90,7 @@ void PushChairExpert::reset(uint64_t) {
   phase_steps_ = 0;
   nominal_ready_ = false;
   orbit_sign_ = 0;
+  orbiting_ = false;
 }
 
 Eigen::VectorXd PushChairExpert::act(const Observation& observation) {
@@ -125,7 +128,7 @@ Eigen::VectorXd PushChairExpert::act(const Observation& observation) {
   // Where the hands go: ahead of the base, right arm to the right.
   std::array<Eigen::Vector3d, 2> hand_goal;
   for (int a = 0; a < 2; ++a)
-    hand_goal[a] = Eigen::Vector3d(base.x(), base.y(), hand_height) +
+    hand_goal[a] = Eigen::Vector3d(base.x(), base.y(), hand_height + (orbiting_ ? kOrbitHandRise : 0.0)) +
                    base_rotation * Eigen::Vector3d(kHandForward, a == 0 ? -kHandSide : kHandSide, 0);
 
   Eigen::Vector2d base_velocity = Eigen::Vector2d::Zero();
@@ -143,7 +146,8 @@ Eigen::VectorXd PushChairExpert::act(const Observation& observation) {
       if (orbit_sign_ == 0) orbit_sign_ = to_go >= 0 ? 1 : -1;
       const Eigen::Vector2d look = chair - base;
       yaw_goal = std::atan2(look.y(), look.x());
-      if (std::abs(to_go) > 0.35) {
+      orbiting_ = std::abs(to_go) > 0.35;
+      if (orbiting_) {
         const int way = std::abs(to_go) > 2.8 ? orbit_sign_ : (to_go >= 0 ? 1 : -1);
         const Eigen::Vector2d radial = unit(here), tangent = way * Eigen::Vector2d(-radial.y(), radial.x());
         base_velocity = kOrbitSpeed * tangent + 3.0 * (kOrbitRadius - from_chair.norm()) * radial;
@@ -162,6 +166,7 @@ Eigen::VectorXd PushChairExpert::act(const Observation& observation) {
       break;
     }
     case Phase::kPush: {
+      orbiting_ = false;
       // Along the push line at a speed that falls with the distance still
       // to go; sideways back onto the line through the chair's centre.
       const double speed = std::clamp(kPushGain * (distance - kStopLead), 0.0, kPushSpeed);
