@@ -330,6 +330,10 @@ TEST(PushChair, InfoPrintsTheStateLayoutAndObjectsListsTheSplits) {
   int count = 0;
   for (std::string id; std::getline(lines, id); ++count) EXPECT_EQ(id.rfind("31", 0), 0u) << id;
   EXPECT_EQ(count, 10);
+  // the fixed-object environment of one chair (the host's rule)
+  const mb::testing::CommandResult fixed = mb::testing::runCli({"objects", "PushChair_3100-v0", "--ids"});
+  ASSERT_EQ(fixed.exit_code, 0) << fixed.err;
+  EXPECT_EQ(fixed.out, "3100\n");
   const auto env = makeEnv();
   uint32_t total = 0;
   for (const mb::SegmentDescription& s : env->calcPolicyLayout(mb::ObservationMode::State).observation_segments)
