@@ -10,6 +10,7 @@
 
 #include <manibench/sdk/partnet.hpp>
 
+#include <limits>
 #include <regex>
 #include <sstream>
 
@@ -125,7 +126,21 @@ ChairModel loadPartNetChair(const std::string& folder, const std::string& id, do
   for (const partnet::Shape& v : seat->visuals)
     for (const Eigen::Vector3d& p : object.calcShapePoints(v)) seat_bounds.add(pose.at(seat->name) * p);
   if (seat_bounds.empty()) throw Error(where + ": the seat link has no visual geometry", MB_INVALID_ARGUMENT);
-  const Eigen::Vector3d top(seat_bounds.center().x(), seat_bounds.center().y(), seat_bounds.hi.z());
+  // The cushion's top: the seat link often carries the backrest too (it
+  // turns on the same swivel), so not the top of its bounds but the top of
+  // the highest of its parts (PartNet keeps parts in separate meshes) that
+  // spans the swivel axis; the backrest stands behind it.
+  const Eigen::Vector3d axis = pose.at(seat->name).translation();
+  Eigen::Vector3d top(seat_bounds.center().x(), seat_bounds.center().y(), seat_bounds.hi.z());
+  double highest = -std::numeric_limits<double>::infinity();
+  for (const partnet::Shape& v : seat->visuals) {
+    partnet::Bounds part;
+    for (const Eigen::Vector3d& p : object.calcShapePoints(v)) part.add(pose.at(seat->name) * p);
+    if (!part.empty() && part.lo.x() <= axis.x() && axis.x() <= part.hi.x() && part.lo.y() <= axis.y() &&
+        axis.y() <= part.hi.y())
+      highest = std::max(highest, part.hi.z());
+  }
+  if (std::isfinite(highest)) top = Eigen::Vector3d(axis.x(), axis.y(), highest);
   chair.seat_top = pose.at(seat->name).inverse() * top;
   chair.footprint_radius = 0;
   for (const std::string& w : wheels)

@@ -1,5 +1,6 @@
 // Expert episodes of PushChair-v0 with the mobile_panda_ee controller
-// (plugins/push_chair), on train and test chairs, and determinism. The
+// (plugins/push_chair), on train and test chairs and a PartNet-format one,
+// and determinism. The
 // full success-rate sweep is docs/tasks/push_chair.md's table.
 #include <gtest/gtest.h>
 
@@ -48,6 +49,15 @@ TEST(PushChairScenario, ExpertPushesChairsOfBothSplitsToTheTarget) {
   ExpertSetup s = makeExpertSetup();
   expectExpertSucceeds(s, "3000", 0);
   expectExpertSucceeds(s, "3105", 1);
+}
+
+// The PartNet-format fixture (plugins/push_chair/tests/partnet_chairs): its
+// seat link carries the backrest, the hands go to the cushion's top. The
+// expert succeeds on 3 of levels 0-5 of `manibench eval` with this folder.
+TEST(PushChairScenario, ExpertPushesAPartNetChair) {
+  ExpertSetup s = makeExpertSetup(
+      {"task.partnet_dir=" + std::string(MANIBENCH_TEST_SOURCE_DIR) + "/plugins/push_chair/tests/partnet_chairs"});
+  expectExpertSucceeds(s, "200001", 1273471130);
 }
 
 TEST(PushChairScenario, SameSeedSameTrajectory) {

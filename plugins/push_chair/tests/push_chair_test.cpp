@@ -433,6 +433,7 @@ TEST(PushChairPartNet, LoaderFindsWheelsCastersAndTheSeat) {
   EXPECT_EQ(wheels, 5);
   EXPECT_EQ(seats, 1);
   // designed Z-up at 0.8 scale: wheels' bottom at 0, backrest top at 0.99 m
+  EXPECT_NEAR(m.seat_top.norm(), 0.47 - 0.39, 1e-6) << "the cushion's top above the swivel, not the backrest's";
   EXPECT_NEAR(m.root_height, 0.0, 1e-6);
   EXPECT_NEAR(m.height, 0.4 + 0.07 + 0.05 + 0.42, 1e-6);
   EXPECT_NEAR(m.footprint_radius, std::hypot(0.32 + 0.03 + 0.03, 0.012), 1e-4) << "the wheels' outer edge";
