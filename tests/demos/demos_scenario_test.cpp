@@ -63,7 +63,8 @@ INSTANTIATE_TEST_SUITE_P(Experts, FamilyDemos,
                          ::testing::Values(DemoSetup{"Reach-v0", "reach_expert", ""},
                                            DemoSetup{"OpenCabinetDoor-v0", "open_cabinet_expert", "mobile_panda_ee"},
                                            DemoSetup{"OpenCabinetDrawer-v0", "open_cabinet_expert", "mobile_panda_ee"},
-                                           DemoSetup{"MoveBucket-v0", "move_bucket_expert", "mobile_panda_ee"}),
+                                           DemoSetup{"MoveBucket-v0", "move_bucket_expert", "mobile_panda_ee"},
+                                           DemoSetup{"PushChair-v0", "push_chair_expert", "mobile_panda_ee"}),
                          nameSetup);
 
 TEST(DemoConversion, PointCloudsOfAConvertedSetAreThoseOfALiveEpisode) {
