@@ -1,5 +1,7 @@
 // manibench run: one episode of a policy, printed step count, return and
 // success conditions.
+#include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <manibench/episode.hpp>
 #include <memory>
@@ -23,13 +25,66 @@ Options:
   --controller NAME       override the task's default controller
   --obs MODE              observation mode: state (default), pointcloud or rgbd
   --no-early-stop         run to the time limit even after success
+  --trace FILE.csv        one row per env step: the observation the policy
+                          acted on (one column per value, named after its
+                          segment: tcp_pose[2]), the action, the reward, each
+                          success condition (0/1) and done; numbers exact
+                          (%.17g)
   --config FILE           a YAML configuration layer; repeatable, later wins
   --set KEY=VALUE         one key, e.g. --set physics.accuracy=0.001; repeatable
 )";
 
+// Column names of a layout: segment[i] (segment alone when it has one value).
+void appendColumns(std::vector<std::string>& columns, const std::string& prefix,
+                   const std::vector<mb::SegmentDescription>& segments) {
+  for (const mb::SegmentDescription& s : segments)
+    for (uint32_t i = 0; i < s.size; ++i)
+      columns.push_back(prefix + s.name + (s.size > 1 ? "[" + std::to_string(i) + "]" : ""));
+}
+
+// `run --trace`: the episode as CSV, written as it runs.
+class TraceWriter {
+ public:
+  TraceWriter(const std::string& path, const mb::Environment& env) : out_(path) {
+    if (!out_) throw std::runtime_error("cannot write the trace '" + path + "'");
+    std::vector<std::string> columns = {"step"};
+    appendColumns(columns, "obs.", env.calcPolicyLayout().observation_segments);
+    appendColumns(columns, "action.", env.getControllerDescription().action_segments);
+    columns.push_back("reward");
+    for (const std::string& c : env.getTaskDescription().success_conditions) columns.push_back(c);
+    columns.push_back("done");
+    for (std::size_t i = 0; i < columns.size(); ++i) out_ << (i ? "," : "") << columns[i];
+    out_ << "\n";
+  }
+  void onReset(const Eigen::VectorXd& observation) { observation_ = observation; }
+  void onStep(uint32_t step, const Eigen::VectorXd& action, const mb::StepResult& result,
+              const Eigen::VectorXd& next_observation) {
+    char number[32];
+    auto put = [&](double v) {
+      std::snprintf(number, sizeof(number), "%.17g", v);
+      out_ << "," << number;
+    };
+    out_ << step;
+    for (Eigen::Index i = 0; i < observation_.size(); ++i) put(observation_[i]);
+    for (Eigen::Index i = 0; i < action.size(); ++i) put(action[i]);
+    put(result.reward);
+    for (uint8_t flag : result.flags) out_ << "," << int(flag);
+    out_ << "," << (result.done ? 1 : 0) << "\n";
+    observation_ = next_observation;
+  }
+  void close(const std::string& path) {
+    out_.close();
+    if (!out_) throw std::runtime_error("cannot write the trace '" + path + "'");
+  }
+
+ private:
+  std::ofstream out_;
+  Eigen::VectorXd observation_;
+};
+
 int runOne(mb::PluginRegistry& registry, const std::string& task_name, const std::string& policy_arg,
            uint64_t seed, const std::string& object_arg, const std::string& split,
-           const mb::ConfigSources& sources, bool stop_on_success) {
+           const mb::ConfigSources& sources, bool stop_on_success, const std::string& trace_path) {
   const std::string policy_name = resolvePolicy(registry, policy_arg);
   registry.getEntry(mb::PluginKind::Policy, policy_name);  // fail before building anything
   const std::unique_ptr<mb::Environment> env_owner =
@@ -48,8 +103,20 @@ int runOne(mb::PluginRegistry& registry, const std::string& task_name, const std
   hooks.on_phase = [&acting](mb::EpisodePhase phase, uint32_t) {
     acting = phase == mb::EpisodePhase::PolicyAct;
   };
+  std::unique_ptr<TraceWriter> trace;
+  if (!trace_path.empty()) {
+    trace = std::make_unique<TraceWriter>(trace_path, env);
+    hooks.on_reset = [&] { trace->onReset(env.getObservation()); };
+    hooks.on_transition = [&](const Eigen::VectorXd& action, const mb::StepResult& step) {
+      trace->onStep(env.getElapsedSteps(), action, step, env.getObservation());
+    };
+  }
   try {
     printEpisode(mb::runEpisode(env, policy, object, seed, hooks));
+    if (trace) {
+      trace->close(trace_path);
+      std::cout << "wrote " << trace_path << "\n";
+    }
   } catch (const mb::PluginCallError& e) {
     if (!acting) throw;
     throw mb::PluginCallError("task '" + env.getTaskDescription().name + "', object '" + object +
@@ -66,7 +133,7 @@ int runOne(mb::PluginRegistry& registry, const std::string& task_name, const std
 int commandRun(int argc, char** argv) {
   const Arguments args =
       parseArguments(argc, argv, 2,
-                     {"policy", "seed", "object", "split", "controller", "obs", "config", "set"},
+                     {"policy", "seed", "object", "split", "controller", "obs", "config", "set", "trace"},
                      {"no-early-stop"}, kRunUsage);
   if (args.help) {
     std::cout << kRunUsage;
@@ -81,7 +148,7 @@ int commandRun(int argc, char** argv) {
   loadPlugins(registry);
   return runOne(registry, args.positional[0], args.options.at("policy"), seed,
                 valueOr(args, "object", ""), split, sources,
-                !args.options.count("no-early-stop"));
+                !args.options.count("no-early-stop"), valueOr(args, "trace", ""));
 }
 
 }  // namespace manibench::cli

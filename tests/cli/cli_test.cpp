@@ -5,7 +5,9 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 
 #include "test_support.hpp"
@@ -129,6 +131,31 @@ TEST(Cli, PolicyCanBeAPathToALibrary) {
   // That library registers two policies: the host must say so, not guess.
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_TRUE(contains(r.err, "registers 2 policies")) << r.err;
+}
+
+// run --trace: one row per env step, as many values as the header names,
+// the last row the successful, final one.
+TEST(Cli, RunTraceWritesOneRowPerStep) {
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("manibench_trace_" + std::to_string(::getpid()) + ".csv")).string();
+  const auto r = runCli({"run", "Reach-v0", "--policy", "reach_expert", "--seed", "3", "--trace", path});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(path);
+  std::string header, line, last;
+  std::getline(in, header);
+  EXPECT_EQ(header.rfind("step,obs.joint_positions[0],", 0), 0u) << header;
+  EXPECT_TRUE(contains(header, ",action.shoulder,action.elbow,reward,reached,static,success,done")) << header;
+  const auto count = [](const std::string& text) { return std::count(text.begin(), text.end(), ','); };
+  int rows = 0;
+  while (std::getline(in, line)) {
+    ++rows;
+    EXPECT_EQ(count(line), count(header)) << "row " << rows;
+    EXPECT_EQ(line.rfind(std::to_string(rows) + ",", 0), 0u) << line;
+    last = line;
+  }
+  EXPECT_GT(rows, 5);
+  EXPECT_EQ(last.substr(last.size() - 4), ",1,1") << last;  // success, done
+  std::filesystem::remove(path);
 }
 
 TEST(Cli, UsageErrorsPrintTheCommandsOwnUsage) {
