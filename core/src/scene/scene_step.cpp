@@ -173,6 +173,21 @@ void Scene::Impl::throwDiverged(const std::string& cause) {
           what = "non-finite acceleration";
           break;
         }
+      // All finite: the integrator gave up on something stiff. The body
+      // with the largest acceleration is where to look (a light link on a
+      // stiff drive, a limit stop, a contact).
+      if (!mobod.isValid()) {
+        int fastest = -1;
+        for (int i = 0; i < udot.size(); ++i)
+          if (fastest < 0 || std::abs(udot[i]) > std::abs(udot[fastest])) fastest = i;
+        if (fastest >= 0) {
+          mobod = u_mobod[fastest];
+          std::ostringstream m;
+          m << "the largest acceleration, " << std::abs(udot[fastest]) << " (speed " << state.getU()[fastest]
+            << ")";
+          what = m.str();
+        }
+      }
     } catch (const std::exception&) {
     }
   }
