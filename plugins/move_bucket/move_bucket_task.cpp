@@ -66,6 +66,8 @@ MoveBucketTask::MoveBucketTask(const Config& config)
       cache_dir_(config.get<std::string>("cache_dir", "")),
       partnet_scale_(config.get<double>("partnet_scale", 0.3)),
       hold_steps_(config.get<uint32_t>("hold_steps", 10)) {
+  config.requireKnownKeys({"partnet_dir", "robot_dir", "cache_dir", "partnet_scale", "hold_steps"},
+                         "MoveBucket: task");
   if (hold_steps_ == 0) throw Error("MoveBucket: task.hold_steps must be positive", MB_INVALID_ARGUMENT);
   if (!partnet_dir_.empty() && !std::filesystem::is_directory(partnet_dir_))
     throw Error("MoveBucket: task.partnet_dir '" + partnet_dir_ + "' is not a folder", MB_INVALID_ARGUMENT);

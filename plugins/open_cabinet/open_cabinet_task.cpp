@@ -50,6 +50,8 @@ OpenCabinetTask::OpenCabinetTask(const Config& config, TargetKind kind)
       static_speed_(config.get<double>("static_speed", 0.1)),
       static_angular_speed_(config.get<double>("static_angular_speed", 1.0)),
       hold_steps_(config.get<uint32_t>("hold_steps", 10)) {
+  config.requireKnownKeys({"partnet_dir", "robot_dir", "static_speed", "static_angular_speed", "hold_steps"},
+                         taskName(kind) + ": task");
   if (!(static_speed_ > 0) || !(static_angular_speed_ > 0) || hold_steps_ == 0)
     throw Error(taskName(kind) + ": static_speed, static_angular_speed and hold_steps must be positive",
                 MB_INVALID_ARGUMENT);

@@ -57,6 +57,9 @@ PushChairTask::PushChairTask(const Config& config)
       static_speed_(config.get<double>("static_speed", 0.1)),
       static_angular_speed_(config.get<double>("static_angular_speed", 0.2)),
       hold_steps_(config.get<uint32_t>("hold_steps", 10)) {
+  config.requireKnownKeys(
+      {"partnet_dir", "partnet_scale", "robot_dir", "static_speed", "static_angular_speed", "hold_steps"},
+      "PushChair: task");
   if (!(static_speed_ > 0) || !(static_angular_speed_ > 0) || hold_steps_ == 0)
     throw Error("PushChair: static_speed, static_angular_speed and hold_steps must be positive", MB_INVALID_ARGUMENT);
   if (!(partnet_scale_ > 0)) throw Error("PushChair: task.partnet_scale must be positive", MB_INVALID_ARGUMENT);

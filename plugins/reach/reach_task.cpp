@@ -93,6 +93,7 @@ ReachTask::ReachTask(const Config& config)
     : reach_tolerance_(config.get<double>("reach_tolerance", 0.03)),
       static_speed_(config.get<double>("static_speed", 0.05)),
       hold_steps_(config.get<uint32_t>("hold_steps", 5)) {
+  config.requireKnownKeys({"reach_tolerance", "static_speed", "hold_steps"}, "Reach: task");
   if (!(reach_tolerance_ > 0) || !(static_speed_ > 0))
     throw Error("Reach: reach_tolerance and static_speed must be positive", MB_INVALID_ARGUMENT);
 }

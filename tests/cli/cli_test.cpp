@@ -278,6 +278,14 @@ TEST(Cli, PluginErrorsAboutConfigKeysNameWhereTheyWereSet) {
   EXPECT_TRUE(contains(r.err, "task.reach_tolerance is set at " + file.path() + ":2")) << r.err;
 }
 
+TEST(Cli, AMistypedTaskKeyIsRefusedWithTheClosestKeyAndWhereItWasSet) {
+  const TempYaml file("task:\n  hold_steps: 3\n  reach_tolerence: 0.05\n");
+  const auto r = runCli({"run", "Reach-v0", "--policy", "zero", "--config", file.path()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(contains(r.err, "unknown key 'reach_tolerence', did you mean 'reach_tolerance'?")) << r.err;
+  EXPECT_TRUE(contains(r.err, "task.reach_tolerence is set at " + file.path() + ":3")) << r.err;
+}
+
 }  // namespace
 }  // namespace manibench
 

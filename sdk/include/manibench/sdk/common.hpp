@@ -23,10 +23,12 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -91,6 +93,22 @@ mb_status guard(mb_error* err, Body&& body) noexcept {
 
 }  // namespace detail
 
+// Levenshtein distance: how far a mistyped key is from a known one.
+inline std::size_t calcEditDistance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
 // A plugin's configuration: the YAML text the host passes at creation.
 class Config {
  public:
@@ -105,10 +123,20 @@ class Config {
   }
   // The value at `key`, or `fallback` when absent; a value of the wrong type
   // is an error naming the key and the line.
+  // Booleans follow YAML 1.2 as the host's configuration does: true or
+  // false (any case), not yes/no/on/off.
   template <class T>
   T get(const std::string& key, const T& fallback) const {
     if (!has(key)) return fallback;
     const YAML::Node value = node_[key];
+    if constexpr (std::is_same_v<T, bool>) {
+      const std::string text = value.IsScalar() ? value.Scalar() : std::string();
+      if (text == "true" || text == "True" || text == "TRUE") return true;
+      if (text == "false" || text == "False" || text == "FALSE") return false;
+      throw Error("configuration key '" + key + "' (line " + std::to_string(value.Mark().line + 1) +
+                      ") must be true or false, got '" + text + "'",
+                  MB_INVALID_ARGUMENT);
+    }
     try {
       return value.as<T>();
     } catch (const YAML::Exception&) {
@@ -120,6 +148,28 @@ class Config {
   }
   Config child(const std::string& key) const {
     return has(key) ? Config(node_[key]) : Config();
+  }
+  // Refuses keys other than `known` (a typo would otherwise be ignored in
+  // silence), naming the key and the closest known key.
+  void requireKnownKeys(const std::vector<std::string>& known, const std::string& what) const {
+    if (!node_.IsMap()) return;
+    for (auto it = node_.begin(); it != node_.end(); ++it) {
+      const std::string key = it->first.Scalar();
+      if (std::find(known.begin(), known.end(), key) != known.end()) continue;
+      std::string closest;
+      std::size_t best = std::string::npos;
+      for (const std::string& k : known) {
+        const std::size_t d = calcEditDistance(key, k);
+        if (d < best) {
+          best = d;
+          closest = k;
+        }
+      }
+      // No line: the host hands a plugin its section re-emitted, and adds
+      // where the key was set itself (annotatePluginError).
+      throw Error(what + ": unknown key '" + key + "'" + (best <= 2 ? ", did you mean '" + closest + "'?" : ""),
+                  MB_INVALID_ARGUMENT);
+    }
   }
 
  private:
