@@ -103,6 +103,14 @@ class VisualObserver {
   // RenderError when rendering fails.
   void observe(uint64_t sample_seed, VisualObservation& out);
 
+  // Seconds observe() has spent since the observer was made (manibench
+  // bench's stage table): drawing the cameras and reading their pixels
+  // back, then assembling the observation from those pixels.
+  struct Times {
+    double render = 0, assembly = 0;
+  };
+  const Times& getTimes() const { return times_; }
+
  private:
   void stackImages(const std::vector<CameraImages>& images, VisualObservation& out) const;
 
@@ -113,6 +121,7 @@ class VisualObserver {
   std::unique_ptr<SceneRenderer> renderer_;
   std::vector<CameraImages> images_;
   PointCloud raw_points_;
+  Times times_;
 };
 
 }  // namespace manibench

@@ -3,7 +3,16 @@
 // them along the channel axis as ManiSkill does.
 #include <manibench/visual_observer.hpp>
 
+#include <chrono>
+
 namespace manibench {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+}  // namespace
 
 VisualObserver::VisualObserver(const Scene& scene, const ObservationOptions& options,
                                const SegmentationMasks& masks, const std::string& task_name)
@@ -52,14 +61,20 @@ void VisualObserver::fusePointCloud(const std::vector<CameraImages>& images, std
 void VisualObserver::observe(uint64_t sample_seed, VisualObservation& out) {
   out.mode = options_.mode;
   if (!isVisualMode(options_.mode)) return;
+  // Render: drawing and readback, with the renderer's conversion of the
+  // pixels (row order, depth, ids); assembly: what is made of them.
+  Clock::time_point start = Clock::now();
   const std::vector<CameraImages>& images = renderCameras();
+  times_.render += secondsSince(start);
+  start = Clock::now();
   out.mask_count = masks_.getCount();
   if (options_.mode == ObservationMode::PointCloud) {
     fusePointCloud(images, images.size(), raw_points_);
     out.points = samplePointCloud(raw_points_, options_.pointcloud, sample_seed);
-    return;
+  } else {
+    stackImages(images, out);
   }
-  stackImages(images, out);
+  times_.assembly += secondsSince(start);
 }
 
 void VisualObserver::stackImages(const std::vector<CameraImages>& images,
