@@ -21,6 +21,10 @@ success and observation. Resets are timed separately: the first on its
 own (its scene was built with the environment; in the visual modes it
 starts the renderer), then the mean of the rest (a new object each, scene
 rebuilt, while the split has several).
+Then the time of an env step by stage, in ms: physics (controller and
+integrator), task (reward, success, state vector), render (drawing the
+cameras and reading their pixels back), assembly (the point cloud or
+images made from those pixels), policy, and the rest.
 The last line gives the integrator's work per env step (steps; for
 implicit_euler its island solves, for cpodes its failed steps, Newton
 iterations and Jacobians; evaluations of the equations of motion), which
@@ -67,21 +71,38 @@ int commandBench(int argc, char** argv) {
   uint64_t steps = 0, episodes = 0, successes = 0;
   // Integrator work during env steps only (resets rebuild scenes).
   mb::IntegratorStatistics physics, before;
-  Clock::time_point start;
+  Clock::time_point start, act_start;
+  // Stage seconds over the timed env steps, and the counters at the step's
+  // start (the observer belongs to the scene, which only resets replace).
+  struct Stages {
+    double physics = 0, task = 0, render = 0, assembly = 0, policy = 0;
+  } stages;
+  mb::Environment::StageTimes env_before;
+  mb::VisualObserver::Times observer_before;
   // Resets (environment and policy) from entering the first to the first
   // act; env steps from each act to the end of its step.
   mb::EpisodeHooks hooks;
   hooks.on_phase = [&](mb::EpisodePhase phase, uint32_t step) {
     if (phase == mb::EpisodePhase::EnvReset) start = Clock::now();
+    if (phase == mb::EpisodePhase::EnvStep)
+      stages.policy += std::chrono::duration<double>(Clock::now() - act_start).count();
     if (phase != mb::EpisodePhase::PolicyAct) return;
     if (step == 0) (episodes == 0 ? first_reset_time : reset_time) += Clock::now() - start;
     before = env->getScene().getIntegratorStatistics();
-    start = Clock::now();
+    env_before = env->getStageTimes();
+    observer_before = env->getObserver().getTimes();
+    start = act_start = Clock::now();
   };
   hooks.on_step = [&](const mb::StepResult& result, const mb::EpisodeResult&) {
     step_time += Clock::now() - start;
     physics += env->getScene().getIntegratorStatistics();
     physics -= before;
+    const mb::Environment::StageTimes& env_now = env->getStageTimes();
+    const mb::VisualObserver::Times& observer_now = env->getObserver().getTimes();
+    stages.physics += env_now.physics - env_before.physics;
+    stages.task += env_now.task - env_before.task;
+    stages.render += observer_now.render - observer_before.render;
+    stages.assembly += observer_now.assembly - observer_before.assembly;
     ++steps;
     if (result.done && result.success) ++successes;
     return steps < target_steps;
@@ -105,6 +126,14 @@ int commandBench(int argc, char** argv) {
     std::cout << ", then " << 1e3 * reset_time.count() / double(episodes - 1) << " ms per reset ("
               << episodes - 1 << (objects.size() > 1 ? ", a new object each" : ", the same object")
               << ")";
+  const double ms = 1e3 / double(steps);
+  const double other = step_time.count() - stages.physics - stages.task - stages.render -
+                       stages.assembly - stages.policy;
+  std::cout << "\nper env step (ms): " << std::setprecision(3) << "physics "
+            << ms * stages.physics << ", task " << ms * stages.task << ", render "
+            << ms * stages.render << ", assembly " << ms * stages.assembly << ", policy "
+            << ms * stages.policy << ", other " << ms * other << "; total "
+            << ms * step_time.count();
   std::cout << "\nphysics per env step: " << std::setprecision(1)
             << double(physics.steps) / double(steps) << " integrator steps";
   if (settings.integrator == mb::Integrator::ImplicitEuler) {

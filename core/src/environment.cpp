@@ -3,12 +3,20 @@
 #include <manibench/task_name.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
 #include <string>
 
 namespace manibench {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+}  // namespace
 
 Environment::Environment(const PluginRegistry& registry, const std::string& environment_id,
                          EnvironmentOptions options)
@@ -186,7 +194,9 @@ void Environment::applySceneOptions(const std::string& object_id) {
 }
 
 void Environment::observe() {
+  const Clock::time_point start = Clock::now();
   task_->observe(*bridge_, observation_);
+  stage_times_.task += secondsSince(start);
   if (isVisualMode(options_.observation.mode))
     observation_.conservativeResize(description_.agent_state_dim);
   // Each step samples anew, yet (seed, step) fixes the sample.
@@ -252,6 +262,7 @@ StepResult Environment::step(const Eigen::VectorXd& action) {
   clipped_action_ = action.cwiseMax(-1.0).cwiseMin(1.0);
 
   const double dt = 1.0 / task.control_frequency;
+  Clock::time_point start = Clock::now();
   try {
     for (uint32_t k = 0; k < task.frame_skip; ++k) {
       controller_->compute(*bridge_, clipped_action_, drives_);
@@ -262,7 +273,9 @@ StepResult Environment::step(const Eigen::VectorXd& action) {
     throw EpisodeFailure(describeEpisode() + ": simulation diverged: " + e.what());
   }
   ++elapsed_steps_;
+  stage_times_.physics += secondsSince(start);
 
+  start = Clock::now();
   StepResult result;
   result.reward = task_->computeReward(*bridge_, clipped_action_);
   if (!std::isfinite(result.reward))
@@ -271,6 +284,7 @@ StepResult Environment::step(const Eigen::VectorXd& action) {
   result.success = result.flags.back() != 0;
   result.done = elapsed_steps_ >= task.max_episode_steps ||
                 (options_.stop_on_success && result.success);
+  stage_times_.task += secondsSince(start);
   observe();
   return result;
 }

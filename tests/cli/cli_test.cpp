@@ -9,6 +9,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
 
 #include "test_support.hpp"
 
@@ -300,6 +303,53 @@ TEST(CliBench, ReportsStepsPerSecond) {
   const auto bad = testing::runCli({"bench", "Reach-v0", "--obs", "depth"});
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("--obs must be state, pointcloud or rgbd"), std::string::npos) << bad.err;
+}
+
+// The stages of "per env step (ms): physics A, task B, render C, assembly D,
+// policy E, other F; total G", by name.
+std::map<std::string, double> parseStages(const std::string& out) {
+  std::map<std::string, double> stages;
+  const std::string head = "per env step (ms): ";
+  const std::size_t at = out.find(head);
+  if (at == std::string::npos) return stages;
+  std::istringstream line(out.substr(at + head.size(), out.find('\n', at) - at - head.size()));
+  std::string name;
+  double value = 0;
+  while (line >> name >> value) {
+    stages[name] = value;
+    line.ignore(1);  // ',' or ';'
+  }
+  return stages;
+}
+
+TEST(CliBench, TimesEachStageOfAnEnvStep) {
+  for (const char* mode : {"state", "pointcloud", "rgbd"}) {
+    const auto r = testing::runCli({"bench", "Reach-v0", "--steps", "30", "--policy", "random", "--obs", mode});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::map<std::string, double> stages = parseStages(r.out);
+    ASSERT_EQ(stages.size(), 7u) << r.out;
+    for (const char* name : {"physics", "task", "render", "assembly", "policy", "other", "total"})
+      ASSERT_EQ(stages.count(name), 1u) << name << "\n" << r.out;
+    // Every env step integrates, and the stages are parts of the total
+    // (printed to the microsecond, so sums are within rounding).
+    EXPECT_GT(stages.at("physics"), 0.0) << r.out;
+    EXPECT_GT(stages.at("total"), 0.0) << r.out;
+    double sum = 0;
+    for (const auto& [name, value] : stages)
+      if (name != "total" && name != "other") {
+        EXPECT_GE(value, 0.0) << name << "\n" << r.out;
+        sum += value;
+      }
+    EXPECT_LE(sum, stages.at("total") + 0.005) << r.out;
+    EXPECT_NEAR(sum + stages.at("other"), stages.at("total"), 0.005) << r.out;
+    if (std::string(mode) == "state") {
+      EXPECT_EQ(stages.at("render"), 0.0) << "the state mode renders nothing\n" << r.out;
+      EXPECT_EQ(stages.at("assembly"), 0.0) << r.out;
+    } else {
+      EXPECT_GT(stages.at("render"), 0.0) << mode << "\n" << r.out;
+      EXPECT_GT(stages.at("assembly"), 0.0) << mode << "\n" << r.out;
+    }
+  }
 }
 
 }  // namespace

@@ -17,9 +17,11 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <array>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -223,6 +225,67 @@ TEST(ObservationModes, SameSeedSameBytesAcrossEnvironments) {
   EXPECT_EQ(a.rgb, b.rgb);
   EXPECT_EQ(a.masks, b.masks);
   EXPECT_NE(a.xyz, c.xyz) << "another seed samples other points";
+}
+
+TEST(ObservationModes, PointCloudFromPixelsIsTheD1SampleOfTheFullCloud) {
+  // The observation classifies pixels and unprojects only what it keeps;
+  // the full cloud (every hit pixel unprojected) sampled by the same rule
+  // must agree: the same masked points bit for bit (same candidates, same
+  // generator), and background points that are points of the full cloud,
+  // in no mask, above the ground, none twice. With ground_height -1 the
+  // ground plane is background too.
+  for (const std::string ground : {"0.001", "-1"}) {
+    SCOPED_TRACE("ground_height " + ground);
+    Environment env(getRegistry(), "RobotTestbed-v0",
+                    makeOptions({"observation.mode=pointcloud",
+                                 "observation.pointcloud.ground_height=" + ground}));
+    env.reset("0", 4);
+    VisualObserver& observer = env.updObserver();
+    VisualObservation observation;
+    observer.observe(77, observation);
+    const PointCloud& cloud = observation.points;
+    PointCloud full;
+    observer.fusePointCloud(observer.renderCameras(), 3, full);
+    const PointCloudSampling& sampling = env.getOptions().observation.pointcloud;
+    const std::vector<uint32_t> reference = selectPointCloudSample(full, sampling, 77);
+    ASSERT_EQ(cloud.size(), 1200u);
+
+    std::size_t masked = 0;
+    while (masked < cloud.size() && cloud.masks[masked]) ++masked;
+    std::size_t reference_masked = 0;
+    while (reference_masked < reference.size() && full.masks[reference[reference_masked]])
+      ++reference_masked;
+    ASSERT_EQ(masked, reference_masked);
+    EXPECT_GT(masked, 50u);
+    for (std::size_t i = 0; i < masked; ++i)
+      for (std::size_t c = 0; c < 3; ++c) {
+        ASSERT_EQ(cloud.xyz[3 * i + c], full.xyz[3 * reference[i] + c]) << "point " << i;
+        ASSERT_EQ(cloud.rgb[3 * i + c], full.rgb[3 * reference[i] + c]) << "point " << i;
+      }
+
+    std::set<std::array<float, 3>> background;
+    for (std::size_t i = 0; i < full.size(); ++i)
+      if (!full.masks[i] && full.xyz[3 * i + 2] > sampling.ground_height)
+        background.insert({full.xyz[3 * i], full.xyz[3 * i + 1], full.xyz[3 * i + 2]});
+    const std::size_t expected = std::min<std::size_t>(1200 - masked, background.size());
+    if (ground == "-1") EXPECT_EQ(expected, 1200 - masked) << "the ground fills the cloud";
+    std::set<std::array<float, 3>> seen;
+    for (std::size_t i = masked; i < masked + expected; ++i) {
+      const std::array<float, 3> p{cloud.xyz[3 * i], cloud.xyz[3 * i + 1], cloud.xyz[3 * i + 2]};
+      EXPECT_FALSE(cloud.masks[i]);
+      EXPECT_EQ(background.count(p), 1u) << "point " << i << " is no background point";
+      EXPECT_TRUE(seen.insert(p).second) << "point " << i << " twice";
+    }
+    for (std::size_t i = masked + expected; i < cloud.size(); ++i)
+      EXPECT_TRUE(cloud.xyz[3 * i] == 0 && cloud.xyz[3 * i + 1] == 0 && cloud.xyz[3 * i + 2] == 0 &&
+                  !cloud.masks[i])
+          << "padding at " << i;
+
+    // The environment's own observation keeps its buffers from step to step.
+    const float* xyz = env.getVisualObservation().points.xyz.data();
+    env.step(Eigen::VectorXd::Zero(env.getControllerDescription().action_dim));
+    EXPECT_EQ(env.getVisualObservation().points.xyz.data(), xyz);
+  }
 }
 
 // ---- rgbd ---------------------------------------------------------------------------------

@@ -116,6 +116,14 @@ class Environment {
   const VisualObserver& getObserver() const { return *observer_; }
   VisualObserver& updObserver() { return *observer_; }
   uint32_t getElapsedSteps() const { return elapsed_steps_; }
+  // Seconds spent so far in the parts of step() and reset() (manibench
+  // bench's stage table): physics (controller and integrator) and the task
+  // (reward, success, its state vector). Rendering and assembling the visual
+  // observation are the observer's (VisualObserver::getTimes).
+  struct StageTimes {
+    double physics = 0, task = 0;
+  };
+  const StageTimes& getStageTimes() const { return stage_times_; }
   const std::string& getObjectId() const { return object_id_; }
   uint64_t getSeed() const { return seed_; }
   const Scene& getScene() const;
@@ -158,6 +166,7 @@ class Environment {
   std::unique_ptr<SegmentationMasks> masks_;
   std::unique_ptr<VisualObserver> observer_;
   VisualObservation visual_;
+  StageTimes stage_times_;
 };
 
 }  // namespace manibench

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace manibench {
@@ -45,6 +46,50 @@ struct PointCloudSampling {
   //    black, no mask) so the size is always `total`, as ManiSkill-Learn
   //    does; false keeps only the chosen points.
   bool pad = true;
+};
+
+// The D.1 rule on candidates named by index (a point of a cloud, a pixel of
+// a camera), for callers that classify once and compute positions only for
+// what is kept: the pointcloud observation adds each hit pixel with its
+// mask bits, and unprojects only the chosen ones. Its buffers are kept from
+// one sample to the next (no allocation once they have grown).
+class PointCloudSampler {
+ public:
+  // Starts a new sample.
+  void clear();
+  // The candidates, in increasing index order: one in the masks of `bits`
+  // (bit m: mask m, at least one set), or one in no mask.
+  void addMasked(uint32_t index, std::uint64_t bits) {
+    const auto position = static_cast<uint32_t>(masked_.size());
+    masked_.push_back(index);
+    if (per_mask_.size() < 64 && (bits >> per_mask_.size()) != 0) growMasks(bits);
+    for (std::uint64_t rest = bits; rest != 0; rest &= rest - 1)
+      per_mask_[std::size_t(__builtin_ctzll(rest))].push_back(position);
+  }
+  void addBackground(uint32_t index) { background_.push_back(index); }
+  std::size_t getMaskedCount() const { return masked_.size(); }
+  std::size_t getBackgroundCount() const { return background_.size(); }
+
+  // The indices D.1 keeps: the masked ones first, then the background ones,
+  // each group in increasing index order. `is_above_ground(index)` is asked
+  // of background candidates only, in random order until enough are found
+  // (so a caller computes few heights). The same candidates, sampling and
+  // seed always give the same indices (the generator is fixed, not the
+  // standard library's). Throws std::invalid_argument when masked_total >
+  // total.
+  const std::vector<uint32_t>& select(const PointCloudSampling& sampling, uint64_t seed,
+                                      const std::function<bool(uint32_t)>& is_above_ground);
+  // How many of select()'s indices are masked (they come first).
+  std::size_t getSelectedMaskedCount() const { return selected_masked_; }
+
+ private:
+  void growMasks(std::uint64_t bits);
+
+  std::vector<uint32_t> masked_, background_;
+  std::vector<std::vector<uint32_t>> per_mask_;  // positions in masked_, per mask
+  std::vector<std::uint8_t> chosen_;             // per position in masked_
+  std::vector<uint32_t> candidates_, selected_, accepted_;
+  std::size_t selected_masked_ = 0;
 };
 
 // Indices into `raw` of the points D.1 keeps: the masked ones first, then

@@ -135,6 +135,68 @@ struct CameraImages {
   double near = 0, far = 0;
 };
 
+// GL depth d in [0, 1] -> metres along the optical axis of a camera with
+// clipping distances `near` and `far`: z = 2 n f / (f + n - (2 d - 1)(f - n)).
+inline float calcLinearDepth(float window_depth, double near, double far) {
+  return static_cast<float>(2 * near * far /
+                            ((far + near) - (2.0 * window_depth - 1.0) * (far - near)));
+}
+
+// One camera's framebuffer as OpenGL returns it, for consumers that convert
+// only what they need (the observation module): rows run from the BOTTOM
+// row up, segmentation as drawn, depth as stored. `CameraImages` is its
+// converted form (SceneRenderer::render).
+struct RawCameraImages {
+  // Segmentation of the ground plane (a hit in no visual); 0 is nothing,
+  // visual v is v + 1.
+  static constexpr std::uint32_t kGroundSegment = 0xFFFFFFFFu;
+  std::string camera;
+  int width = 0, height = 0;
+  std::vector<std::uint8_t> rgba;      // 4 per pixel
+  std::vector<std::uint32_t> segment;  // per pixel, see kGroundSegment
+  std::vector<float> depth;            // window depth in [0, 1] (1: far plane)
+  std::uint32_t visual_count = 0;      // segments 1..visual_count are visuals
+  Eigen::Isometry3d camera_to_world = Eigen::Isometry3d::Identity();
+  Eigen::Matrix3d intrinsic = Eigen::Matrix3d::Identity();  // as CameraImages'
+  double near = 0, far = 0;
+
+  // Index into the arrays of image pixel (row from the top, col).
+  std::size_t getIndex(int row, int col) const {
+    return static_cast<std::size_t>(height - 1 - row) * static_cast<std::size_t>(width) +
+           static_cast<std::size_t>(col);
+  }
+  // Whether the pixel at `index` shows a visual or the ground.
+  bool isHit(std::size_t index) const {
+    const std::uint32_t s = segment[index];
+    return s != 0 && (s <= visual_count || s == kGroundSegment) && depth[index] < 1.0f;
+  }
+  // The visual at a hit pixel's `index` (-1: the ground).
+  int getVisual(std::size_t index) const {
+    const std::uint32_t s = segment[index];
+    return s <= visual_count ? static_cast<int>(s) - 1 : -1;
+  }
+  // Metres along the optical axis at `index` (0 where nothing was hit).
+  float calcDepth(std::size_t index) const {
+    return isHit(index) ? calcLinearDepth(depth[index], near, far) : 0.0f;
+  }
+};
+
+// The world-frame (or, with the identity, camera-frame) point of image
+// pixel (row from the top, col) at `depth` metres: the one unprojection of
+// calcCameraPoints and the point-cloud observation.
+inline Eigen::Vector3f calcPixelPoint(const Eigen::Matrix3d& intrinsic,
+                                      const Eigen::Matrix3d& rotation,
+                                      const Eigen::Vector3d& translation, int row, int col,
+                                      float depth) {
+  const double fx = intrinsic(0, 0), fy = intrinsic(1, 1);
+  const double cx = intrinsic(0, 2), cy = intrinsic(1, 2);
+  const double z = depth;
+  // OpenCV ray (right, down, forward) -> SAPIEN camera (forward, left, up).
+  const double right = (col + 0.5 - cx) / fx * z, down = (row + 0.5 - cy) / fy * z;
+  const Eigen::Vector3d p(z, -right, -down);
+  return (rotation * p + translation).cast<float>();
+}
+
 // Renders one Scene (which must outlive it). The constructor uploads all
 // visual geometry once (build the scene first: render() refuses a scene that
 // gained visuals since); render() only reads link poses (the scene must be
@@ -153,6 +215,13 @@ class SceneRenderer {
   // Renders `camera` placed at `camera_pose_world` (SAPIEN camera frame)
   // into `out` (resized as needed; reuse it to avoid allocations).
   void render(const CameraSpec& camera, const Pose& camera_pose_world, CameraImages& out);
+  // The same in two halves, so that a caller draws every camera of a step
+  // before reading any back (a GPU then does not idle between cameras):
+  // draw() renders into the camera's own framebuffer, readBack() copies
+  // what the last draw() of that camera made into `out` (resized as
+  // needed), unconverted. readBack() of a camera never drawn throws.
+  void draw(const CameraSpec& camera, const Pose& camera_pose_world);
+  void readBack(const CameraSpec& camera, RawCameraImages& out);
 
   void setLighting(const LightingSpec& lighting);
   const LightingSpec& getLighting() const;

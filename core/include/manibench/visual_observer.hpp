@@ -100,11 +100,27 @@ class VisualObserver {
                       PointCloud& out) const;
   // The visual observation of the current state in the options' mode
   // (nothing in State). `sample_seed` fixes the point-cloud sample. Throws
-  // RenderError when rendering fails.
+  // RenderError when rendering fails. Every camera is drawn before any is
+  // read back; the pixels are then converted once, straight into `out`:
+  // a point cloud classifies them (hit, masks, background) and unprojects
+  // only the D.1 sample, rgbd writes each pixel's channels in one pass.
   void observe(uint64_t sample_seed, VisualObservation& out);
 
+  // Seconds observe() has spent since the observer was made (manibench
+  // bench's stage table): drawing the cameras and reading their pixels
+  // back, then assembling the observation from those pixels.
+  struct Times {
+    double render = 0, assembly = 0;
+  };
+  const Times& getTimes() const { return times_; }
+
  private:
-  void stackImages(const std::vector<CameraImages>& images, VisualObservation& out) const;
+  // The mask bits of each renderer segment value (visual + 1; 0: none).
+  void updateSegmentBits();
+  void assemblePointCloud(uint64_t sample_seed, PointCloud& out);
+  // World point of sample index `index` (camera start + row * width + col).
+  Eigen::Vector3f calcSamplePoint(uint32_t index, std::size_t& camera, std::size_t& pixel) const;
+  void assembleImages(VisualObservation& out) const;
 
   const Scene& scene_;
   const ObservationOptions& options_;
@@ -112,7 +128,12 @@ class VisualObserver {
   CameraRig cameras_;
   std::unique_ptr<SceneRenderer> renderer_;
   std::vector<CameraImages> images_;
-  PointCloud raw_points_;
+  // observe()'s buffers, kept from step to step.
+  std::vector<RawCameraImages> raw_;
+  std::vector<std::uint64_t> segment_bits_;  // see updateSegmentBits
+  std::vector<uint32_t> camera_starts_;  // per camera: its first sample index
+  PointCloudSampler sampler_;
+  Times times_;
 };
 
 }  // namespace manibench

@@ -59,6 +59,68 @@ void PointCloud::appendZero() {
   masks.insert(masks.end(), mask_count, 0);
 }
 
+void PointCloudSampler::clear() {
+  masked_.clear();
+  background_.clear();
+  for (std::vector<uint32_t>& list : per_mask_) list.clear();
+}
+
+void PointCloudSampler::growMasks(std::uint64_t bits) {
+  std::size_t count = 64;
+  while (count > 0 && ((bits >> (count - 1)) & 1u) == 0) --count;
+  if (count > per_mask_.size()) per_mask_.resize(count);
+}
+
+const std::vector<uint32_t>& PointCloudSampler::select(
+    const PointCloudSampling& sampling, uint64_t seed,
+    const std::function<bool(uint32_t)>& is_above_ground) {
+  if (sampling.masked_total > sampling.total)
+    throw std::invalid_argument("point cloud sampling: masked_total (" +
+                                std::to_string(sampling.masked_total) + ") exceeds total (" +
+                                std::to_string(sampling.total) + ")");
+  SplitMix64 rng(seed);
+  const std::size_t masked = masked_.size();
+  chosen_.assign(masked, 0);
+  // 1. Every mask gets up to per_mask points of its own (a point already
+  // chosen for an earlier mask counts for this one too).
+  for (std::vector<uint32_t>& list : per_mask_) chooseSome(list, sampling.per_mask, rng, chosen_);
+  // 2. More masked points up to masked_total.
+  std::size_t masked_chosen = 0;
+  candidates_.clear();
+  for (std::size_t p = 0; p < masked; ++p) {
+    if (chosen_[p])
+      ++masked_chosen;
+    else
+      candidates_.push_back(uint32_t(p));
+  }
+  const std::size_t masked_goal = std::min<std::size_t>(sampling.masked_total, masked);
+  if (masked_goal > masked_chosen) {
+    chooseSome(candidates_, masked_goal - masked_chosen, rng, chosen_);
+    masked_chosen = masked_goal;
+  }
+  selected_.clear();
+  for (std::size_t p = 0; p < masked; ++p)
+    if (chosen_[p]) selected_.push_back(masked_[p]);
+  selected_masked_ = selected_.size();
+  // 3. Background above the ground fills up to total: a partial Fisher-
+  // Yates shuffle of the background whose prefix, without the points on or
+  // below the ground, is a uniform sample of those above it; heights are
+  // asked only along that prefix.
+  if (sampling.total > selected_.size()) {
+    const std::size_t goal = sampling.total - selected_.size();
+    const std::size_t n = background_.size();
+    accepted_.clear();
+    for (std::size_t i = 0; i < n && accepted_.size() < goal; ++i) {
+      const std::size_t j = i + static_cast<std::size_t>(rng.below(n - i));
+      std::swap(background_[i], background_[j]);
+      if (is_above_ground(background_[i])) accepted_.push_back(background_[i]);
+    }
+    std::sort(accepted_.begin(), accepted_.end());
+    selected_.insert(selected_.end(), accepted_.begin(), accepted_.end());
+  }
+  return selected_;
+}
+
 std::vector<uint32_t> selectPointCloudSample(const PointCloud& raw,
                                              const PointCloudSampling& sampling,
                                              uint64_t seed) {
@@ -70,58 +132,20 @@ std::vector<uint32_t> selectPointCloudSample(const PointCloud& raw,
         std::to_string(raw.rgb.size()) + " rgb values and " + std::to_string(raw.masks.size()) +
         " mask values for " + std::to_string(k) + " masks");
   if (n > UINT32_MAX) throw std::invalid_argument("point cloud has more than 2^32 points");
-  if (sampling.masked_total > sampling.total)
-    throw std::invalid_argument("point cloud sampling: masked_total (" +
-                                std::to_string(sampling.masked_total) + ") exceeds total (" +
-                                std::to_string(sampling.total) + ")");
-  SplitMix64 rng(seed);
-  std::vector<std::uint8_t> chosen(n, 0);
-  std::vector<uint32_t> candidates;
-  candidates.reserve(n);
-
-  // 1. Every mask gets up to per_mask points of its own.
-  for (std::size_t m = 0; m < k; ++m) {
-    candidates.clear();
-    for (std::size_t i = 0; i < n; ++i)
-      if (raw.masks[i * k + m]) candidates.push_back(uint32_t(i));
-    chooseSome(candidates, sampling.per_mask, rng, chosen);
-  }
-  // 2. More masked points up to masked_total.
-  std::size_t masked = 0, masked_chosen = 0;
-  candidates.clear();
+  if (k > 64) throw std::invalid_argument("point cloud has more than 64 masks");
+  PointCloudSampler sampler;
   for (std::size_t i = 0; i < n; ++i) {
-    const std::uint8_t* bits = raw.masks.data() + i * k;
-    if (std::none_of(bits, bits + k, [](std::uint8_t b) { return b != 0; })) continue;
-    ++masked;
-    if (chosen[i])
-      ++masked_chosen;
+    std::uint64_t bits = 0;
+    for (std::size_t m = 0; m < k; ++m)
+      if (raw.masks[i * k + m]) bits |= std::uint64_t(1) << m;
+    if (bits != 0)
+      sampler.addMasked(uint32_t(i), bits);
     else
-      candidates.push_back(uint32_t(i));
+      sampler.addBackground(uint32_t(i));
   }
-  const std::size_t masked_goal = std::min<std::size_t>(sampling.masked_total, masked);
-  if (masked_goal > masked_chosen) {
-    chooseSome(candidates, masked_goal - masked_chosen, rng, chosen);
-    masked_chosen = masked_goal;
-  }
-  std::vector<uint32_t> out;
-  out.reserve(std::max<std::size_t>(sampling.total, masked_chosen));
-  for (std::size_t i = 0; i < n; ++i)
-    if (chosen[i]) out.push_back(uint32_t(i));
-  // 3. Background above the ground fills up to total.
-  if (sampling.total > out.size()) {
-    candidates.clear();
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::uint8_t* bits = raw.masks.data() + i * k;
-      if (!chosen[i] && raw.xyz[3 * i + 2] > sampling.ground_height &&
-          std::none_of(bits, bits + k, [](std::uint8_t b) { return b != 0; }))
-        candidates.push_back(uint32_t(i));
-    }
-    std::vector<std::uint8_t> background(n, 0);
-    chooseSome(candidates, sampling.total - out.size(), rng, background);
-    for (std::size_t i = 0; i < n; ++i)
-      if (background[i]) out.push_back(uint32_t(i));
-  }
-  return out;
+  return sampler.select(sampling, seed, [&](uint32_t i) {
+    return raw.xyz[3 * std::size_t(i) + 2] > sampling.ground_height;
+  });
 }
 
 PointCloud samplePointCloud(const PointCloud& raw, const PointCloudSampling& sampling,

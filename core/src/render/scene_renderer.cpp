@@ -169,13 +169,51 @@ struct DrawItem {
 
 // Segmentation value of the ground plane (visuals are index + 1, 0 is
 // nothing): it counts as a hit for depth but names no visual.
-constexpr std::uint32_t kGroundSegment = 0xFFFFFFFFu;
+constexpr std::uint32_t kGroundSegment = RawCameraImages::kGroundSegment;
 
 struct CameraTarget {
   GLuint framebuffer = 0;
   GLuint renderbuffers[3] = {0, 0, 0};  // color, segmentation, depth
   int width = 0, height = 0;
+  // What the last draw saw, for its readback.
+  bool drawn = false;
+  Eigen::Isometry3d camera_to_world = Eigen::Isometry3d::Identity();
+  Eigen::Matrix3d intrinsic = Eigen::Matrix3d::Identity();
+  double near = 0, far = 0;
 };
+
+// `raw` as CameraImages: rows flipped to run from the top, depth in
+// metres (0 where nothing was hit), visual and link ids.
+void convertImages(const RawCameraImages& raw, const std::vector<int>& visual_links,
+                   CameraImages& out) {
+  const int width = raw.width, height = raw.height;
+  const std::size_t pixels = static_cast<std::size_t>(width) * height;
+  out.camera = raw.camera;
+  out.width = width;
+  out.height = height;
+  out.rgba.resize(pixels * 4);
+  out.depth.resize(pixels);
+  out.visual.resize(pixels);
+  out.link.resize(pixels);
+  out.camera_to_world = raw.camera_to_world;
+  out.intrinsic = raw.intrinsic;
+  out.near = raw.near;
+  out.far = raw.far;
+  for (int row = 0; row < height; ++row) {
+    const std::size_t source = raw.getIndex(row, 0);
+    const std::size_t destination = static_cast<std::size_t>(row) * width;
+    std::copy_n(raw.rgba.data() + source * 4, static_cast<std::size_t>(width) * 4,
+                out.rgba.data() + destination * 4);
+    for (int col = 0; col < width; ++col) {
+      const std::size_t i = source + static_cast<std::size_t>(col);
+      const bool hit = raw.isHit(i);
+      out.depth[destination + col] = hit ? calcLinearDepth(raw.depth[i], raw.near, raw.far) : 0.0f;
+      const int visual = hit ? raw.getVisual(i) : -1;
+      out.visual[destination + col] = visual;
+      out.link[destination + col] = visual >= 0 ? visual_links[static_cast<std::size_t>(visual)] : -1;
+    }
+  }
+}
 
 }  // namespace
 
@@ -193,10 +231,7 @@ struct SceneRenderer::Impl {
   std::vector<int> link_slot;       // per visual: index into links
   std::size_t triangle_count = 0;
   std::map<std::string, CameraTarget> targets;
-  // Readback scratch (GL rows bottom-up).
-  std::vector<std::uint8_t> color_rows;
-  std::vector<std::uint32_t> segment_rows;
-  std::vector<float> depth_rows;
+  RawCameraImages raw;  // render()'s readback scratch
   std::vector<Eigen::Isometry3d> link_poses;
 
   Impl(const Scene& s, RenderContext::Impl& c, LightingSpec l)
@@ -206,6 +241,11 @@ struct SceneRenderer::Impl {
   void releaseGl();
   CameraTarget& getTarget(const CameraSpec& camera);
   const ShaderProgram& getProgram();
+  // Throws RenderError for a camera or pose no draw can honour.
+  void checkDraw(const CameraSpec& camera, const Pose& camera_pose_world) const;
+  // Under the context's lock.
+  void draw(const CameraSpec& camera, const Pose& camera_pose_world);
+  void readBack(const CameraSpec& camera, RawCameraImages& out);
   void setLightUniforms(const ShaderProgram& program, const Eigen::Isometry3d& world_to_view) const;
 };
 
@@ -493,7 +533,23 @@ SceneRenderer::~SceneRenderer() {
 
 void SceneRenderer::render(const CameraSpec& camera, const Pose& camera_pose_world,
                            CameraImages& out) {
-  Impl& d = *impl_;
+  impl_->checkDraw(camera, camera_pose_world);
+  // Under the lock: this renderer's scratch (and the scene's pose cache) is
+  // shared by every thread that renders it.
+  RenderLock lock(impl_->context, "SceneRenderer::render");
+  impl_->draw(camera, camera_pose_world);
+  impl_->readBack(camera, impl_->raw);
+  convertImages(impl_->raw, impl_->visual_links, out);
+}
+
+void SceneRenderer::draw(const CameraSpec& camera, const Pose& camera_pose_world) {
+  impl_->checkDraw(camera, camera_pose_world);
+  RenderLock lock(impl_->context, "SceneRenderer::draw");
+  impl_->draw(camera, camera_pose_world);
+}
+
+void SceneRenderer::Impl::checkDraw(const CameraSpec& camera, const Pose& camera_pose_world) const {
+  const Impl& d = *this;
   if (camera.width < 1 || camera.height < 1 || camera.width > 16384 || camera.height > 16384) {
     throw RenderError("camera '" + camera.name + "': size " + std::to_string(camera.width) +
                       "x" + std::to_string(camera.height) + " outside 1..16384");
@@ -512,9 +568,15 @@ void SceneRenderer::render(const CameraSpec& camera, const Pose& camera_pose_wor
                       std::to_string(d.visual_links.size()) +
                       "; create the SceneRenderer after the scene is built");
   }
-  // Under the lock: this renderer's scratch (and the scene's pose cache) is
-  // shared by every thread that renders it.
-  RenderLock lock(d.context, "SceneRenderer::render");
+}
+
+void SceneRenderer::readBack(const CameraSpec& camera, RawCameraImages& out) {
+  RenderLock lock(impl_->context, "SceneRenderer::readBack");
+  impl_->readBack(camera, out);
+}
+
+void SceneRenderer::Impl::draw(const CameraSpec& camera, const Pose& camera_pose_world) {
+  Impl& d = *this;
   for (std::size_t k = 0; k < d.links.size(); ++k) {
     d.link_poses[k] = toIsometry(d.scene.getLinkPose(d.links[k]));
   }
@@ -603,55 +665,44 @@ void SceneRenderer::render(const CameraSpec& camera, const Pose& camera_pose_wor
   }
   glBindVertexArray(0);
 
+  target.drawn = true;
+  target.camera_to_world = camera_to_world;
+  target.near = n;
+  target.far = f;
+  const double fy = (height / 2.0) * focal;
+  target.intrinsic << fy, 0, width / 2.0,  //
+      0, fy, height / 2.0,                 //
+      0, 0, 1;
+}
+
+void SceneRenderer::Impl::readBack(const CameraSpec& camera, RawCameraImages& out) {
+  const auto found = targets.find(camera.name);
+  if (found == targets.end() || !found->second.drawn || found->second.width != camera.width ||
+      found->second.height != camera.height)
+    throw RenderError("camera '" + camera.name + "': read back before it was drawn at " +
+                      std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  const CameraTarget& target = found->second;
+  const int width = target.width, height = target.height;
   const std::size_t pixels = static_cast<std::size_t>(width) * height;
-  d.color_rows.resize(pixels * 4);
-  d.segment_rows.resize(pixels);
-  d.depth_rows.resize(pixels);
+  out.rgba.resize(pixels * 4);
+  out.segment.resize(pixels);
+  out.depth.resize(pixels);
   glBindFramebuffer(GL_READ_FRAMEBUFFER, target.framebuffer);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   glReadBuffer(GL_COLOR_ATTACHMENT0);
-  glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, d.color_rows.data());
+  glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, out.rgba.data());
   glReadBuffer(GL_COLOR_ATTACHMENT1);
-  glReadPixels(0, 0, width, height, GL_RED_INTEGER, GL_UNSIGNED_INT, d.segment_rows.data());
-  glReadPixels(0, 0, width, height, GL_DEPTH_COMPONENT, GL_FLOAT, d.depth_rows.data());
-  checkGlError("rendering a camera");
-
+  glReadPixels(0, 0, width, height, GL_RED_INTEGER, GL_UNSIGNED_INT, out.segment.data());
+  glReadPixels(0, 0, width, height, GL_DEPTH_COMPONENT, GL_FLOAT, out.depth.data());
+  checkGlError("reading a camera back");
   out.camera = camera.name;
   out.width = width;
   out.height = height;
-  out.rgba.resize(pixels * 4);
-  out.depth.resize(pixels);
-  out.visual.resize(pixels);
-  out.link.resize(pixels);
-  out.camera_to_world = camera_to_world;
-  out.near = n;
-  out.far = f;
-  const double fy = (height / 2.0) * focal;
-  out.intrinsic << fy, 0, width / 2.0,  //
-      0, fy, height / 2.0,              //
-      0, 0, 1;
-  // GL depth d in [0, 1] -> distance along the optical axis:
-  // z = 2 n f / (f + n - (2 d - 1)(f - n)).
-  const double two_nf = 2 * n * f, sum = f + n, difference = f - n;
-  const auto visual_count = static_cast<std::uint32_t>(d.visual_links.size());
-  for (int row = 0; row < height; ++row) {
-    const std::size_t source = static_cast<std::size_t>(height - 1 - row) * width;
-    const std::size_t destination = static_cast<std::size_t>(row) * width;
-    std::copy_n(d.color_rows.data() + source * 4, static_cast<std::size_t>(width) * 4,
-                out.rgba.data() + destination * 4);
-    for (int col = 0; col < width; ++col) {
-      const float depth = d.depth_rows[source + col];
-      const std::uint32_t segment = d.segment_rows[source + col];
-      const bool is_visual = segment != 0 && segment <= visual_count;
-      const bool hit = (is_visual || segment == kGroundSegment) && depth < 1.0f;
-      out.depth[destination + col] =
-          hit ? static_cast<float>(two_nf / (sum - (2.0 * depth - 1.0) * difference)) : 0.0f;
-      const int visual = hit && is_visual ? static_cast<int>(segment) - 1 : -1;
-      out.visual[destination + col] = visual;
-      out.link[destination + col] =
-          visual >= 0 ? d.visual_links[static_cast<std::size_t>(visual)] : -1;
-    }
-  }
+  out.visual_count = static_cast<std::uint32_t>(visual_links.size());
+  out.camera_to_world = target.camera_to_world;
+  out.intrinsic = target.intrinsic;
+  out.near = target.near;
+  out.far = target.far;
 }
 
 void SceneRenderer::setLighting(const LightingSpec& lighting) {
@@ -696,8 +747,6 @@ Eigen::Matrix3Xf calcCameraPoints(const CameraImages& images, bool world,
   for (float z : images.depth) valid += z > 0 ? 1 : 0;
   Eigen::Matrix3Xf points(3, static_cast<Eigen::Index>(valid));
   if (pixels != nullptr) pixels->resize(valid);
-  const double fx = images.intrinsic(0, 0), fy = images.intrinsic(1, 1);
-  const double cx = images.intrinsic(0, 2), cy = images.intrinsic(1, 2);
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
   if (world) {
@@ -708,12 +757,9 @@ Eigen::Matrix3Xf calcCameraPoints(const CameraImages& images, bool world,
   for (int row = 0; row < images.height; ++row) {
     for (int col = 0; col < images.width; ++col) {
       const std::size_t i = static_cast<std::size_t>(row) * images.width + col;
-      const double z = images.depth[i];
+      const float z = images.depth[i];
       if (!(z > 0)) continue;
-      // OpenCV ray (right, down, forward) -> SAPIEN camera (forward, left, up).
-      const double right = (col + 0.5 - cx) / fx * z, down = (row + 0.5 - cy) / fy * z;
-      const Eigen::Vector3d p(z, -right, -down);
-      points.col(k) = (rotation * p + translation).cast<float>();
+      points.col(k) = calcPixelPoint(images.intrinsic, rotation, translation, row, col, z);
       if (pixels != nullptr) (*pixels)[static_cast<std::size_t>(k)] = static_cast<int>(i);
       ++k;
     }
