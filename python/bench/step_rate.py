@@ -5,7 +5,9 @@
 
 As `manibench bench` does: episodes on the split's objects in turn with
 seeds 0, 1, ..., until --steps env steps ran; only env.step() is timed
-(resets apart), with uniform random actions made in numpy beforehand.
+(resets apart), with uniform random actions made in numpy beforehand
+(--policy zero: zero actions, the trajectories of `manibench bench
+--policy zero`, for comparing the work per step exactly).
 --num-envs N times make_vec(N) instead (steps of all environments counted;
 auto-resets included in the timing, as a vector user sees them).
 """
@@ -22,6 +24,8 @@ def single(args):
     objects = env.list_objects("train")
     rng = np.random.default_rng(0)
     actions = rng.uniform(-1, 1, size=(args.steps, env.action_space.shape[0]))
+    if args.policy == "zero":
+        actions[:] = 0
     steps, episodes, step_time, reset_time = 0, 0, 0.0, 0.0
     while steps < args.steps:
         start = time.perf_counter()
@@ -63,6 +67,7 @@ def main():
     parser.add_argument("--steps", type=int, default=2000)
     parser.add_argument("--obs", default="state")
     parser.add_argument("--controller", default=None)
+    parser.add_argument("--policy", choices=["random", "zero"], default="random")
     parser.add_argument("--num-envs", type=int, default=0, help="time make_vec(N) (0: one env)")
     args = parser.parse_args()
     (vector if args.num_envs else single)(args)
