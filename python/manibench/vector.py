@@ -173,7 +173,10 @@ class VectorEnv:
         if self._closed:
             raise _core.Error("the vector environment is closed")
         for pipe, payload in zip(self._pipes, payloads):
-            pipe.send((command, payload))
+            try:
+                pipe.send((command, payload))
+            except OSError:  # a dead worker: _receive_all reports it
+                pass
 
     def reset(self, *, seed=None, options=None):
         """Resets every environment. seed: an int (environment i gets seed +

@@ -1,5 +1,8 @@
 """make_vec: worker processes, batched arrays, auto-reset, seeds per
 environment, the same trajectories as sequential environments."""
+import os
+import signal
+
 import numpy as np
 import pytest
 
@@ -90,3 +93,27 @@ def test_vector_pointcloud_batches_dicts():
             assert value.shape == (2,) + space[key].shape and value.dtype == space[key].dtype
         obs, *_ = venv.step(np.zeros((2, 2)))
         assert obs["xyz"].shape == (2, 1200, 3)
+
+
+def test_a_dead_worker_is_an_error_not_a_hang():
+    venv = manibench.make_vec("Reach-v0", num_envs=2)
+    venv.reset(seed=0)
+    victim = venv._processes[1]
+    os.kill(victim.pid, signal.SIGKILL)
+    victim.join(timeout=10)
+    with pytest.raises(manibench.Error, match=r"worker 1: died \(exit code -9\)"):
+        venv.step(np.zeros((2, 2)))
+    survivor = venv._processes[0]
+    venv.close()
+    assert not survivor.is_alive() and survivor.exitcode == 0
+
+
+def test_spawned_workers_give_the_forked_workers_trajectories():
+    actions = np.random.default_rng(3).uniform(-1, 1, size=(5, 2, 2))
+    runs = []
+    for context in ("spawn", "fork"):
+        with manibench.make_vec("Reach-v0", num_envs=2, context=context) as venv:
+            assert venv.context == context
+            rows = [venv.reset(seed=8)[0]] + [venv.step(a)[0] for a in actions]
+        runs.append(np.stack(rows))
+    assert runs[0].tobytes() == runs[1].tobytes()
