@@ -102,3 +102,49 @@ def test_python_policy_errors_name_the_file(tmp_path):
     missing = subprocess.run([BINARY, "eval", "Reach-v0", "--policy", str(tmp_path / "none.py")],
                              capture_output=True, text=True)
     assert missing.returncode != 0 and "none.py" in missing.stderr
+
+
+# Misbehaves ({what}) on object 8 only (told apart by its link lengths,
+# part of Reach's state), from its second step; object 9's episode runs on.
+MISBEHAVING_POLICY = """
+import ctypes, time
+import numpy as np
+
+class UserPolicy:
+    def reset(self):
+        self.step = 0
+
+    def act(self, obs):
+        self.step += 1
+        if self.step >= 2 and abs(obs[10] - {length!r}) < 1e-12:
+            if "{what}" == "hang":
+                time.sleep(600)
+            elif "{what}" == "segfault":
+                ctypes.string_at(0)
+            elif "{what}" == "nan":
+                return np.full(2, np.nan)
+            elif "{what}" == "wrong size":
+                return np.zeros(5)
+        return np.zeros(2)
+"""
+
+
+@pytest.mark.parametrize("what,failure", [("hang", "timeout"), ("segfault", "crash"),
+                                          ("nan", "invalid_action"),
+                                          ("wrong size", "invalid_action")])
+def test_a_misbehaving_python_policy_fails_only_its_episode(tmp_path, what, failure):
+    import manibench
+    with manibench.make("Reach-v0") as env:
+        length = float(env.reset(seed=0, options={"object_id": "8"})[0][10])
+        assert env.reset(seed=0, options={"object_id": "9"})[0][10] != length
+    policy = tmp_path / "solution.py"
+    policy.write_text(textwrap.dedent(MISBEHAVING_POLICY.format(what=what, length=length)))
+    out = tmp_path / "results"
+    run = subprocess.run([BINARY, "eval", "Reach-v0", "--policy", str(policy), "--objects", "8,9",
+                          "--episodes-per-object", "1", "--workers", "2", "--step-timeout", "2",
+                          "--no-progress", "--out", str(out)], capture_output=True, text=True)
+    assert run.returncode == 0, run.stdout + run.stderr
+    with open(out / "episodes.csv", newline="") as f:
+        episodes = {e["object"]: e for e in csv.DictReader(f)}
+    assert episodes["8"]["failure"] == failure and episodes["8"]["failure_step"] == "1"
+    assert episodes["9"]["failure"] == "" and int(episodes["9"]["steps"]) > 3
