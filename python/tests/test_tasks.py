@@ -1,6 +1,10 @@
 """Every task in every observation mode: the arrays of a reset and a step
 have the shapes and dtypes of the spaces, which are those `manibench info`
 describes (observation_dim, agent_state_dim, cameras, masks)."""
+import os
+import re
+import subprocess
+
 import numpy as np
 import pytest
 
@@ -38,3 +42,39 @@ def test_observations_match_spaces_and_info(task, mode):
                 assert o["seg"].shape == (h, w, masks * cameras)
             else:
                 assert o["seg"].shape[1] == masks
+
+
+def parse_cli_info(task):
+    """observation_dim, agent_state_dim, action_dim, masks and cameras
+    (name, width, height) as `manibench info TASK` prints them."""
+    text = subprocess.run([os.environ["MANIBENCH_BIN"], "info", task], check=True,
+                          capture_output=True, text=True).stdout
+    cameras = re.search(r"^cameras:(.*)$", text, re.M).group(1)
+    return {
+        "observation_dim": int(re.search(r"observation \(state\), (\d+) values", text).group(1)),
+        "agent_state_dim": int(re.search(r"modes: the first (\d+) values", text).group(1)),
+        "action_dim": int(re.search(r"^action, (\d+) values", text, re.M).group(1)),
+        "masks": re.search(r"^masks:(.*)$", text, re.M).group(1).split(),
+        "cameras": [(n, int(w), int(h)) for n, w, h in re.findall(r"(\S+) \((\d+)x(\d+)", cameras)],
+    }
+
+
+@pytest.mark.skipif("MANIBENCH_BIN" not in os.environ, reason="needs MANIBENCH_BIN (set by ctest)")
+@pytest.mark.parametrize("task", TASKS)
+def test_spaces_have_the_shapes_the_cli_prints(task):
+    cli = parse_cli_info(task)
+    masks = 0 if cli["masks"] == ["(none)"] else len(cli["masks"])
+    with manibench.make(task) as env:
+        assert env.observation_space.shape == (cli["observation_dim"],)
+        assert env.action_space.shape == (cli["action_dim"],)
+    if not cli["cameras"]:
+        return
+    pc = manibench.info(task, obs_mode="pointcloud")["observation"]
+    assert pc["agent"]["shape"] == (cli["agent_state_dim"],)
+    assert pc["seg"]["shape"] == (1200, masks)
+    rgbd = manibench.info(task, obs_mode="rgbd")["observation"]
+    k, (_, w, h) = len(cli["cameras"]), cli["cameras"][0]
+    assert rgbd["rgb"]["shape"] == (h, w, 3 * k)
+    assert rgbd["depth"]["shape"] == (h, w, k)
+    assert rgbd["seg"]["shape"] == (h, w, masks * k)
+    assert rgbd["agent"]["shape"] == (cli["agent_state_dim"],)
