@@ -55,14 +55,14 @@ mb::ConfigSources makeSources(const std::vector<std::string>& files,
 template <typename T>
 py::array_t<T> copyArray(const T* data, std::vector<py::ssize_t> shape) {
   py::array_t<T> out(shape);
-  std::memcpy(out.mutable_data(), data, sizeof(T) * std::size_t(out.size()));
+  if (out.size() > 0) std::memcpy(out.mutable_data(), data, sizeof(T) * std::size_t(out.size()));
   return out;
 }
 
 // 0/1 bytes as a numpy bool array (same bytes, one copy).
 py::array copyMasks(const std::vector<std::uint8_t>& bytes, std::vector<py::ssize_t> shape) {
   py::array out(py::dtype("bool"), shape);
-  std::memcpy(out.mutable_data(), bytes.data(), bytes.size());
+  if (!bytes.empty()) std::memcpy(out.mutable_data(), bytes.data(), bytes.size());
   return out;
 }
 
