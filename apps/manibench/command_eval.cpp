@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -21,7 +22,7 @@ namespace manibench::cli {
 
 namespace {
 
-const char* kEvalUsage = R"(usage: manibench eval [TASK] --policy NAME|PATH.so [options]
+const char* kEvalUsage = R"(usage: manibench eval [TASK] --policy NAME|PATH.so|PATH.py [options]
 
 Evaluates a policy on a task's objects (ManiSkill's evaluation kit): every
 selected object times every level is one episode, with a seed derived from
@@ -37,6 +38,8 @@ Options:
                           id <Task>_<object>-v<N> (e.g. Reach_3-v0) evaluates
                           only those objects, whatever --split says
   --policy NAME|PATH.so   policy plugin by name, or a library file to load
+  --policy PATH.py        a Python policy class (act(obs), optional reset()),
+                          run by the `python` policy plugin (docs/python.md)
   --policy-config FILE    YAML handed to the policy's create
   --obs MODE              observation mode: state, pointcloud or rgbd
                           (default: the configuration's observation.mode)
@@ -148,13 +151,27 @@ int commandEval(int argc, char** argv) {
     options.policy_config = readTextFile(args.options.at("policy-config"));
     options.config_notes.push_back("--policy-config " + args.options.at("policy-config"));
   }
+  // A Python file is the `python` policy plugin's configuration (its
+  // embedded interpreter starts in each worker, after the fork).
+  std::string policy_arg = args.options.at("policy");
+  if (policy_arg.size() > 3 && policy_arg.compare(policy_arg.size() - 3, 3, ".py") == 0) {
+    if (args.options.count("policy-config"))
+      throw UsageError("--policy FILE.py takes no --policy-config (name the file in a "
+                       "configuration for --policy python instead)", kEvalUsage);
+    if (!std::ifstream(policy_arg)) throw std::runtime_error("cannot read the policy file '" + policy_arg + "'");
+    std::string path = std::filesystem::absolute(policy_arg).string(), quoted;
+    for (char c : path) quoted += c == '\'' ? std::string("''") : std::string(1, c);  // YAML single quotes
+    options.policy_config = "file: '" + quoted + "'\n";
+    options.config_notes.push_back("--policy " + policy_arg);
+    policy_arg = "python";
+  }
   const std::string out_dir = valueOr(args, "out", "results");
 
   // Everything that can be checked here fails before any worker starts: the
   // policy library (loader errors), the names, the configuration.
   PluginRegistry registry;
   loadPlugins(registry);
-  options.policy = resolvePolicy(registry, args.options.at("policy"));
+  options.policy = resolvePolicy(registry, policy_arg);
   registry.getEntry(PluginKind::Policy, options.policy);
   const TaskId task_id = resolveTaskId(registry, task);
   {

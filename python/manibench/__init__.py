@@ -1,0 +1,88 @@
+"""manibench from Python: gymnasium-style environments over the C++ core.
+
+    import manibench
+    env = manibench.make("OpenCabinetDrawer-v0", obs_mode="pointcloud",
+                         controller="mobile_panda_ee")
+    obs, info = env.reset(seed=0)
+    obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+
+Plugins are found as the ``manibench`` program finds them
+($MANIBENCH_PLUGIN_PATH, ~/.local/lib/manibench/plugins, the install
+prefix, the build tree). docs/python.md has the whole story.
+"""
+
+from . import _core
+from ._core import (ConfigError, EpisodeFailure, Error, InvalidAction, PluginCallError,
+                    PluginError)
+from .env import OBS_MODES, ManibenchEnv
+from .env import make_config_files as _make_config_files
+from .env import make_overrides as _make_overrides
+from .vector import VectorEnv, make_vec
+
+__version__ = _core.get_version()
+
+__all__ = [
+    "ConfigError", "EpisodeFailure", "Error", "InvalidAction", "ManibenchEnv", "OBS_MODES",
+    "PluginCallError", "PluginError", "VectorEnv", "info", "list_plugins", "list_tasks", "make",
+    "make_vec", "objects",
+]
+
+
+def make(env_id, obs_mode=None, controller=None, config=None, overrides=None, **kwargs):
+    """An environment: a task name ("OpenCabinetDrawer-v0") or a fixed-object
+    id ("OpenCabinetDrawer_1000-v0").
+
+    obs_mode: "state", "pointcloud" or "rgbd" (default: the configuration's,
+    state). controller: a controller plugin (default: the task's). config: a
+    YAML file or a list of them (as --config). overrides: {key: value} or
+    ["key=value", ...] (as --set). Further keywords: split ("train": where
+    resets without an object_id draw from), stop_on_success (True),
+    render_mode ("rgb_array"), render_size ((512, 512)).
+    """
+    return ManibenchEnv(env_id, obs_mode=obs_mode, controller=controller, config=config,
+                        overrides=overrides, **kwargs)
+
+
+def list_tasks():
+    """The registered task names (`manibench list`)."""
+    return list(_core.list_tasks())
+
+
+def list_plugins():
+    """Every registered plugin (kind, name, summary, library), and the
+    libraries refused, as `manibench list` prints them."""
+    return {"plugins": list(_core.list_plugins()),
+            "failures": [{"path": p, "message": m} for p, m in _core.list_load_failures()],
+            "search_path": list(_core.get_search_path())}
+
+
+def _describe(env_id, obs_mode, controller, config, overrides):
+    core = _core.Environment(env_id, _make_config_files(config),
+                             _make_overrides(overrides, obs_mode, controller), True)
+    try:
+        d = core.describe()
+        d["objects"] = {"train": len(core.list_objects("train")),
+                        "test": len(core.list_objects("test"))}
+        return d
+    finally:
+        core.close()
+
+
+def info(env_id, obs_mode=None, controller=None, config=None, overrides=None):
+    """What `manibench info` prints, as a dict: timing, observation layout
+    and the shapes of each observation array (``observation``), the
+    controller's action layout, success conditions, masks, objects per
+    split, cameras."""
+    return _describe(env_id, obs_mode, controller, config, overrides)
+
+
+def objects(env_id, split="train", config=None, overrides=None):
+    """The object ids of a split (`manibench objects --ids`); a fixed-object
+    id's own objects whatever the split."""
+    if split not in ("train", "test"):
+        raise ValueError(f"split must be 'train' or 'test', got {split!r}")
+    core = _core.Environment(env_id, _make_config_files(config), _make_overrides(overrides), True)
+    try:
+        return list(core.list_objects(split))
+    finally:
+        core.close()

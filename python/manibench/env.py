@@ -1,0 +1,204 @@
+"""ManibenchEnv: one manibench environment with the gymnasium API."""
+
+import numbers
+import os
+
+import numpy as np
+
+from . import _core
+from . import spaces as _spaces
+
+try:  # pragma: no cover - depends on the machine
+    import gymnasium as _gymnasium
+    _Base = _gymnasium.Env
+except ImportError:  # pragma: no cover
+    _Base = object
+
+OBS_MODES = ("state", "pointcloud", "rgbd")
+
+
+def _to_yaml(value):
+    """A Python value as the YAML text of a --set override."""
+    if value is None:
+        return ""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, numbers.Integral):
+        return str(int(value))
+    if isinstance(value, numbers.Real):
+        v = float(value)
+        if np.isnan(v):
+            return ".nan"
+        if np.isinf(v):
+            return ".inf" if v > 0 else "-.inf"
+        return repr(v)
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return "[" + ", ".join(_to_yaml(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k}: {_to_yaml(v)}" for k, v in value.items()) + "}"
+    return str(value)
+
+
+def make_overrides(overrides=None, obs_mode=None, controller=None):
+    """The --set KEY=VALUE list of make()'s arguments, in the CLI's order:
+    the overrides, then the controller, then the observation mode."""
+    if overrides is None:
+        sets = []
+    elif isinstance(overrides, dict):
+        sets = [f"{key}={_to_yaml(value)}" for key, value in overrides.items()]
+    elif isinstance(overrides, str):
+        sets = [overrides]
+    else:
+        sets = [str(s) for s in overrides]
+    for s in sets:
+        if "=" not in s:
+            raise ValueError(f"override '{s}' is not KEY=VALUE")
+    if controller is not None:
+        sets.append(f"control.controller={controller}")
+    if obs_mode is not None:
+        if obs_mode not in OBS_MODES:
+            raise ValueError(f"obs_mode must be one of {', '.join(OBS_MODES)}, got {obs_mode!r}")
+        sets.append(f"observation.mode={obs_mode}")
+    return sets
+
+
+def make_config_files(config):
+    if config is None:
+        return []
+    if isinstance(config, (str, os.PathLike)):
+        return [os.fspath(config)]
+    return [os.fspath(c) for c in config]
+
+
+class ManibenchEnv(_Base):
+    """A task (or fixed-object id) with gymnasium's calling convention.
+
+    reset(seed, options) -> (obs, info); step(action) -> (obs, reward,
+    terminated, truncated, info). ``terminated``: the task's ``success``
+    held (with stop_on_success); ``truncated``: the time limit was reached.
+    ``info``: ``success``, ``eval_info`` (each success condition's flag),
+    ``eval_values`` (its value), ``object_id``, ``seed``, ``elapsed_steps``.
+    """
+
+    metadata = {"render_modes": ["rgb_array"]}
+
+    def __init__(self, env_id, obs_mode=None, controller=None, config=None, overrides=None,
+                 split="train", stop_on_success=True, render_mode="rgb_array",
+                 render_size=(512, 512)):
+        if split not in ("train", "test"):
+            raise ValueError(f"split must be 'train' or 'test', got {split!r}")
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode must be 'rgb_array' or None, got {render_mode!r}")
+        self._env = _core.Environment(env_id, make_config_files(config),
+                                      make_overrides(overrides, obs_mode, controller),
+                                      bool(stop_on_success))
+        self.description = self._env.describe()
+        self.env_id = env_id
+        self.obs_mode = self.description["obs_mode"]
+        self.split = split
+        self.stop_on_success = bool(stop_on_success)
+        self.render_mode = render_mode
+        self.render_size = tuple(int(n) for n in render_size)
+        self.max_episode_steps = self.description["max_episode_steps"]
+        self.success_conditions = list(self.description["success_conditions"])
+        self.observation_space = _spaces.make_observation_space(self.description["observation"],
+                                                                self.obs_mode)
+        self.action_space = _spaces.make_action_space(self.description["action_dim"])
+        self.metadata = dict(self.metadata, render_fps=self.description["control_frequency"]
+                             / self.description["frame_skip"])
+        self._rng = None
+        self._started = False
+
+    # ---- gymnasium API ---------------------------------------------------
+
+    def reset(self, *, seed=None, options=None):
+        """Starts an episode. ``seed`` is the episode's seed (as ``manibench
+        run --seed``) and reseeds the generator that draws the seeds of later
+        resets without one. ``options``: ``object_id`` (default: drawn from
+        the split by the seed, as the CLI draws it)."""
+        options = dict(options or {})
+        object_id = options.pop("object_id", None)
+        if options:
+            raise ValueError(f"unknown reset option(s): {', '.join(sorted(options))} "
+                             "(known: object_id)")
+        if seed is not None:
+            if not isinstance(seed, numbers.Integral) or not 0 <= int(seed) < 2**64:
+                raise ValueError(f"seed must be an integer in [0, 2^64), got {seed!r}")
+            episode_seed = int(seed)
+            self._rng = np.random.default_rng(episode_seed)
+        else:
+            if self._rng is None:
+                self._rng = np.random.default_rng()
+            episode_seed = int(self._rng.integers(2**32))
+        if object_id is None:
+            object_id = self._env.choose_object(self.split, episode_seed)
+        self._env.reset(str(object_id), episode_seed)
+        self._started = True
+        return self._env.get_observation(), self._make_info()
+
+    def step(self, action):
+        reward, done, success, flags, values = self._env.step(np.asarray(action, dtype=np.float64))
+        terminated = bool(success and self.stop_on_success)
+        truncated = self._env.elapsed_steps >= self.max_episode_steps
+        info = self._make_info()
+        info["success"] = bool(success)
+        info["eval_info"] = dict(zip(self.success_conditions, flags))
+        info["eval_values"] = dict(zip(self.success_conditions, values))
+        return self._env.get_observation(), float(reward), terminated, truncated, info
+
+    def render(self):
+        """An RGB image (height, width, 3; uint8) of the current state from a
+        third-person camera above and in front of the robot."""
+        if self.render_mode is None:
+            return None
+        width, height = self.render_size
+        return self._env.render(width, height)
+
+    def close(self):
+        self._env.close()
+
+    @property
+    def unwrapped(self):
+        return self
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+    def __repr__(self):
+        return f"<ManibenchEnv {self.env_id} obs_mode={self.obs_mode}>"
+
+    # ---- beyond gymnasium ----------------------------------------------
+
+    def get_obs(self):
+        """The current observation (a fresh copy)."""
+        return self._env.get_observation()
+
+    def get_state(self):
+        """The whole episode state as bytes (Environment::saveState): the
+        steps after set_state(blob) are bit-identical to those after the save."""
+        return self._env.save_state()
+
+    def set_state(self, blob):
+        """Restores get_state()'s bytes (of this task); returns the observation."""
+        self._env.restore_state(bytes(blob))
+        self._started = True
+        return self._env.get_observation()
+
+    def list_objects(self, split="train"):
+        return self._env.list_objects(split)
+
+    @property
+    def object_id(self):
+        return self._env.object_id
+
+    @property
+    def elapsed_steps(self):
+        return self._env.elapsed_steps
+
+    def _make_info(self):
+        return {"object_id": self._env.object_id, "seed": self._env.seed,
+                "elapsed_steps": self._env.elapsed_steps}

@@ -1,0 +1,400 @@
+// manibench._core: the C++ side of the Python package. It owns the
+// process's plugin registry and wraps Environment with numpy observations;
+// the gymnasium conventions (spaces, seeds, info dicts, terminated vs
+// truncated) live in the pure-Python package over it (python/manibench).
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <manibench/config.hpp>
+#include <manibench/environment.hpp>
+#include <manibench/evaluation.hpp>
+#include <manibench/plugin_registry.hpp>
+#include <manibench/renderer.hpp>
+#include <manibench/task_name.hpp>
+
+#include <atomic>
+#include <cstring>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace py = pybind11;
+namespace mb = manibench;
+
+namespace {
+
+// One registry per process, loaded from the search path on first use, as
+// the CLI loads it (libraries are never unloaded: descriptors point into
+// them, so it lives as long as the process).
+mb::PluginRegistry& updRegistry() {
+  static mb::PluginRegistry* registry = [] {
+    auto* r = new mb::PluginRegistry();
+    r->loadSearchPath();
+    return r;
+  }();
+  return *registry;
+}
+
+// Whether this process has made a renderer (an EGL context): a visual
+// observation or render() ran. make_vec forks its workers only while this
+// is false (an EGL context does not survive fork).
+std::atomic<bool> g_rendered{false};
+
+mb::ConfigSources makeSources(const std::vector<std::string>& files,
+                              const std::vector<std::string>& overrides) {
+  mb::ConfigSources sources;
+  sources.files = files;
+  sources.overrides = overrides;
+  return sources;
+}
+
+// A new numpy array of `shape` filled from `data`: the one copy an
+// observation makes on its way to Python.
+template <typename T>
+py::array_t<T> copyArray(const T* data, std::vector<py::ssize_t> shape) {
+  py::array_t<T> out(shape);
+  if (out.size() > 0) std::memcpy(out.mutable_data(), data, sizeof(T) * std::size_t(out.size()));
+  return out;
+}
+
+// 0/1 bytes as a numpy bool array (same bytes, one copy).
+py::array copyMasks(const std::vector<std::uint8_t>& bytes, std::vector<py::ssize_t> shape) {
+  py::array out(py::dtype("bool"), shape);
+  if (!bytes.empty()) std::memcpy(out.mutable_data(), bytes.data(), bytes.size());
+  return out;
+}
+
+py::list toSegments(const std::vector<mb::SegmentDescription>& segments) {
+  py::list out;
+  for (const mb::SegmentDescription& s : segments)
+    out.append(py::dict(py::arg("name") = s.name, py::arg("offset") = s.offset,
+                        py::arg("size") = s.size, py::arg("description") = s.description));
+  return out;
+}
+
+// The observation's arrays in the environment's mode: the shape, dtype
+// and bounds of each, as the package's spaces are built from them.
+py::dict describeObservation(const mb::Environment& env) {
+  const mb::TaskDescription& task = env.getTaskDescription();
+  const mb::ObservationOptions& o = env.getOptions().observation;
+  const double inf = std::numeric_limits<double>::infinity();
+  auto field = [&](std::vector<py::ssize_t> shape, const char* dtype, double low, double high) {
+    return py::dict(py::arg("shape") = py::tuple(py::cast(shape)), py::arg("dtype") = dtype,
+                    py::arg("low") = low, py::arg("high") = high);
+  };
+  py::dict fields;
+  const py::ssize_t masks = py::ssize_t(task.masks.size());
+  switch (o.mode) {
+    case mb::ObservationMode::State:
+      fields["state"] = field({py::ssize_t(task.observation_dim)}, "float64", -inf, inf);
+      break;
+    case mb::ObservationMode::PointCloud: {
+      // Without padding the cloud may be smaller: total is its maximum.
+      const py::ssize_t n = o.pointcloud.total;
+      fields["xyz"] = field({n, 3}, "float32", -inf, inf);
+      fields["rgb"] = field({n, 3}, "float32", 0, 1);
+      fields["seg"] = field({n, masks}, "bool", 0, 1);
+      fields["agent"] = field({py::ssize_t(task.agent_state_dim)}, "float64", -inf, inf);
+      break;
+    }
+    case mb::ObservationMode::Rgbd: {
+      const py::ssize_t c = py::ssize_t(o.cameras.size());
+      const py::ssize_t h = c ? o.cameras.front().spec.height : 0;
+      const py::ssize_t w = c ? o.cameras.front().spec.width : 0;
+      fields["rgb"] = field({h, w, 3 * c}, "float32", 0, 1);
+      fields["depth"] = field({h, w, c}, "float32", 0, inf);
+      fields["seg"] = field({h, w, masks * c}, "bool", 0, 1);
+      fields["agent"] = field({py::ssize_t(task.agent_state_dim)}, "float64", -inf, inf);
+      break;
+    }
+  }
+  return fields;
+}
+
+// An environment as the CLI configures it (apps/manibench/cli.cpp
+// makeEnvironment), with numpy in and out.
+class PyEnvironment {
+ public:
+  PyEnvironment(const std::string& environment_id, const std::vector<std::string>& config_files,
+                const std::vector<std::string>& overrides, bool stop_on_success)
+      : config_(mb::loadTaskConfig(updRegistry(), environment_id,
+                                   makeSources(config_files, overrides))) {
+    mb::EnvironmentOptions options = mb::calcEnvironmentOptions(config_);
+    options.stop_on_success = stop_on_success;
+    try {
+      env_ = std::make_unique<mb::Environment>(updRegistry(), environment_id, options);
+    } catch (const mb::PluginCallError& e) {
+      throw mb::PluginCallError(mb::annotatePluginError(config_, e.what()), e.status());
+    }
+  }
+
+  mb::Environment& upd() {
+    if (!env_) throw std::logic_error("the environment is closed");
+    return *env_;
+  }
+  const mb::Environment& get() const {
+    if (!env_) throw std::logic_error("the environment is closed");
+    return *env_;
+  }
+
+  void close() { env_.reset(); }
+  bool isClosed() const { return !env_; }
+
+  void reset(const std::string& object_id, uint64_t seed) {
+    mb::Environment& env = upd();
+    if (mb::isVisualMode(env.getObservationMode())) g_rendered = true;
+    py::gil_scoped_release release;
+    env.reset(object_id, seed);
+  }
+
+  // (reward, done, success, flags, values)
+  py::tuple step(py::array_t<double, py::array::c_style | py::array::forcecast> action) {
+    mb::Environment& env = upd();
+    if (action.ndim() != 1)
+      throw std::invalid_argument("the action must be a 1-d array, got " +
+                                  std::to_string(action.ndim()) + " dimensions");
+    const Eigen::Map<const Eigen::VectorXd> view(action.data(), action.shape(0));
+    action_ = view;
+    mb::StepResult r;
+    {
+      py::gil_scoped_release release;
+      r = env.step(action_);
+    }
+    py::list flags, values;
+    for (uint8_t f : r.flags) flags.append(bool(f));
+    for (double v : r.values) values.append(v);
+    return py::make_tuple(r.reward, r.done, r.success, flags, values);
+  }
+
+  // The current observation: the state vector, or a dict of arrays in the
+  // visual modes. Each array is a fresh copy of the environment's buffers.
+  py::object getObservation() const {
+    const mb::Environment& env = get();
+    const Eigen::VectorXd& state = env.getObservation();
+    py::array_t<double> vector = copyArray(state.data(), {py::ssize_t(state.size())});
+    const mb::VisualObservation& v = env.getVisualObservation();
+    if (v.mode == mb::ObservationMode::State) return std::move(vector);
+    py::dict out;
+    const py::ssize_t k = v.mask_count;
+    if (v.mode == mb::ObservationMode::PointCloud) {
+      const py::ssize_t n = py::ssize_t(v.points.size());
+      out["xyz"] = copyArray(v.points.xyz.data(), {n, 3});
+      out["rgb"] = copyArray(v.points.rgb.data(), {n, 3});
+      out["seg"] = copyMasks(v.points.masks, {n, k});
+    } else {
+      const py::ssize_t h = v.height, w = v.width, c = v.camera_count;
+      out["rgb"] = copyArray(v.rgb.data(), {h, w, 3 * c});
+      out["depth"] = copyArray(v.depth.data(), {h, w, c});
+      out["seg"] = copyMasks(v.masks, {h, w, k * c});
+    }
+    out["agent"] = std::move(vector);
+    return std::move(out);
+  }
+
+  // A third-person RGB image (height x width x 3, uint8) of the current
+  // state, from the front-right and above the robot's root, as the CLI's
+  // videos (apps/manibench/video.cpp).
+  py::array_t<std::uint8_t> render(int width, int height) {
+    mb::Environment& env = upd();
+    if (width <= 0 || height <= 0)
+      throw std::invalid_argument("render size must be positive, got " + std::to_string(width) +
+                                  "x" + std::to_string(height));
+    mb::CameraSpec camera;
+    camera.name = "python_render";
+    camera.width = width;
+    camera.height = height;
+    camera.fovy = 1.0;
+    camera.far = 20;
+    const mb::Scene& scene = env.getScene();
+    const int robot = scene.findArticulation(env.getTaskDescription().robot_articulation);
+    const Eigen::Vector3d target =
+        (robot >= 0 ? scene.getRootPose(robot).position : Eigen::Vector3d::Zero()) +
+        Eigen::Vector3d(0, 0, 0.6);
+    const mb::Pose pose = mb::calcLookAtPose(target + Eigen::Vector3d(2.5, -2.5, 1.6), target);
+    g_rendered = true;
+    {
+      py::gil_scoped_release release;
+      env.updObserver().updRenderer().render(camera, pose, frame_);
+    }
+    py::array_t<std::uint8_t> out({py::ssize_t(height), py::ssize_t(width), py::ssize_t(3)});
+    std::uint8_t* dst = out.mutable_data();
+    const std::size_t pixels = std::size_t(width) * std::size_t(height);
+    for (std::size_t p = 0; p < pixels; ++p)
+      for (int ch = 0; ch < 3; ++ch) dst[3 * p + ch] = frame_.rgba[4 * p + ch];
+    return out;
+  }
+
+  py::bytes saveState() {
+    const std::vector<uint8_t> blob = upd().saveState();
+    return py::bytes(reinterpret_cast<const char*>(blob.data()), blob.size());
+  }
+
+  void restoreState(const py::bytes& blob) {
+    mb::Environment& env = upd();
+    const std::string text = blob;
+    const std::vector<uint8_t> bytes(text.begin(), text.end());
+    if (mb::isVisualMode(env.getObservationMode())) g_rendered = true;
+    py::gil_scoped_release release;
+    env.restoreState(bytes);
+  }
+
+  // Everything the package needs to describe the environment.
+  py::dict describe() const {
+    const mb::Environment& env = get();
+    const mb::TaskDescription& task = env.getTaskDescription();
+    const mb::ControllerDescription& controller = env.getControllerDescription();
+    const mb::ObservationOptions& o = env.getOptions().observation;
+    py::list cameras;
+    for (const mb::CameraMount& c : o.cameras)
+      cameras.append(py::dict(py::arg("name") = c.spec.name, py::arg("width") = c.spec.width,
+                              py::arg("height") = c.spec.height,
+                              py::arg("mount") = c.articulation.empty()
+                                                     ? std::string("world")
+                                                     : c.articulation + (c.link.empty() ? "" : ":" + c.link)));
+    py::dict d;
+    d["environment_id"] = env.getEnvironmentId();
+    d["task"] = task.name;
+    d["library"] =
+        updRegistry().getLibraries()[updRegistry().getEntry(mb::PluginKind::Task, task.name).library].path;
+    d["control_frequency"] = task.control_frequency;
+    d["frame_skip"] = task.frame_skip;
+    d["max_episode_steps"] = task.max_episode_steps;
+    d["obs_mode"] = mb::toString(o.mode);
+    d["observation_dim"] = task.observation_dim;
+    d["observation_segments"] = toSegments(task.observation_segments);
+    d["agent_state_dim"] = task.agent_state_dim;
+    d["observation"] = describeObservation(env);
+    d["controller"] = controller.name;
+    d["action_dim"] = controller.action_dim;
+    d["action_segments"] = toSegments(controller.action_segments);
+    d["success_conditions"] = task.success_conditions;
+    d["masks"] = task.masks;
+    d["fixed_objects"] = env.getFixedObjects();
+    d["cameras"] = cameras;
+    return d;
+  }
+
+  std::vector<std::string> listObjects(const std::string& split) const {
+    if (split != "train" && split != "test")
+      throw std::invalid_argument("split must be 'train' or 'test', got '" + split + "'");
+    return get().listObjects(split);
+  }
+
+  // The object `manibench run --seed SEED --split SPLIT` draws
+  // (apps/manibench/cli.cpp chooseObject), so that both run one episode.
+  std::string chooseObject(const std::string& split, uint64_t seed) const {
+    const std::vector<std::string> objects = listObjects(split);
+    if (objects.empty()) throw std::runtime_error("the " + split + " split has no objects");
+    std::mt19937_64 rng(seed);
+    return objects[rng() % objects.size()];
+  }
+
+ private:
+  mb::ConfigNode config_;
+  std::unique_ptr<mb::Environment> env_;
+  Eigen::VectorXd action_;
+  mb::CameraImages frame_;
+};
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "manibench's C++ core: environments over the plugin registry (use the manibench package)";
+
+  // Exceptions carry the C++ message under classes that say what went
+  // wrong; other std::exceptions keep pybind11's mapping (invalid_argument:
+  // ValueError, the rest: RuntimeError). The classes are made here with
+  // type() so that ConfigError and InvalidAction can also be ValueErrors;
+  // they live as long as the process (never decref'd: no destructor runs
+  // after the interpreter is gone).
+  const py::object make_type = py::reinterpret_borrow<py::object>(reinterpret_cast<PyObject*>(&PyType_Type));
+  auto make_error = [&](const char* name, py::tuple bases, const char* doc) {
+    py::object type = make_type(name, bases, py::dict(py::arg("__module__") = "manibench",
+                                                      py::arg("__doc__") = doc));
+    m.attr(name) = type;
+    return type.release().ptr();
+  };
+  static PyObject* error = make_error("Error", py::make_tuple(py::handle(PyExc_RuntimeError)),
+                                      "Base of manibench's errors.");
+  const py::handle base(error);
+  static PyObject* plugin_error = make_error(
+      "PluginError", py::make_tuple(base), "A plugin could not be loaded or a name is unknown.");
+  static PyObject* plugin_call_error = make_error(
+      "PluginCallError", py::make_tuple(base), "A plugin call failed (the plugin's message).");
+  static PyObject* episode_failure = make_error(
+      "EpisodeFailure", py::make_tuple(base), "Physics diverged or rendering failed in a reset or step.");
+  static PyObject* config_error =
+      make_error("ConfigError", py::make_tuple(base, py::handle(PyExc_ValueError)),
+                 "Bad configuration: unreadable file, unknown key, wrong type, out of range.");
+  static PyObject* invalid_action =
+      make_error("InvalidAction", py::make_tuple(base, py::handle(PyExc_ValueError)),
+                 "An action of the wrong size, or with NaN or infinity.");
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const mb::ConfigError& e) {
+      PyErr_SetString(config_error, e.what());
+    } catch (const mb::InvalidAction& e) {
+      PyErr_SetString(invalid_action, e.what());
+    } catch (const mb::PluginCallError& e) {
+      PyErr_SetString(plugin_call_error, e.what());
+    } catch (const mb::PluginError& e) {
+      PyErr_SetString(plugin_error, e.what());
+    } catch (const mb::EpisodeFailure& e) {
+      PyErr_SetString(episode_failure, e.what());
+    }
+  });
+
+  m.def(
+      "list_tasks", [] { return updRegistry().getNames(mb::PluginKind::Task); },
+      "The registered task names.");
+  m.def(
+      "list_plugins",
+      [] {
+        const mb::PluginRegistry& r = updRegistry();
+        py::list out;
+        for (const mb::PluginEntry& e : r.getEntries())
+          out.append(py::dict(py::arg("kind") = mb::toString(e.kind), py::arg("name") = e.name,
+                              py::arg("summary") = e.summary,
+                              py::arg("library") = r.getLibraries()[e.library].path));
+        return out;
+      },
+      "Every registered plugin: kind, name, summary, library.");
+  m.def(
+      "list_load_failures",
+      [] {
+        py::list out;
+        for (const mb::LoadFailure& f : updRegistry().getFailures())
+          out.append(py::make_tuple(f.path, f.message));
+        return out;
+      },
+      "(path, message) of every library the registry refused.");
+  m.def("get_search_path", &mb::PluginRegistry::calcDefaultSearchPath,
+        "The plugin directories searched, in order.");
+  m.def("has_rendered", [] { return g_rendered.load(); },
+        "Whether this process has made a renderer (an EGL context).");
+  m.def("get_version", &mb::getManibenchVersion);
+
+  py::class_<PyEnvironment>(m, "Environment")
+      .def(py::init<const std::string&, const std::vector<std::string>&,
+                    const std::vector<std::string>&, bool>(),
+           py::arg("environment_id"), py::arg("config_files"), py::arg("overrides"),
+           py::arg("stop_on_success"))
+      .def("reset", &PyEnvironment::reset, py::arg("object_id"), py::arg("seed"))
+      .def("step", &PyEnvironment::step, py::arg("action"))
+      .def("get_observation", &PyEnvironment::getObservation)
+      .def("render", &PyEnvironment::render, py::arg("width"), py::arg("height"))
+      .def("save_state", &PyEnvironment::saveState)
+      .def("restore_state", &PyEnvironment::restoreState, py::arg("blob"))
+      .def("describe", &PyEnvironment::describe)
+      .def("list_objects", &PyEnvironment::listObjects, py::arg("split"))
+      .def("choose_object", &PyEnvironment::chooseObject, py::arg("split"), py::arg("seed"))
+      .def_property_readonly("object_id", [](const PyEnvironment& e) { return e.get().getObjectId(); })
+      .def_property_readonly("seed", [](const PyEnvironment& e) { return e.get().getSeed(); })
+      .def_property_readonly("elapsed_steps",
+                             [](const PyEnvironment& e) { return e.get().getElapsedSteps(); })
+      .def_property_readonly("closed", &PyEnvironment::isClosed)
+      .def("close", &PyEnvironment::close);
+}

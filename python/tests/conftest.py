@@ -1,0 +1,21 @@
+# The tests import the package from the build tree (ctest sets PYTHONPATH to
+# build/python) and load the build tree's real plugins.
+import numpy as np
+import pytest
+
+
+def assert_same_obs(a, b):
+    """Bit-identical observations (arrays or dicts of arrays)."""
+    if isinstance(a, dict):
+        assert a.keys() == b.keys()
+        for key in a:
+            assert_same_obs(a[key], b[key])
+        return
+    assert a.dtype == b.dtype and a.shape == b.shape
+    assert a.tobytes() == b.tobytes()
+
+
+@pytest.fixture
+def actions():
+    """A fixed sequence of Reach-v0 actions (2 joints), in [-1, 1]."""
+    return np.random.default_rng(1234).uniform(-1, 1, size=(40, 2))

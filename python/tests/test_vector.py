@@ -1,0 +1,119 @@
+"""make_vec: worker processes, batched arrays, auto-reset, seeds per
+environment, the same trajectories as sequential environments."""
+import os
+import signal
+
+import numpy as np
+import pytest
+
+import manibench
+from conftest import assert_same_obs
+
+
+def sequential_reference(seed, actions, **make_kwargs):
+    """What environment i of make_vec(...).reset(seed) then step(actions)
+    gives, computed with one ManibenchEnv per environment in this process,
+    with the next-step auto-reset written out."""
+    n = actions.shape[1]
+    out = []
+    for i in range(n):
+        with manibench.make("Reach-v0", **make_kwargs) as env:
+            obs, _ = env.reset(seed=seed + i)
+            rows, needs_reset = [(obs, 0.0, False, False)], False
+            for t in range(actions.shape[0]):
+                if needs_reset:
+                    obs, _ = env.reset()
+                    rows.append((obs, 0.0, False, False))
+                    needs_reset = False
+                else:
+                    obs, reward, terminated, truncated, _ = env.step(actions[t, i])
+                    rows.append((obs, reward, terminated, truncated))
+                    needs_reset = terminated or truncated
+            out.append(rows)
+    return out
+
+
+def test_vector_env_matches_sequential_envs_with_auto_reset():
+    overrides = {"episode.max_steps": 4}
+    actions = np.random.default_rng(7).uniform(-1, 1, size=(10, 2, 2))
+    with manibench.make_vec("Reach-v0", num_envs=2, overrides=overrides) as venv:
+        # Forked unless this process rendered (other tests in the same run).
+        assert venv.context == ("spawn" if manibench._core.has_rendered() else "fork")
+        assert venv.single_action_space.shape == (2,)
+        assert venv.action_space.shape == (2, 2)
+        dim = venv.single_observation_space.shape[0]
+        assert venv.observation_space.shape == (2, dim)
+        obs, info = venv.reset(seed=20)
+        assert obs.shape == (2, dim) and obs.dtype == np.float64
+        assert list(info["seed"]) == [20, 21]
+        rows = [(obs, np.zeros(2), np.zeros(2, bool), np.zeros(2, bool))]
+        for t in range(actions.shape[0]):
+            obs, rewards, terminated, truncated, info = venv.step(actions[t])
+            assert rewards.shape == (2,) and terminated.dtype == bool
+            rows.append((obs, rewards, terminated, truncated))
+            if t == 4:  # the auto-reset step: reset infos, no step keys
+                assert "success" not in info and info["_seed"].all()
+            if t == 3:
+                assert truncated.all() and info["_success"].all()
+    expected = sequential_reference(20, actions, overrides=overrides)
+    for t, (obs, rewards, terminated, truncated) in enumerate(rows):
+        for i in range(2):
+            e_obs, e_reward, e_terminated, e_truncated = expected[i][t]
+            assert_same_obs(obs[i], e_obs)
+            assert rewards[i] == e_reward
+            assert terminated[i] == e_terminated and truncated[i] == e_truncated
+    # The two environments ran different episodes (seeds 20 and 21).
+    assert not np.array_equal(rows[1][0][0], rows[1][0][1])
+
+
+def test_vector_env_reaps_its_workers_and_reports_errors():
+    venv = manibench.make_vec("Reach-v0", num_envs=2)
+    processes = list(venv._processes)
+    venv.reset(seed=0)
+    with pytest.raises(manibench.InvalidAction, match="worker 0"):
+        venv.step(np.full((2, 2), np.nan))
+    with pytest.raises(ValueError, match="shape"):
+        venv.step(np.zeros((3, 2)))
+    venv.step(np.zeros((2, 2)))  # the workers survived the errors
+    venv.close()
+    assert all(not p.is_alive() and p.exitcode == 0 for p in processes)
+    with pytest.raises(manibench.Error, match="closed"):
+        venv.step(np.zeros((2, 2)))
+    with pytest.raises(manibench.ConfigError, match="worker"):
+        manibench.make_vec("Reach-v0", num_envs=2, overrides={"physics.nope": 1})
+    with pytest.raises(ValueError):
+        manibench.make_vec("Reach-v0", num_envs=0)
+
+
+def test_vector_pointcloud_batches_dicts():
+    with manibench.make_vec("Reach-v0", num_envs=2, obs_mode="pointcloud") as venv:
+        obs, _ = venv.reset(seed=1, options=[{"object_id": "0"}, {"object_id": "1"}])
+        space = venv.single_observation_space
+        for key, value in obs.items():
+            assert value.shape == (2,) + space[key].shape and value.dtype == space[key].dtype
+        obs, *_ = venv.step(np.zeros((2, 2)))
+        assert obs["xyz"].shape == (2, 1200, 3)
+
+
+def test_a_dead_worker_is_an_error_not_a_hang():
+    venv = manibench.make_vec("Reach-v0", num_envs=2)
+    venv.reset(seed=0)
+    victim = venv._processes[1]
+    os.kill(victim.pid, signal.SIGKILL)
+    victim.join(timeout=10)
+    with pytest.raises(manibench.Error, match=r"worker 1: died \(exit code -9\)"):
+        venv.step(np.zeros((2, 2)))
+    survivor = venv._processes[0]
+    venv.close()
+    assert not survivor.is_alive() and survivor.exitcode == 0
+
+
+def test_spawned_workers_give_the_forked_workers_trajectories():
+    actions = np.random.default_rng(3).uniform(-1, 1, size=(5, 2, 2))
+    runs = []
+    for context in ("spawn", "fork"):
+        with manibench.make_vec("Reach-v0", num_envs=2, context=context) as venv:
+            assert venv.context == context
+            rows = [venv.reset(seed=8)[0]] + [venv.step(a)[0] for a in actions]
+        runs.append(np.stack(rows))
+    assert runs[0].tobytes() == runs[1].tobytes()
