@@ -1,6 +1,6 @@
 """A random agent on one episode: manibench from Python in a few lines.
 
-    PYTHONPATH=build/python python3 python/examples/random_agent.py OpenCabinetDrawer-v0
+    PYTHONPATH=build/python python3 examples/python/random_agent.py OpenCabinetDrawer-v0
 """
 import sys
 

@@ -1,6 +1,6 @@
 """A policy for the evaluation kit, in Python (ManiSkill's UserPolicy form):
 
-    build/bin/manibench eval Reach-v0 --policy python/examples/random_policy.py --workers 2
+    build/bin/manibench eval Reach-v0 --policy examples/python/random_policy.py --workers 2
 
 The kit runs it in each worker through the `python` policy plugin's
 embedded interpreter; obs is what manibench.make returns in the evaluated
