@@ -45,8 +45,8 @@ def single(args):
 
 
 def vector(args):
-    venv = manibench.make_vec(args.task, num_envs=args.num_envs, obs_mode=args.obs,
-                              controller=args.controller)
+    venv = manibench.make_vec(args.task, num_envs=args.num_envs, spin_wait=args.spin_wait,
+                              obs_mode=args.obs, controller=args.controller)
     rng = np.random.default_rng(0)
     venv.reset(seed=0)
     batches = max(1, args.steps // args.num_envs)
@@ -69,6 +69,8 @@ def main():
     parser.add_argument("--controller", default=None)
     parser.add_argument("--policy", choices=["random", "zero"], default="random")
     parser.add_argument("--num-envs", type=int, default=0, help="time make_vec(N) (0: one env)")
+    parser.add_argument("--spin-wait", type=float, default=None,
+                        help="make_vec's spin_wait in seconds (default: make_vec's)")
     args = parser.parse_args()
     (vector if args.num_envs else single)(args)
 

@@ -117,3 +117,19 @@ def test_spawned_workers_give_the_forked_workers_trajectories():
             rows = [venv.reset(seed=8)[0]] + [venv.step(a)[0] for a in actions]
         runs.append(np.stack(rows))
     assert runs[0].tobytes() == runs[1].tobytes()
+
+
+def test_spin_wait_changes_the_waiting_not_the_trajectories():
+    actions = np.random.default_rng(4).uniform(-1, 1, size=(5, 2, 2))
+    runs = []
+    for spin_wait in (0.0, 0.002):
+        with manibench.make_vec("Reach-v0", num_envs=2, spin_wait=spin_wait) as venv:
+            assert venv.spin_wait == spin_wait
+            rows = [venv.reset(seed=9)[0]] + [venv.step(a)[0] for a in actions]
+        runs.append(np.stack(rows))
+    assert runs[0].tobytes() == runs[1].tobytes()
+    # The default spins only while every worker can have a core.
+    with manibench.make_vec("Reach-v0", num_envs=1) as venv:
+        assert venv.spin_wait == manibench.vector.DEFAULT_SPIN_WAIT
+    with pytest.raises(ValueError, match="spin_wait"):
+        manibench.make_vec("Reach-v0", num_envs=1, spin_wait=-1)
