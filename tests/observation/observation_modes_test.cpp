@@ -268,7 +268,9 @@ TEST(ObservationModes, PointCloudFromPixelsIsTheD1SampleOfTheFullCloud) {
       if (!full.masks[i] && full.xyz[3 * i + 2] > sampling.ground_height)
         background.insert({full.xyz[3 * i], full.xyz[3 * i + 1], full.xyz[3 * i + 2]});
     const std::size_t expected = std::min<std::size_t>(1200 - masked, background.size());
-    if (ground == "-1") EXPECT_EQ(expected, 1200 - masked) << "the ground fills the cloud";
+    if (ground == "-1") {
+      EXPECT_EQ(expected, 1200 - masked) << "the ground fills the cloud";
+    }
     std::set<std::array<float, 3>> seen;
     for (std::size_t i = masked; i < masked + expected; ++i) {
       const std::array<float, 3> p{cloud.xyz[3 * i], cloud.xyz[3 * i + 1], cloud.xyz[3 * i + 2]};
@@ -311,7 +313,8 @@ TEST(ObservationModes, RgbdStacksCamerasAlongChannels) {
   for (std::size_t c = 0; c < 3; ++c)
     for (std::size_t p = 0; p < pixels; ++p) {
       ASSERT_EQ(v.depth[p * 3 + c], images[c].depth[p]) << "camera " << c << " pixel " << p;
-      ASSERT_EQ(v.rgb[p * 9 + 3 * c + 1], images[c].rgba[4 * p + 1] / 255.0f);
+      for (std::size_t channel = 0; channel < 3; ++channel)
+        ASSERT_EQ(v.rgb[p * 9 + 3 * c + channel], images[c].rgba[4 * p + channel] / 255.0f);
       const bool robot = v.masks[p * 3 + c] != 0;
       ASSERT_EQ(robot, images[c].visual[p] >= 0) << "only the robot is drawn";
       if (robot) {
@@ -326,6 +329,29 @@ TEST(ObservationModes, RgbdStacksCamerasAlongChannels) {
   const Pose base = scene.getLinkPose(scene.findLink(scene.findArticulation("robot"), "base_link"));
   EXPECT_NEAR(env.getObserver().getCameras().calcCameraPose(0).position.z() - base.position.z(), 1.5,
               1e-9);
+}
+
+// Several masks (the cabinet's handle, target link and robot): each pixel's
+// mask bytes are its visual's bits, in the masks' order.
+TEST(ObservationModes, RgbdMaskBytesAreTheVisualsMaskBits) {
+  Environment env(getRegistry(), "OpenCabinetDrawer-v0", makeOptions({"observation.mode=rgbd"}));
+  env.reset(env.listObjects("train").front(), 3);
+  const VisualObservation& v = env.getVisualObservation();
+  const std::uint32_t k = env.getObserver().getMasks().getCount();
+  ASSERT_EQ(k, 3u);
+  const std::vector<CameraImages> images = env.updObserver().renderCameras();
+  const std::size_t cameras = v.camera_count, pixels = std::size_t(v.height) * v.width;
+  std::array<std::size_t, 3> in_mask{};
+  for (std::size_t c = 0; c < cameras; ++c)
+    for (std::size_t p = 0; p < pixels; ++p) {
+      const std::uint64_t bits = env.getObserver().getMasks().calcPixelMasks(images[c], p);
+      for (std::uint32_t m = 0; m < k; ++m) {
+        ASSERT_EQ(v.masks[(p * cameras + c) * k + m], (bits >> m) & 1u)
+            << "camera " << c << " pixel " << p << " mask " << m;
+        in_mask[m] += (bits >> m) & 1u;
+      }
+    }
+  for (std::uint32_t m = 0; m < k; ++m) EXPECT_GT(in_mask[m], 0u) << "mask " << m << " seen nowhere";
 }
 
 // A policy that reports what it saw through the SDK's views, as its action.

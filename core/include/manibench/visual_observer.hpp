@@ -131,6 +131,10 @@ class VisualObserver {
   // observe()'s buffers, kept from step to step.
   std::vector<RawCameraImages> raw_;
   std::vector<std::uint64_t> segment_bits_;  // see updateSegmentBits
+  // Per segment value, its mask bytes (byte m: in mask m) packed into 8
+  // bytes in memory order, for up to 8 masks: the rgbd masks of a pixel are
+  // then one store.
+  std::vector<std::uint64_t> segment_mask_bytes_;
   std::vector<uint32_t> camera_starts_;  // per camera: its first sample index
   PointCloudSampler sampler_;
   Times times_;

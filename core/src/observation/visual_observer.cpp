@@ -6,6 +6,11 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cstring>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace manibench {
 
@@ -14,6 +19,27 @@ using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
+
+// One camera row's mask bytes, K per pixel, `stride` bytes apart: the
+// pixel's segment picks its packed bytes (none where nothing was hit or at
+// the far plane), written as one K-byte store.
+template <std::size_t K>
+void writeMaskRow(const std::uint32_t* segment, const float* depth, std::size_t width,
+                  std::uint32_t visual_count, const std::uint64_t* mask_bytes, std::uint8_t* out,
+                  std::size_t stride) {
+  for (std::size_t col = 0; col < width; ++col) {
+    const std::uint32_t s = segment[col];
+    const std::uint64_t bytes =
+        mask_bytes[s <= visual_count ? s : 0u] & (0 - std::uint64_t(depth[col] < 1.0f));
+    std::memcpy(out + stride * col, &bytes, K);
+  }
+}
+
+using MaskRowWriter = void (*)(const std::uint32_t*, const float*, std::size_t, std::uint32_t,
+                               const std::uint64_t*, std::uint8_t*, std::size_t);
+constexpr std::array<MaskRowWriter, 9> kMaskRowWriters = {
+    nullptr,         &writeMaskRow<1>, &writeMaskRow<2>, &writeMaskRow<3>, &writeMaskRow<4>,
+    &writeMaskRow<5>, &writeMaskRow<6>, &writeMaskRow<7>, &writeMaskRow<8>};
 }  // namespace
 
 VisualObserver::VisualObserver(const Scene& scene, const ObservationOptions& options,
@@ -86,6 +112,12 @@ void VisualObserver::updateSegmentBits() {
   const std::size_t visuals = scene_.getVisualShapes().size();
   segment_bits_.assign(visuals + 1, 0);
   std::copy_n(masks.begin(), std::min(masks.size(), visuals), segment_bits_.begin() + 1);
+  segment_mask_bytes_.assign(segment_bits_.size(), 0);
+  for (std::size_t s = 0; s < segment_bits_.size(); ++s) {
+    std::uint8_t bytes[8] = {};
+    for (std::size_t m = 0; m < 8; ++m) bytes[m] = (segment_bits_[s] >> m) & 1u;
+    std::memcpy(&segment_mask_bytes_[s], bytes, 8);
+  }
 }
 
 void VisualObserver::assemblePointCloud(uint64_t sample_seed, PointCloud& out) {
@@ -198,7 +230,24 @@ void VisualObserver::assembleImages(VisualObservation& out) const {
       const std::uint32_t* segment = raw.segment.data() + base;
       const float* depth = raw.depth.data() + base;
       float* rgb = out.rgb.data() + p0 * 3 * cameras + 3 * c;
-      for (std::size_t col = 0; col < w; ++col) {
+      std::size_t col = 0;
+#if defined(__SSE2__)
+      // Four bytes to four floats, divided by 255 (IEEE division: the same
+      // floats as the table); r, g as one 8-byte store and b as one more.
+      const __m128 k255 = _mm_set1_ps(255.0f);
+      const __m128i zero = _mm_setzero_si128();
+      for (; col < w; ++col) {
+        std::uint32_t word;
+        std::memcpy(&word, color + 4 * col, 4);
+        const __m128i bytes = _mm_cvtsi32_si128(int(word));
+        const __m128i ints = _mm_unpacklo_epi16(_mm_unpacklo_epi8(bytes, zero), zero);
+        const __m128 unit = _mm_div_ps(_mm_cvtepi32_ps(ints), k255);
+        float* pixel = rgb + 3 * cameras * col;
+        _mm_storel_pi(reinterpret_cast<__m64*>(pixel), unit);
+        _mm_store_ss(pixel + 2, _mm_movehl_ps(unit, unit));
+      }
+#endif
+      for (; col < w; ++col) {
         rgb[3 * cameras * col + 0] = kByteToUnit[color[4 * col + 0]];
         rgb[3 * cameras * col + 1] = kByteToUnit[color[4 * col + 1]];
         rgb[3 * cameras * col + 2] = kByteToUnit[color[4 * col + 2]];
@@ -209,7 +258,28 @@ void VisualObserver::assembleImages(VisualObservation& out) const {
       const double two_nf = 2 * raw.near * raw.far, sum = raw.far + raw.near,
                    difference = raw.far - raw.near;
       float* depth_out = out.depth.data() + p0 * cameras + c;
-      for (std::size_t col = 0; col < w; ++col) {
+      col = 0;
+#if defined(__SSE2__)
+      // Two pixels per division, the scalar loop's operations in its order
+      // (so the same floats as calcLinearDepth).
+      const __m128d two = _mm_set1_pd(2.0), one = _mm_set1_pd(1.0), two_nf_v = _mm_set1_pd(two_nf),
+                    sum_v = _mm_set1_pd(sum), difference_v = _mm_set1_pd(difference);
+      for (; col + 2 <= w; col += 2) {
+        const __m128d d = _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(
+            reinterpret_cast<const __m128i*>(depth + col))));
+        const __m128d window = _mm_sub_pd(_mm_mul_pd(two, d), one);
+        const __m128d z = _mm_div_pd(two_nf_v, _mm_sub_pd(sum_v, _mm_mul_pd(window, difference_v)));
+        float zf[4];
+        _mm_storeu_ps(zf, _mm_cvtpd_ps(z));
+        for (std::size_t i = 0; i < 2; ++i) {
+          const std::uint32_t s = segment[col + i];
+          const bool hit = (s - 1u < visual_count || s == RawCameraImages::kGroundSegment) &
+                           (depth[col + i] < 1.0f);
+          depth_out[cameras * (col + i)] = hit ? zf[i] : 0.0f;
+        }
+      }
+#endif
+      for (; col < w; ++col) {
         const std::uint32_t s = segment[col];
         const bool hit = (s - 1u < visual_count || s == RawCameraImages::kGroundSegment) &
                          (depth[col] < 1.0f);
@@ -218,6 +288,11 @@ void VisualObserver::assembleImages(VisualObservation& out) const {
       }
       if (k == 0) continue;
       std::uint8_t* masks = out.masks.data() + p0 * k * cameras + k * c;
+      if (k < kMaskRowWriters.size()) {
+        kMaskRowWriters[k](segment, depth, w, visual_count, segment_mask_bytes_.data(), masks,
+                           k * cameras);
+        continue;
+      }
       for (std::size_t col = 0; col < w; ++col) {
         const std::uint32_t s = segment[col];
         // Pixels that hit no visual (nothing, the ground, the far plane)
