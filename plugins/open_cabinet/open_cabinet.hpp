@@ -18,6 +18,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -200,6 +201,8 @@ class OpenCabinetTask : public manibench::sdk::Task {
   // the robot's facts (assets/robots/mobile_panda_single.yaml) and state
   std::unique_ptr<manibench::sdk::mobile_panda::AgentState> robot_;
   mutable std::map<std::string, std::shared_ptr<CabinetModel>> cabinets_;
+  // PartNet cabinets listObjects skipped (and warned about once).
+  mutable std::set<std::string> skipped_;
   // the scene
   std::shared_ptr<CabinetModel> cabinet_;
   const TargetLink* target_ = nullptr;

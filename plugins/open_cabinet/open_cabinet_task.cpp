@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <iostream>
 #include <sstream>
 
 #ifndef MANIBENCH_ROBOT_DIR
@@ -115,8 +116,28 @@ std::vector<std::string> OpenCabinetTask::listObjects(const std::string& split) 
   const std::vector<std::string> cabinets =
       partnet_dir_.empty() ? listGeneratedCabinets(kind_, split) : listPartNetCabinets(partnet_dir_, split);
   std::vector<std::string> ids;
-  for (const std::string& c : cabinets)
-    for (const TargetLink* t : getCabinet(c).getTargets(kind_)) ids.push_back(c + "_" + t->link);
+  for (const std::string& c : cabinets) {
+    const CabinetModel* cabinet = nullptr;
+    std::string reason;
+    try {
+      cabinet = &getCabinet(c);
+      if (cabinet->getTargets(TargetKind::kDoor).empty() && cabinet->getTargets(TargetKind::kDrawer).empty())
+        reason = "no door or drawer with a handle part (a visual or semantics.txt label naming 'handle')";
+    } catch (const std::exception& e) {
+      // A generated cabinet that fails is our bug: let it through.
+      if (partnet_dir_.empty()) throw;
+      reason = e.what();
+    }
+    if (!reason.empty()) {
+      // One bad object of a user's folder must not make the folder
+      // unusable: skip it, and say why once per process.
+      if (skipped_.insert(c).second)
+        std::cerr << "manibench: warning: " << taskName(kind_) << ": skipping PartNet cabinet " << c << " ("
+                  << (std::filesystem::path(partnet_dir_) / c).string() << "): " << reason << "\n";
+      continue;
+    }
+    for (const TargetLink* t : cabinet->getTargets(kind_)) ids.push_back(c + "_" + t->link);
+  }
   return ids;
 }
 

@@ -41,12 +41,26 @@ CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id
     TargetLink t;
     t.link = link.name;
     t.joint = joint->name;
-    if (joint->type == "revolute" || joint->type == "continuous")
+    const bool revolute = joint->type == "revolute" || joint->type == "continuous";
+    const bool prismatic = joint->type == "prismatic";
+    // semantics.txt says what the part is (a handled lid or a sliding door
+    // is no target); without an entry for the link, its joint decides.
+    if (const partnet::Semantic* semantic = object.findSemantic(link.name)) {
+      const bool door = semantic->label.find("door") != std::string::npos;
+      const bool drawer = semantic->label.find("drawer") != std::string::npos;
+      if (door && revolute)
+        t.kind = TargetKind::kDoor;
+      else if (drawer && prismatic)
+        t.kind = TargetKind::kDrawer;
+      else
+        continue;
+    } else if (revolute) {
       t.kind = TargetKind::kDoor;
-    else if (joint->type == "prismatic")
+    } else if (prismatic) {
       t.kind = TargetKind::kDrawer;
-    else
+    } else {
       continue;
+    }
     t.axis = joint->axis;
     // Outward (-x of the cabinet) in the link frame; the grip runs along
     // the longer of the box's two other sides.

@@ -104,4 +104,37 @@ TEST(OpenCabinetScenario, APartNetFolderOfTestObjectsOnlyRuns) {
   std::filesystem::remove_all(dir);
 }
 
+// A user's folder: semantics.txt decides what a handled part is, and a
+// malformed object is skipped with its reason while the others load.
+TEST(OpenCabinetScenario, PartNetSemanticsDecideTargetsAndABrokenObjectIsSkipped) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("manibench_partnet_skip_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::copy(std::string(MANIBENCH_TEST_SOURCE_DIR) + "/tests/fixtures/partnet_mini", dir,
+                        std::filesystem::copy_options::recursive);
+  // 100001's hinged part is a lid now (it keeps its handle): no door.
+  std::ofstream(dir / "100001" / "semantics.txt") << "link_0 hinge lid\nlink_1 slider drawer\nlink_2 heavy cabinet_body\n";
+  std::filesystem::create_directories(dir / "100003");
+  std::ofstream(dir / "100003" / "mobility.urdf") << "<robot name=\"broken\">\n  <link name=\"base\">\n";
+
+  ::testing::internal::CaptureStderr();
+  ExpertSetup drawer = makeExpertSetup("OpenCabinetDrawer-v0", {"task.partnet_dir=" + dir.string()});
+  const std::vector<std::string> drawers = drawer.env->listObjects("train");
+  ExpertSetup door = makeExpertSetup("OpenCabinetDoor-v0", {"task.partnet_dir=" + dir.string()});
+  const std::vector<std::string> doors = door.env->listObjects("train");
+  const std::vector<std::string> test_doors = door.env->listObjects("test");
+  const std::string warnings = ::testing::internal::GetCapturedStderr();
+
+  EXPECT_EQ(drawers, (std::vector<std::string>{"100001_link_1"}));
+  EXPECT_TRUE(doors.empty()) << doors.front();
+  EXPECT_EQ(test_doors, (std::vector<std::string>{"100002_link_0"}));
+  EXPECT_NE(warnings.find("skipping PartNet cabinet 100003 (" + (dir / "100003").string() + ")"), std::string::npos)
+      << warnings;
+  EXPECT_NE(warnings.find("mobility.urdf"), std::string::npos) << warnings;
+  EXPECT_EQ(warnings.find("100001"), std::string::npos) << "100001 has a drawer: " << warnings;
+  // The skipped object's fixed-object environment says why.
+  EXPECT_THROW(drawer.env->reset("100003_link_1", 0), std::exception);
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
