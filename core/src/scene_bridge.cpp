@@ -263,6 +263,26 @@ mb_status calcLinkJacobian(mb_scene* s, mb_id articulation, mb_id link,
   });
 }
 
+mb_status getRootLink(mb_scene* s, mb_id articulation, mb_id* out, mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requirePointer(out, "output link id");
+    *out = m.scene->getRootLink(articulation);
+  });
+}
+mb_status setRootTwist(mb_scene* s, mb_id articulation, const double twist[6], mb_error* err) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requireStateChanges(m, "set_root_twist");
+    requireArray(twist, 6, "twist");
+    Twist t;
+    t.angular = Eigen::Vector3d(twist[0], twist[1], twist[2]);
+    t.linear = Eigen::Vector3d(twist[3], twist[4], twist[5]);
+    if (!t.angular.allFinite() || !t.linear.allFinite())
+      throw SceneError("set_root_twist: the twist of articulation '" + m.scene->getArticulationName(articulation) +
+                       "' is not finite");
+    m.scene->setRootTwist(articulation, t);
+  });
+}
+
 mb_status addToMask(mb_scene* s, uint32_t mask_index, mb_id articulation, mb_id link,
                     const char* visual_name_part, mb_error* err) {
   return guarded(s, err, [&](mb_scene& m) {
@@ -301,6 +321,8 @@ const mb_scene_api kSceneApi = [] {
   api.set_joint_dynamics = &setJointDynamics;
   api.add_to_mask = &addToMask;
   api.calc_link_jacobian = &calcLinkJacobian;
+  api.get_root_link = &getRootLink;
+  api.set_root_twist = &setRootTwist;
   return api;
 }();
 

@@ -160,6 +160,39 @@ TEST(UrdfRobustness, ARigidObjectHasEmptyJointVectorsInThePluginsView) {
   EXPECT_EQ(view.getJointVelocities(box).size(), 0);
 }
 
+// ABI 1.3: the root link and a floating root's twist through the plugin's
+// view, without the URDF's link names.
+TEST(UrdfRobustness, ThePluginsViewGivesTheRootLinkAndSetsTheRootTwist) {
+  PhysicsSettings settings;
+  settings.gravity_z = 0;
+  Scene scene(settings);
+  const int fixed = scene.addUrdfString(robot(link("a", inertial()) + link("b", inertial()) + joint("ab", "a", "b")),
+                                        "", "arm", Pose(), true);
+  std::string floating_urdf = robot(link("hull", inertial()) + link("mast", inertial()) + joint("hm", "hull", "mast"));
+  const int boat = scene.addUrdfString(floating_urdf, "", "boat", Pose(), false);
+  scene.finalize();
+  SceneBridge bridge(scene);
+  sdk::SceneView view(SceneBridge::getApi(), bridge.getHandle());
+  EXPECT_EQ(scene.getLinkName(int(view.getRootLink(fixed))), "a");
+  const mb_id hull = view.getRootLink(boat);
+  EXPECT_EQ(hull, scene.findLink(boat, "hull"));
+  sdk::Twist twist;
+  twist.angular = Eigen::Vector3d(0, 0, 0.5);
+  twist.linear = Eigen::Vector3d(1.0, -2.0, 0.25);
+  bridge.setStateChangesAllowed(true);  // as in a task's reset
+  view.setRootTwist(boat, twist);
+  const sdk::Twist back = view.getRootTwist(boat);
+  EXPECT_TRUE(back.angular.isApprox(twist.angular, 1e-12)) << back.angular.transpose();
+  EXPECT_TRUE(back.linear.isApprox(twist.linear, 1e-12)) << back.linear.transpose();
+  scene.advance(0.1);  // no gravity, no contact: it coasts
+  EXPECT_NEAR(view.getRootPose(boat).position.x(), 0.1, 1e-6);
+  EXPECT_NEAR(view.getRootPose(boat).position.y(), -0.2, 1e-6);
+  // A fixed base has no twist to set; a non-finite one is refused.
+  EXPECT_THROW(view.setRootTwist(fixed, twist), sdk::Error);
+  twist.linear.x() = std::nan("");
+  expectMentions(catchMessage<sdk::Error>([&] { view.setRootTwist(boat, twist); }), {"'boat'", "not finite"});
+}
+
 // A free body with no collision shape falls through the ground: the scene
 // says so, naming the link, instead of letting it fall for ever.
 TEST(UrdfRobustness, ABodyFallingThroughTheGroundIsADivergenceNamingIt) {

@@ -193,6 +193,11 @@ int Scene::findLink(int articulation, const std::string& link_name) const {
   return -1;
 }
 
+int Scene::getRootLink(int articulation) const {
+  // The model lists links depth first from the root (urdf_model.cpp).
+  return impl_->getArticulation(articulation, "getRootLink").first_link;
+}
+
 const std::string& Scene::getLinkName(int link) const {
   impl_->checkLink(link, "getLinkName");
   const auto& [a, l] = impl_->links[link];

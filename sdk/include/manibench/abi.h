@@ -57,7 +57,7 @@ extern "C" {
 #endif
 
 #define MB_ABI_MAJOR 1
-#define MB_ABI_MINOR 2
+#define MB_ABI_MINOR 3
 #define MB_ENTRY_POINT_NAME "manibench_plugin_entry"
 
 /* True when `field` of struct type `type` lies within `size` bytes. */
@@ -228,6 +228,19 @@ typedef struct mb_scene_api {
   mb_status (*add_to_mask)(mb_scene* scene, uint32_t mask_index,
                            mb_id articulation, mb_id link,
                            const char* visual_name_part, mb_error* err);
+
+  /* ---- ABI 1.3 ------------------------------------------------------- */
+
+  /* The link id of `articulation`'s root link (its URDF's root, whose pose
+   * get_root_pose reports), for get_link_pose / get_link_twist without
+   * knowing the URDF's link names. */
+  mb_status (*get_root_link)(mb_scene* scene, mb_id articulation,
+                             mb_id* out_link, mb_error* err);
+  /* A floating root's twist: angular velocity x, y, z, then the root link
+   * origin's linear velocity x, y, z, world frame (get_link_twist's
+   * layout). An error for a fixed base. Not while the host steps. */
+  mb_status (*set_root_twist)(mb_scene* scene, mb_id articulation,
+                              const double twist[6], mb_error* err);
 } mb_scene_api;
 
 /* ---- descriptors ------------------------------------------------------ */

@@ -139,6 +139,14 @@ class SceneView {
     call("get_link_pose", required(&mb_scene_api::get_link_pose), link, &p);
     return Pose::fromC(p);
   }
+  // ABI 1.3: the root link's id (its URDF's root) and a floating root's
+  // twist, without the URDF's link names.
+  mb_id getRootLink(mb_id articulation) const {
+    mb_id link = -1;
+    call("get_root_link", required(&mb_scene_api::get_root_link), articulation, &link);
+    return link;
+  }
+  Twist getRootTwist(mb_id articulation) const { return getLinkTwist(getRootLink(articulation)); }
   Twist getLinkTwist(mb_id link) const {
     double v[6] = {0, 0, 0, 0, 0, 0};
     call("get_link_twist", required(&mb_scene_api::get_link_twist), link, v);
@@ -168,6 +176,13 @@ class SceneView {
   void setJointVelocities(mb_id articulation, const Eigen::VectorXd& qdot) {
     call("set_joint_velocities", required(&mb_scene_api::set_joint_velocities),
          articulation, qdot.data(), uint32_t(qdot.size()));
+  }
+  // ABI 1.3. Floating roots: angular velocity, then the root link origin's
+  // velocity, world frame.
+  void setRootTwist(mb_id articulation, const Twist& twist) {
+    const double v[6] = {twist.angular.x(), twist.angular.y(), twist.angular.z(),
+                         twist.linear.x(),  twist.linear.y(),  twist.linear.z()};
+    call("set_root_twist", required(&mb_scene_api::set_root_twist), articulation, v);
   }
   void setRootPose(mb_id articulation, const Pose& pose) {
     const mb_pose p = pose.toC();

@@ -18,15 +18,24 @@
 
 namespace manibench::sdk {
 
+// What describe() returns. Required: `robot_articulation` (the name
+// buildScene gives the robot's addUrdf* call) and `actuated_joints` (joints
+// of that articulation, in action order): the environment refuses a scene
+// without them, naming the articulation or joint. `observation` is what
+// policies see in state mode (empty: nothing). Everything else has a
+// working default; the host refuses, naming the field, success_conditions
+// not ending with "success", a non-positive control_frequency, frame_skip
+// or max_episode_steps, a segment beyond the observation, and an
+// agent_state_dim that does not end a segment.
 struct TaskSpec {
   std::vector<Segment> observation;  // the `state` observation, in order
   // Named success conditions; the last one must be "success".
   std::vector<std::string> success_conditions = {"success"};
-  std::vector<std::string> masks;  // segmentation masks (B.3)
-  std::string robot_articulation;  // name the task gives its robot
-  std::vector<std::string> actuated_joints;  // in action order
+  std::vector<std::string> masks;  // segmentation masks (B.3); none: no mask channels
+  std::string robot_articulation;  // required: name buildScene gives the robot
+  std::vector<std::string> actuated_joints;  // required: in action order
   std::string default_controller = "joint_velocity";
-  std::string controller_config;  // YAML for the controller
+  std::string controller_config;  // YAML for the controller; empty: its defaults
   double control_frequency = 100;
   uint32_t frame_skip = 5;
   uint32_t max_episode_steps = 200;
