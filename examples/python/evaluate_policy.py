@@ -1,6 +1,7 @@
 """Evaluate a Python policy with the evaluation kit (supplement B.5).
 
     PYTHONPATH=build/python python3 examples/python/evaluate_policy.py [TASK] [--workers N]
+    build/bin/manibench eval Reach-v0 --policy examples/python/evaluate_policy.py --workers 2
 
 This file is both the solution and its launcher: the kit (`manibench eval
 TASK --policy THIS_FILE`) imports it in every worker and uses `UserPolicy`;
