@@ -12,11 +12,18 @@
 // bucket rests on the platform, release, retreat upwards.
 #include "move_bucket.hpp"
 
+#include <manibench/sdk/policy_math.hpp>
+
 #include <algorithm>
 #include <cmath>
 
 namespace move_bucket {
 
+using manibench::sdk::clipNorm;
+using manibench::sdk::clipUnit;
+using manibench::sdk::getQuaternion;
+using manibench::sdk::getVector3;
+using manibench::sdk::wrapAngle;
 using manibench::sdk::Error;
 using manibench::sdk::kPi;
 using manibench::sdk::Observation;
@@ -34,20 +41,6 @@ constexpr double kGripDepth = 0.013;      // TCP below the rim top (pads 4 mm be
 constexpr double kLiftBy = 0.25;          // the platform is 0.2 m tall
 constexpr double kCarrySpeed = 0.4, kCarryAcceleration = 0.6;  // m/s, m/s^2
 
-Eigen::Vector3d getVec(const Eigen::VectorXd& s, uint32_t at) { return s.segment<3>(at); }
-Eigen::Quaterniond getQuat(const Eigen::VectorXd& s, uint32_t at) {
-  return Eigen::Quaterniond(s[at], s[at + 1], s[at + 2], s[at + 3]).normalized();
-}
-double clip(double x) { return std::clamp(x, -1.0, 1.0); }
-Eigen::Vector3d clipNorm(const Eigen::Vector3d& v, double most) {
-  const double n = v.norm();
-  return n > most ? Eigen::Vector3d(v * (most / n)) : v;
-}
-Eigen::Vector2d clipNorm(const Eigen::Vector2d& v, double most) {
-  const double n = v.norm();
-  return n > most ? Eigen::Vector2d(v * (most / n)) : v;
-}
-double wrap(double a) { return std::remainder(a, 2 * kPi); }
 
 // TCP orientation pointing down with the fingers opening along `across`
 // (horizontal): z = -world z, y = across, x = y cross z.
@@ -108,13 +101,13 @@ Eigen::VectorXd MoveBucketExpert::act(const Observation& observation) {
   const double yaw = s[L::kBaseYaw];
   const double lift = s[L::kJointPositions + 3];
   const Eigen::Matrix3d base_rotation = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  const std::array<Eigen::Vector3d, 2> tcp = {getVec(s, L::kRightTcpPose), getVec(s, L::kLeftTcpPose)};
-  const std::array<Eigen::Matrix3d, 2> tcp_rotation = {getQuat(s, L::kRightTcpPose + 3).toRotationMatrix(),
-                                                       getQuat(s, L::kLeftTcpPose + 3).toRotationMatrix()};
-  const Eigen::Vector3d bucket = getVec(s, L::kBucketPose);
-  const Eigen::Matrix3d bucket_rotation = getQuat(s, L::kBucketPose + 3).toRotationMatrix();
-  const Eigen::Vector3d bucket_velocity = getVec(s, L::kBucketVelocity);
-  const Eigen::Vector3d platform = getVec(s, L::kPlatformPose);
+  const std::array<Eigen::Vector3d, 2> tcp = {getVector3(s, L::kRightTcpPose), getVector3(s, L::kLeftTcpPose)};
+  const std::array<Eigen::Matrix3d, 2> tcp_rotation = {getQuaternion(s, L::kRightTcpPose + 3).toRotationMatrix(),
+                                                       getQuaternion(s, L::kLeftTcpPose + 3).toRotationMatrix()};
+  const Eigen::Vector3d bucket = getVector3(s, L::kBucketPose);
+  const Eigen::Matrix3d bucket_rotation = getQuaternion(s, L::kBucketPose + 3).toRotationMatrix();
+  const Eigen::Vector3d bucket_velocity = getVector3(s, L::kBucketVelocity);
+  const Eigen::Vector3d platform = getVector3(s, L::kPlatformPose);
   const double platform_top = platform.z() + s[L::kPlatformHalfSize + 2];
   const double rim_height = s[L::kBucketRim], grip_y = (s[L::kBucketRim + 1] + s[L::kBucketRim + 2]) / 2;
   constexpr double dt = 0.05;  // one env step
@@ -132,7 +125,7 @@ Eigen::VectorXd MoveBucketExpert::act(const Observation& observation) {
   grip_axis = grip_axis.norm() > 1e-6 ? Eigen::Vector2d(grip_axis.normalized()) : Eigen::Vector2d(0, 1);
   if (phase_ == Phase::kApproach && phase_steps_ == 1) {
     const double yaw_a = std::atan2(grip_axis.y(), grip_axis.x()) - kPi / 2;
-    grip_side_ = std::abs(wrap(yaw_a - yaw)) <= kPi / 2 ? 1.0 : -1.0;
+    grip_side_ = std::abs(wrapAngle(yaw_a - yaw)) <= kPi / 2 ? 1.0 : -1.0;
   }
   const Eigen::Vector2d across = grip_side_ * grip_axis;  // the base's +y at the grasp
   const Eigen::Vector3d across3(across.x(), across.y(), 0);
@@ -156,10 +149,10 @@ Eigen::VectorXd MoveBucketExpert::act(const Observation& observation) {
     const double yaw_goal = std::atan2(across.y(), across.x()) - kPi / 2;
     const Eigen::Vector2d forward(std::cos(yaw_goal), std::sin(yaw_goal));
     base_velocity = clipNorm(Eigen::Vector2d(2.0 * (bucket.head<2>() - kReach * forward - base)), kBaseSpeed);
-    yaw_rate = std::clamp(2.5 * wrap(yaw_goal - yaw), -1.5, 1.5);
+    yaw_rate = std::clamp(2.5 * wrapAngle(yaw_goal - yaw), -1.5, 1.5);
     const double lift_goal = std::clamp(tcp_height + kShoulderDrop - kShoulderAboveLift, 0.0, 1.5);
     lift_rate = std::clamp(3.0 * (lift_goal - lift), -0.4, 0.4);
-    return (bucket.head<2>() - kReach * forward - base).norm() + 0.3 * std::abs(wrap(yaw_goal - yaw));
+    return (bucket.head<2>() - kReach * forward - base).norm() + 0.3 * std::abs(wrapAngle(yaw_goal - yaw));
   };
   auto tcpError = [&] { return std::max((goal[0] - tcp[0]).norm(), (goal[1] - tcp[1]).norm()); };
 
@@ -201,7 +194,7 @@ Eigen::VectorXd MoveBucketExpert::act(const Observation& observation) {
       const double wanted = std::min(kCarrySpeed, std::sqrt(2 * kCarryAcceleration * std::max(distance - 0.005, 0.0)));
       carry_speed_ = std::min(wanted, carry_speed_ + kCarryAcceleration * dt);
       base_velocity = distance > 1e-6 ? Eigen::Vector2d(carry_speed_ * error / distance) : Eigen::Vector2d::Zero();
-      yaw_rate = std::clamp(2.5 * wrap(held_yaw_ - yaw), -0.5, 0.5);
+      yaw_rate = std::clamp(2.5 * wrapAngle(held_yaw_ - yaw), -0.5, 0.5);
       if (distance < 0.015 && bucket_velocity.head<2>().norm() < 0.05) next(Phase::kLower);
       break;
     }
@@ -242,16 +235,16 @@ Eigen::VectorXd MoveBucketExpert::act(const Observation& observation) {
     const Eigen::Vector3d linear_local = base_rotation.transpose() * linear;
     const Eigen::Vector3d angular_local = base_rotation.transpose() * angular;
     for (int i = 0; i < 3; ++i) {
-      action[ee_linear_[a] + i] = clip(linear_local[i] / kEeSpeed);
-      action[ee_angular_[a] + i] = clip(angular_local[i] / kEeAngularSpeed);
+      action[ee_linear_[a] + i] = clipUnit(linear_local[i] / kEeSpeed);
+      action[ee_angular_[a] + i] = clipUnit(angular_local[i] / kEeAngularSpeed);
     }
     action[gripper_[a]] = gripper;
   }
   const Eigen::Vector2d base_local = Eigen::Rotation2Dd(-yaw).toRotationMatrix() * base_velocity;
-  action[base_] = clip(base_local.x() / kBaseSpeed);
-  action[base_ + 1] = clip(base_local.y() / kBaseSpeed);
-  action[base_ + 2] = clip(yaw_rate / kYawSpeed);
-  action[base_ + 3] = clip(lift_rate / kLiftSpeed);
+  action[base_] = clipUnit(base_local.x() / kBaseSpeed);
+  action[base_ + 1] = clipUnit(base_local.y() / kBaseSpeed);
+  action[base_ + 2] = clipUnit(yaw_rate / kYawSpeed);
+  action[base_ + 3] = clipUnit(lift_rate / kLiftSpeed);
   return action;
 }
 

@@ -12,11 +12,17 @@
 // hold. A handle that slips out while pulling is let go and grasped again.
 #include "open_cabinet.hpp"
 
+#include <manibench/sdk/policy_math.hpp>
+
 #include <algorithm>
 #include <cmath>
 
 namespace open_cabinet {
 
+using manibench::sdk::clipNorm;
+using manibench::sdk::clipUnit;
+using manibench::sdk::getQuaternion;
+using manibench::sdk::getVector3;
 using manibench::sdk::Error;
 using manibench::sdk::Observation;
 using manibench::sdk::PolicyContext;
@@ -27,19 +33,6 @@ constexpr double kBaseSpeed = 0.5, kYawSpeed = 3.14, kLiftSpeed = 0.5;  // per u
 constexpr double kEeSpeed = 0.5, kEeAngularSpeed = 1.57;
 constexpr double kDoorLead = 0.02;  // m: how far the goal leads a door's handle
 
-Eigen::Vector3d getVec(const Eigen::VectorXd& s, uint32_t at) { return s.segment<3>(at); }
-Eigen::Quaterniond getQuat(const Eigen::VectorXd& s, uint32_t at) {
-  return Eigen::Quaterniond(s[at], s[at + 1], s[at + 2], s[at + 3]).normalized();
-}
-double clip(double x) { return std::clamp(x, -1.0, 1.0); }
-Eigen::Vector3d clipNorm(const Eigen::Vector3d& v, double most) {
-  const double n = v.norm();
-  return n > most ? Eigen::Vector3d(v * (most / n)) : v;
-}
-Eigen::Vector2d clipNorm2(const Eigen::Vector2d& v, double most) {
-  const double n = v.norm();
-  return n > most ? Eigen::Vector2d(v * (most / n)) : v;
-}
 
 }  // namespace
 
@@ -85,15 +78,15 @@ Eigen::VectorXd OpenCabinetExpert::act(const Observation& observation) {
   const double yaw = s[L::kBaseYaw];
   const double lift = s[L::kJointPositions + 3];
   const Eigen::Matrix3d base_rotation = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  const Eigen::Vector3d tcp = getVec(s, L::kTcpPose);
-  const Eigen::Quaterniond tcp_q = getQuat(s, L::kTcpPose + 3);
-  const Eigen::Vector3d handle = getVec(s, L::kHandlePose);
-  const Eigen::Matrix3d hr = getQuat(s, L::kHandlePose + 3).toRotationMatrix();
+  const Eigen::Vector3d tcp = getVector3(s, L::kTcpPose);
+  const Eigen::Quaterniond tcp_q = getQuaternion(s, L::kTcpPose + 3);
+  const Eigen::Vector3d handle = getVector3(s, L::kHandlePose);
+  const Eigen::Matrix3d hr = getQuaternion(s, L::kHandlePose + 3).toRotationMatrix();
   const Eigen::Vector3d hx = hr.col(0), hy = hr.col(1), hz = hr.col(2);
   const bool door = s[L::kTargetJointType] < 0.5;
   const double q = s[L::kTargetJoint], lower = s[L::kTargetJoint + 2], upper = s[L::kTargetJoint + 3];
   const double open_fraction = (q - lower) / (upper - lower);
-  const Eigen::Vector3d axis = getVec(s, L::kJointAxis), origin = getVec(s, L::kJointOrigin);
+  const Eigen::Vector3d axis = getVector3(s, L::kJointAxis), origin = getVector3(s, L::kJointOrigin);
   const double fingers = s[L::kJointPositions + 11] + s[L::kJointPositions + 12];  // opening, m
 
   if (!nominal_ready_) {  // the canonical arm pose's TCP, relative to the base
@@ -175,7 +168,7 @@ Eigen::VectorXd OpenCabinetExpert::act(const Observation& observation) {
   // Where the arm alone falls short (reach, joint limits), the base helps.
   base_velocity += 1.5 * (goal - tcp).head<2>();
   if (phase_ == Phase::kHold || phase_ == Phase::kClose) base_velocity.setZero();
-  base_velocity = clipNorm2(base_velocity, kBaseSpeed);
+  base_velocity = clipNorm(base_velocity, kBaseSpeed);
   const Eigen::Vector2d base_local = Eigen::Rotation2Dd(-yaw).toRotationMatrix() * base_velocity;
   double yaw_rate = 2.0 * std::remainder(yaw_goal - yaw, 2 * M_PI);
   if (phase_ == Phase::kPull) yaw_rate *= yaw_follow_;
@@ -200,15 +193,15 @@ Eigen::VectorXd OpenCabinetExpert::act(const Observation& observation) {
   angular = clipNorm(angular, kEeAngularSpeed);
 
   Eigen::VectorXd action = Eigen::VectorXd::Zero(action_dim_);
-  action[base_] = clip(base_local.x() / kBaseSpeed);
-  action[base_ + 1] = clip(base_local.y() / kBaseSpeed);
-  action[base_ + 2] = clip(yaw_rate / kYawSpeed);
-  action[base_ + 3] = clip(lift_rate / kLiftSpeed);
+  action[base_] = clipUnit(base_local.x() / kBaseSpeed);
+  action[base_ + 1] = clipUnit(base_local.y() / kBaseSpeed);
+  action[base_ + 2] = clipUnit(yaw_rate / kYawSpeed);
+  action[base_ + 3] = clipUnit(lift_rate / kLiftSpeed);
   const Eigen::Vector3d linear_local = base_rotation.transpose() * arm_velocity;
   const Eigen::Vector3d angular_local = base_rotation.transpose() * angular;
   for (int i = 0; i < 3; ++i) {
-    action[ee_linear_ + i] = clip(linear_local[i] / kEeSpeed);
-    action[ee_angular_ + i] = clip(angular_local[i] / kEeAngularSpeed);
+    action[ee_linear_ + i] = clipUnit(linear_local[i] / kEeSpeed);
+    action[ee_angular_ + i] = clipUnit(angular_local[i] / kEeAngularSpeed);
   }
   action[gripper_] = gripper;
   return action;

@@ -14,11 +14,17 @@
 // to a stop there), release (back away and wait while the chair settles).
 #include "push_chair.hpp"
 
+#include <manibench/sdk/policy_math.hpp>
+
 #include <algorithm>
 #include <cmath>
 
 namespace push_chair {
 
+using manibench::sdk::clipNorm;
+using manibench::sdk::clipUnit;
+using manibench::sdk::getQuaternion;
+using manibench::sdk::getVector3;
 using manibench::sdk::Error;
 using manibench::sdk::Observation;
 using manibench::sdk::PolicyContext;
@@ -40,15 +46,6 @@ constexpr double kStopLead = 0.05;      // m: the chair coasts about this far af
 constexpr double kReleaseDistance = 0.06;  // m: push ends with the chair this close to the target
 constexpr double kRetryDistance = 0.11;    // m: a chair that stopped farther is pushed again
 
-Eigen::Vector3d getVec(const Eigen::VectorXd& s, uint32_t at) { return s.segment<3>(at); }
-Eigen::Quaterniond getQuat(const Eigen::VectorXd& s, uint32_t at) {
-  return Eigen::Quaterniond(s[at], s[at + 1], s[at + 2], s[at + 3]).normalized();
-}
-double clip(double x) { return std::clamp(x, -1.0, 1.0); }
-Eigen::Vector3d clipNorm(const Eigen::Vector3d& v, double most) {
-  const double n = v.norm();
-  return n > most ? Eigen::Vector3d(v * (most / n)) : v;
-}
 Eigen::Vector2d unit(double angle) { return {std::cos(angle), std::sin(angle)}; }
 
 }  // namespace
@@ -100,8 +97,8 @@ Eigen::VectorXd PushChairExpert::act(const Observation& observation) {
   const double yaw = s[L::kBaseYaw];
   const double lift = s[L::kJointPositions + 3];
   const Eigen::Matrix3d base_rotation = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  const std::array<Eigen::Vector3d, 2> tcp = {getVec(s, L::kRightTcpPose), getVec(s, L::kLeftTcpPose)};
-  const std::array<Eigen::Quaterniond, 2> tcp_q = {getQuat(s, L::kRightTcpPose + 3), getQuat(s, L::kLeftTcpPose + 3)};
+  const std::array<Eigen::Vector3d, 2> tcp = {getVector3(s, L::kRightTcpPose), getVector3(s, L::kLeftTcpPose)};
+  const std::array<Eigen::Quaterniond, 2> tcp_q = {getQuaternion(s, L::kRightTcpPose + 3), getQuaternion(s, L::kLeftTcpPose + 3)};
   const Eigen::Vector2d chair = s.segment<2>(L::kChairPose);
   const Eigen::Vector2d chair_velocity = s.segment<2>(L::kChairVelocity);
   const Eigen::Vector2d target = s.segment<2>(L::kTarget);
@@ -206,10 +203,10 @@ Eigen::VectorXd PushChairExpert::act(const Observation& observation) {
   const double lift_rate = 3.0 * (lift_goal - lift);
 
   Eigen::VectorXd action = Eigen::VectorXd::Zero(action_dim_);
-  action[base_] = clip(base_local.x() / kBaseSpeed);
-  action[base_ + 1] = clip(base_local.y() / kBaseSpeed);
-  action[base_ + 2] = clip(yaw_rate / kYawSpeed);
-  action[base_ + 3] = clip(lift_rate / kLiftSpeed);
+  action[base_] = clipUnit(base_local.x() / kBaseSpeed);
+  action[base_ + 1] = clipUnit(base_local.y() / kBaseSpeed);
+  action[base_ + 2] = clipUnit(yaw_rate / kYawSpeed);
+  action[base_ + 3] = clipUnit(lift_rate / kLiftSpeed);
   for (int a = 0; a < 2; ++a) {
     Eigen::Vector3d velocity = clipNorm(5.0 * (hand_goal[a] - tcp[a]), kEeSpeed);
     // The command is relative to the moving base and lift: take out what
@@ -223,8 +220,8 @@ Eigen::VectorXd PushChairExpert::act(const Observation& observation) {
     const Eigen::Vector3d linear_local = base_rotation.transpose() * velocity;
     const Eigen::Vector3d angular_local = base_rotation.transpose() * angular;
     for (int i = 0; i < 3; ++i) {
-      action[ee_linear_[a] + i] = clip(linear_local[i] / kEeSpeed);
-      action[ee_angular_[a] + i] = clip(angular_local[i] / kEeAngularSpeed);
+      action[ee_linear_[a] + i] = clipUnit(linear_local[i] / kEeSpeed);
+      action[ee_angular_[a] + i] = clipUnit(angular_local[i] / kEeAngularSpeed);
     }
     action[gripper_[a]] = -1.0;  // closed: a compact fist
   }
