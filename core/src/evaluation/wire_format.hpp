@@ -97,7 +97,8 @@ class Reader {
     const uint64_t n = u64();
     if (n > (data_.size() - pos_) / sizeof(T)) throw std::runtime_error("truncated message from a worker");
     v.resize(n);
-    std::memcpy(v.data(), data_.data() + pos_, n * sizeof(T));
+    // An empty vector's data() may be null, which memcpy must not get.
+    if (n > 0) std::memcpy(v.data(), data_.data() + pos_, n * sizeof(T));
     pos_ += n * sizeof(T);
   }
   template <class... T>
