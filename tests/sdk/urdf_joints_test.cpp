@@ -42,7 +42,7 @@ void expectSameAsTheHost(const sdk::UrdfJoints& inspected, Scene& scene, int art
 
 TEST(UrdfJoints, TheRobotsAndAPartNetObjectGiveTheHostsJointVector) {
   const std::string source = MANIBENCH_TEST_SOURCE_DIR;
-  for (const std::string path : {source + "/assets/robots/mobile_panda_single.urdf",
+  for (const std::string& path : {source + "/assets/robots/mobile_panda_single.urdf",
                                  source + "/assets/robots/mobile_panda_dual.urdf",
                                  source + "/tests/fixtures/partnet_mini/100001/mobility.urdf"}) {
     SCOPED_TRACE(path);
