@@ -101,7 +101,9 @@ void TreeStructure::calcMassBlock(int tree, Eigen::Ref<Eigen::MatrixXd> block) c
     const SimTK::MobilizedBodyIndex parent = bodies_[*it].parent;
     if (parent != SimTK::GroundIndex) composite_[parent] += composite_[*it];
   }
-  // M(l, k) = S_l^T Ic(b) S_k for u_k of body b and u_l of b or an ancestor.
+  // M(l, k) = S_l^T Ic(b) S_k for u_k of body b and u_l of b or an ancestor;
+  // speeds of sibling branches do not couple: those entries are zero.
+  block.setZero();
   for (SimTK::MobilizedBodyIndex m : members) {
     const Body& body = bodies_[m];
     for (int k = 0; k < body.num_u; ++k) {

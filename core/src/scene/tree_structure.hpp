@@ -39,7 +39,7 @@ class TreeStructure {
   // Per state, realized through Position: hinge columns and inertias.
   void update(const SimTK::State& state);
   // Writes the tree's mass matrix block into `block` (square, in tree-local
-  // order).
+  // order), every entry: those of speeds on sibling branches are zero.
   void calcMassBlock(int tree, Eigen::Ref<Eigen::MatrixXd> block) const;
   // Adds sign times the Jacobian of the velocity of `body`'s material point
   // at `point` (Ground frame) with respect to its tree's speeds into
