@@ -3,14 +3,13 @@
 // them along the channel axis as ManiSkill does.
 #include <manibench/visual_observer.hpp>
 
+#include "observation/image_rows.hpp"
+
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cassert>
 #include <cstring>
-
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 namespace manibench {
 
@@ -19,27 +18,6 @@ using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
-
-// One camera row's mask bytes, K per pixel, `stride` bytes apart: the
-// pixel's segment picks its packed bytes (none where nothing was hit or at
-// the far plane), written as one K-byte store.
-template <std::size_t K>
-void writeMaskRow(const std::uint32_t* segment, const float* depth, std::size_t width,
-                  std::uint32_t visual_count, const std::uint64_t* mask_bytes, std::uint8_t* out,
-                  std::size_t stride) {
-  for (std::size_t col = 0; col < width; ++col) {
-    const std::uint32_t s = segment[col];
-    const std::uint64_t bytes =
-        mask_bytes[s <= visual_count ? s : 0u] & (0 - std::uint64_t(depth[col] < 1.0f));
-    std::memcpy(out + stride * col, &bytes, K);
-  }
-}
-
-using MaskRowWriter = void (*)(const std::uint32_t*, const float*, std::size_t, std::uint32_t,
-                               const std::uint64_t*, std::uint8_t*, std::size_t);
-constexpr std::array<MaskRowWriter, 9> kMaskRowWriters = {
-    nullptr,         &writeMaskRow<1>, &writeMaskRow<2>, &writeMaskRow<3>, &writeMaskRow<4>,
-    &writeMaskRow<5>, &writeMaskRow<6>, &writeMaskRow<7>, &writeMaskRow<8>};
 }  // namespace
 
 VisualObserver::VisualObserver(const Scene& scene, const ObservationOptions& options,
@@ -202,12 +180,6 @@ Eigen::Vector3f VisualObserver::calcSamplePoint(uint32_t index, std::size_t& cam
 }
 
 void VisualObserver::assembleImages(VisualObservation& out) const {
-  // x / 255.0f for every byte: the same floats as the division, without it.
-  static const std::array<float, 256> kByteToUnit = [] {
-    std::array<float, 256> table{};
-    for (int i = 0; i < 256; ++i) table[std::size_t(i)] = float(i) / 255.0f;
-    return table;
-  }();
   const uint32_t k = masks_.getCount();
   const std::size_t cameras = raw_.size();
   const std::size_t h = std::size_t(raw_.front().height), w = std::size_t(raw_.front().width);
@@ -217,89 +189,46 @@ void VisualObserver::assembleImages(VisualObservation& out) const {
   out.rgb.resize(h * w * 3 * cameras);
   out.depth.resize(h * w * cameras);
   out.masks.resize(h * w * k * cameras);
+  const image_rows::InstructionSet set = image_rows::getBestInstructionSet();
+  std::vector<const std::uint32_t*> segment_rows(cameras);
+  std::vector<const float*> depth_rows(cameras);
   // Row by row (the output rows of all cameras stay in cache), each
-  // camera's row from its GL row (bottom-up) in one sweep per channel kind,
-  // with no copy in between; the sweeps are branch-free so that they
-  // vectorize. Depth is linearized here, where a pixel was hit.
+  // camera's row from its GL row (bottom-up), with no copy in between.
   for (std::size_t row = 0; row < h; ++row) {
     const std::size_t p0 = row * w;
     for (std::size_t c = 0; c < cameras; ++c) {
       const RawCameraImages& raw = raw_[c];
       const std::size_t base = raw.getIndex(int(row), 0);
-      const std::uint8_t* color = raw.rgba.data() + 4 * base;
-      const std::uint32_t* segment = raw.segment.data() + base;
-      const float* depth = raw.depth.data() + base;
-      float* rgb = out.rgb.data() + p0 * 3 * cameras + 3 * c;
-      std::size_t col = 0;
-#if defined(__SSE2__)
-      // Four bytes to four floats, divided by 255 (IEEE division: the same
-      // floats as the table); r, g as one 8-byte store and b as one more.
-      const __m128 k255 = _mm_set1_ps(255.0f);
-      const __m128i zero = _mm_setzero_si128();
-      for (; col < w; ++col) {
-        std::uint32_t word;
-        std::memcpy(&word, color + 4 * col, 4);
-        const __m128i bytes = _mm_cvtsi32_si128(int(word));
-        const __m128i ints = _mm_unpacklo_epi16(_mm_unpacklo_epi8(bytes, zero), zero);
-        const __m128 unit = _mm_div_ps(_mm_cvtepi32_ps(ints), k255);
-        float* pixel = rgb + 3 * cameras * col;
-        _mm_storel_pi(reinterpret_cast<__m64*>(pixel), unit);
-        _mm_store_ss(pixel + 2, _mm_movehl_ps(unit, unit));
-      }
-#endif
-      for (; col < w; ++col) {
-        rgb[3 * cameras * col + 0] = kByteToUnit[color[4 * col + 0]];
-        rgb[3 * cameras * col + 1] = kByteToUnit[color[4 * col + 1]];
-        rgb[3 * cameras * col + 2] = kByteToUnit[color[4 * col + 2]];
-      }
-      const std::uint32_t visual_count = raw.visual_count;
-      // calcLinearDepth's terms, and the hit test without branches (the
-      // pixels' order is the image's, not the branch predictor's).
-      const double two_nf = 2 * raw.near * raw.far, sum = raw.far + raw.near,
-                   difference = raw.far - raw.near;
-      float* depth_out = out.depth.data() + p0 * cameras + c;
-      col = 0;
-#if defined(__SSE2__)
-      // Two pixels per division, the scalar loop's operations in its order
-      // (so the same floats as calcLinearDepth).
-      const __m128d two = _mm_set1_pd(2.0), one = _mm_set1_pd(1.0), two_nf_v = _mm_set1_pd(two_nf),
-                    sum_v = _mm_set1_pd(sum), difference_v = _mm_set1_pd(difference);
-      for (; col + 2 <= w; col += 2) {
-        const __m128d d = _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(
-            reinterpret_cast<const __m128i*>(depth + col))));
-        const __m128d window = _mm_sub_pd(_mm_mul_pd(two, d), one);
-        const __m128d z = _mm_div_pd(two_nf_v, _mm_sub_pd(sum_v, _mm_mul_pd(window, difference_v)));
-        float zf[4];
-        _mm_storeu_ps(zf, _mm_cvtpd_ps(z));
-        for (std::size_t i = 0; i < 2; ++i) {
-          const std::uint32_t s = segment[col + i];
-          const bool hit = (s - 1u < visual_count || s == RawCameraImages::kGroundSegment) &
-                           (depth[col + i] < 1.0f);
-          depth_out[cameras * (col + i)] = hit ? zf[i] : 0.0f;
-        }
-      }
-#endif
-      for (; col < w; ++col) {
-        const std::uint32_t s = segment[col];
-        const bool hit = (s - 1u < visual_count || s == RawCameraImages::kGroundSegment) &
-                         (depth[col] < 1.0f);
-        const float z = static_cast<float>(two_nf / (sum - (2.0 * depth[col] - 1.0) * difference));
-        depth_out[cameras * col] = hit ? z : 0.0f;
-      }
-      if (k == 0) continue;
-      std::uint8_t* masks = out.masks.data() + p0 * k * cameras + k * c;
-      if (k < kMaskRowWriters.size()) {
-        kMaskRowWriters[k](segment, depth, w, visual_count, segment_mask_bytes_.data(), masks,
-                           k * cameras);
-        continue;
-      }
+      segment_rows[c] = raw.segment.data() + base;
+      depth_rows[c] = raw.depth.data() + base;
+      // A camera's fourth float is the next camera's red, written after.
+      image_rows::convertRgbRow(raw.rgba.data() + 4 * base, w,
+                                out.rgb.data() + p0 * 3 * cameras + 3 * c, 3 * cameras,
+                                /*pad=*/c + 1 < cameras, set);
+      image_rows::linearizeDepthRow(segment_rows[c], depth_rows[c], w, raw.visual_count,
+                                    raw.near, raw.far, out.depth.data() + p0 * cameras + c,
+                                    cameras, set);
+    }
+    if (k == 0) continue;
+    std::uint8_t* masks = out.masks.data() + p0 * k * cameras;
+    if (k <= 8) {
+      // One scene, so one segment numbering for every camera.
+      assert(std::all_of(raw_.begin(), raw_.end(), [&](const RawCameraImages& raw) {
+        return raw.visual_count == raw_.front().visual_count;
+      }));
+      image_rows::writeMaskRow(segment_rows.data(), depth_rows.data(), cameras, w, k,
+                               raw_.front().visual_count, segment_mask_bytes_.data(), masks);
+      continue;
+    }
+    for (std::size_t c = 0; c < cameras; ++c) {
+      const std::uint32_t visual_count = raw_[c].visual_count;
       for (std::size_t col = 0; col < w; ++col) {
-        const std::uint32_t s = segment[col];
+        const std::uint32_t s = segment_rows[c][col];
         // Pixels that hit no visual (nothing, the ground, the far plane)
         // are in no mask: segment_bits_[0] is 0.
-        const std::uint64_t bits =
-            segment_bits_[s <= visual_count ? s : 0u] & (0 - std::uint64_t(depth[col] < 1.0f));
-        std::uint8_t* pixel_masks = masks + k * cameras * col;
+        const std::uint64_t bits = segment_bits_[s <= visual_count ? s : 0u] &
+                                   (0 - std::uint64_t(depth_rows[c][col] < 1.0f));
+        std::uint8_t* pixel_masks = masks + k * (col * cameras + c);
         for (uint32_t m = 0; m < k; ++m) pixel_masks[m] = (bits >> m) & 1u;
       }
     }

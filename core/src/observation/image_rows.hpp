@@ -1,0 +1,45 @@
+// The per-row kernels of the rgbd observation (VisualObserver::assembleImages):
+// one camera row of GL pixels into the stacked layout, where a camera's
+// values of one pixel are `stride` elements apart from the next pixel's.
+//
+// Each kernel gives exactly the floats of its scalar definition (IEEE
+// division and conversions, the same operations in the same order), so the
+// observation does not depend on which instruction set ran it: SSE2 always
+// (x86-64's baseline), AVX2 where the processor has it, chosen at run time.
+// tests/observation/image_rows_test.cpp checks every variant against the
+// scalar definitions.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace manibench::image_rows {
+
+// Which variant the dispatching functions below run.
+enum class InstructionSet { Scalar, Sse2, Avx2 };
+InstructionSet getBestInstructionSet();  // of this processor (and build)
+
+// rgb[stride * col + i] = rgba[4 * col + i] / 255.0f for i = 0, 1, 2.
+// With `pad`, rgb[stride * col + 3] may be written too (with anything), as
+// one 16-byte store: for a camera whose pixels are followed by another's
+// that are written after.
+void convertRgbRow(const std::uint8_t* rgba, std::size_t width, float* rgb, std::size_t stride,
+                   bool pad, InstructionSet set = getBestInstructionSet());
+
+// out[stride * col] = calcLinearDepth(depth[col], near, far) where the pixel
+// hit a visual (segments 1..visual_count) or the ground (kGroundSegment)
+// before the far plane, else 0.
+void linearizeDepthRow(const std::uint32_t* segment, const float* depth, std::size_t width,
+                       std::uint32_t visual_count, double near, double far, float* out,
+                       std::size_t stride, InstructionSet set = getBestInstructionSet());
+
+// The mask bytes of one output row of all cameras, in output order:
+// out[(col * cameras + c) * k + m] is bit m of the segment's masks
+// (mask_bytes[s]: byte m is 0 or 1) where camera c's pixel hit a visual
+// before the far plane, else 0. segments[c] and depths[c] are camera c's
+// row. k at most 8.
+void writeMaskRow(const std::uint32_t* const* segments, const float* const* depths,
+                  std::size_t cameras, std::size_t width, std::uint32_t k,
+                  std::uint32_t visual_count, const std::uint64_t* mask_bytes, std::uint8_t* out);
+
+}  // namespace manibench::image_rows

@@ -1,0 +1,167 @@
+// The rgbd row kernels (core/src/observation/image_rows.hpp): every
+// instruction-set variant this processor runs gives exactly the scalar
+// definitions' floats and bytes, writes nothing it should not, and handles
+// the widths that leave a tail after the vector loop.
+#include "observation/image_rows.hpp"
+
+#include <manibench/renderer.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace manibench {
+namespace {
+
+using image_rows::InstructionSet;
+
+std::vector<InstructionSet> getRunnableSets() {
+  std::vector<InstructionSet> sets = {InstructionSet::Scalar};
+  const InstructionSet best = image_rows::getBestInstructionSet();
+  if (best == InstructionSet::Sse2 || best == InstructionSet::Avx2)
+    sets.push_back(InstructionSet::Sse2);
+  if (best == InstructionSet::Avx2) sets.push_back(InstructionSet::Avx2);
+  return sets;
+}
+
+std::string getName(InstructionSet set) {
+  switch (set) {
+    case InstructionSet::Scalar: return "scalar";
+    case InstructionSet::Sse2: return "sse2";
+    case InstructionSet::Avx2: return "avx2";
+  }
+  return "?";
+}
+
+constexpr std::uint32_t kVisualCount = 20;
+const std::vector<std::size_t> kWidths = {1, 2, 3, 4, 5, 7, 8, 9, 400};
+
+// Segments that sit on every edge of the hit test, and window depths from
+// the near plane to the far plane (1: nothing hit) and just below it.
+struct Row {
+  std::vector<std::uint8_t> rgba;
+  std::vector<std::uint32_t> segment;
+  std::vector<float> depth;
+};
+Row makeRow(std::size_t width, std::mt19937& random) {
+  static const std::uint32_t kSegments[] = {0,  1,  2,  kVisualCount - 1, kVisualCount,
+                                            kVisualCount + 1, RawCameraImages::kGroundSegment,
+                                            RawCameraImages::kGroundSegment - 1, 0x80000000u, 7};
+  static const float kDepths[] = {0.0f, 0.25f, 0.5f, 0.9f, 0.999f, std::nextafter(1.0f, 0.0f),
+                                  1.0f};
+  Row row;
+  row.rgba.resize(4 * width);
+  for (std::uint8_t& byte : row.rgba) byte = std::uint8_t(random());
+  for (std::size_t col = 0; col < width; ++col) {
+    row.segment.push_back(kSegments[random() % std::size(kSegments)]);
+    const bool any = random() % 2 == 0;
+    row.depth.push_back(any ? std::uniform_real_distribution<float>(0.0f, 1.0f)(random)
+                            : kDepths[random() % std::size(kDepths)]);
+  }
+  return row;
+}
+
+bool isHitByDefinition(std::uint32_t segment, float depth) {
+  RawCameraImages image;
+  image.width = image.height = 1;
+  image.segment = {segment};
+  image.depth = {depth};
+  image.visual_count = kVisualCount;
+  return image.isHit(0);
+}
+
+TEST(ImageRows, RgbIsEachByteOver255InEveryVariant) {
+  std::mt19937 random(1);
+  const float kCanary = -7.0f;
+  for (InstructionSet set : getRunnableSets())
+    for (std::size_t width : kWidths)
+      for (bool pad : {false, true}) {
+        SCOPED_TRACE(getName(set) + " width " + std::to_string(width) + (pad ? " pad" : ""));
+        const Row row = makeRow(width, random);
+        const std::size_t stride = 9;  // three cameras' rgb
+        std::vector<float> rgb(stride * width + 4, kCanary);
+        image_rows::convertRgbRow(row.rgba.data(), width, rgb.data(), stride, pad, set);
+        for (std::size_t col = 0; col < width; ++col) {
+          for (std::size_t i = 0; i < 3; ++i)
+            ASSERT_EQ(rgb[stride * col + i], float(row.rgba[4 * col + i]) / 255.0f)
+                << "column " << col << " channel " << i;
+          // Only a padded row may write the fourth float; nothing further.
+          if (!pad) {
+            ASSERT_EQ(rgb[stride * col + 3], kCanary) << "column " << col;
+          }
+          for (std::size_t i = 4; i < stride; ++i) ASSERT_EQ(rgb[stride * col + i], kCanary);
+        }
+      }
+}
+
+TEST(ImageRows, DepthIsTheLinearDepthOfHitPixelsInEveryVariant) {
+  std::mt19937 random(2);
+  const double near = 0.01, far = 10.0;
+  const float kCanary = -7.0f;
+  std::size_t hits = 0, misses = 0;
+  for (InstructionSet set : getRunnableSets())
+    for (std::size_t width : kWidths) {
+      SCOPED_TRACE(getName(set) + " width " + std::to_string(width));
+      const Row row = makeRow(width, random);
+      const std::size_t stride = 3;
+      std::vector<float> out(stride * width, kCanary);
+      image_rows::linearizeDepthRow(row.segment.data(), row.depth.data(), width, kVisualCount,
+                                    near, far, out.data(), stride, set);
+      for (std::size_t col = 0; col < width; ++col) {
+        const bool hit = isHitByDefinition(row.segment[col], row.depth[col]);
+        ++(hit ? hits : misses);
+        const float expected = hit ? calcLinearDepth(row.depth[col], near, far) : 0.0f;
+        ASSERT_EQ(out[stride * col], expected)
+            << "column " << col << " segment " << row.segment[col] << " depth " << row.depth[col];
+        ASSERT_EQ(out[stride * col + 1], kCanary);
+        ASSERT_EQ(out[stride * col + 2], kCanary);
+      }
+    }
+  // The rows exercise both sides of the test.
+  EXPECT_GT(hits, 100u);
+  EXPECT_GT(misses, 100u);
+}
+
+TEST(ImageRows, MaskBytesAreTheSegmentsMasksInOutputOrder) {
+  std::mt19937 random(3);
+  // Segment s is in mask m when bit m of (s * 37) is set; segment 0 in none.
+  std::vector<std::uint64_t> mask_bytes(kVisualCount + 1, 0);
+  for (std::uint32_t s = 1; s <= kVisualCount; ++s)
+    for (std::uint32_t m = 0; m < 8; ++m)
+      mask_bytes[s] |= std::uint64_t(((s * 37) >> m) & 1u) << (8 * m);
+  const std::uint8_t kCanary = 0xAB;
+  for (std::uint32_t k = 1; k <= 8; ++k)
+    for (std::size_t cameras = 1; cameras <= 3; ++cameras)
+      for (std::size_t width : kWidths) {
+        SCOPED_TRACE("k " + std::to_string(k) + " cameras " + std::to_string(cameras) +
+                     " width " + std::to_string(width));
+        std::vector<Row> rows;
+        std::vector<const std::uint32_t*> segments;
+        std::vector<const float*> depths;
+        for (std::size_t c = 0; c < cameras; ++c) rows.push_back(makeRow(width, random));
+        for (const Row& row : rows) {
+          segments.push_back(row.segment.data());
+          depths.push_back(row.depth.data());
+        }
+        const std::size_t bytes = k * cameras * width;
+        std::vector<std::uint8_t> out(bytes + 8, kCanary);
+        image_rows::writeMaskRow(segments.data(), depths.data(), cameras, width, k, kVisualCount,
+                                 mask_bytes.data(), out.data());
+        for (std::size_t col = 0; col < width; ++col)
+          for (std::size_t c = 0; c < cameras; ++c) {
+            const std::uint32_t s = rows[c].segment[col];
+            const bool in_visual = s >= 1 && s <= kVisualCount && rows[c].depth[col] < 1.0f;
+            for (std::uint32_t m = 0; m < k; ++m)
+              ASSERT_EQ(out[(col * cameras + c) * k + m], in_visual ? ((s * 37) >> m) & 1u : 0u)
+                  << "column " << col << " camera " << c << " mask " << m;
+          }
+        for (std::size_t i = bytes; i < out.size(); ++i) ASSERT_EQ(out[i], kCanary) << i;
+      }
+}
+
+}  // namespace
+}  // namespace manibench
