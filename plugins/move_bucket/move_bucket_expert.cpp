@@ -20,7 +20,9 @@
 namespace move_bucket {
 
 using manibench::sdk::clipNorm;
-using manibench::sdk::clipUnit;
+using manibench::sdk::MobilePandaSpeeds;
+using manibench::sdk::setBaseAction;
+using manibench::sdk::setEeAction;
 using manibench::sdk::getQuaternion;
 using manibench::sdk::getVector3;
 using manibench::sdk::wrapAngle;
@@ -31,8 +33,8 @@ using manibench::sdk::PolicyContext;
 
 namespace {
 
-constexpr double kBaseSpeed = 0.5, kYawSpeed = 3.14, kLiftSpeed = 0.5;  // per unit action
-constexpr double kEeSpeed = 0.5, kEeAngularSpeed = 1.57;
+constexpr double kBaseSpeed = MobilePandaSpeeds::kBase;  // per unit action
+constexpr double kEeSpeed = MobilePandaSpeeds::kEeLinear, kEeAngularSpeed = MobilePandaSpeeds::kEeAngular;
 constexpr double kReach = 0.55;        // m: bucket centre ahead of the base while gripping
 constexpr double kShoulderDrop = 0.2;  // m: TCP below the arm's first joint while gripping
 constexpr double kShoulderAboveLift = 0.1315 + 0.2885;  // first joint above the lift's zero (docs/robot.md)
@@ -232,19 +234,11 @@ Eigen::VectorXd MoveBucketExpert::act(const Observation& observation) {
       angular.z() -= yaw_rate;
     }
     if (phase_ == Phase::kRetreat && phase_steps_ <= 8) linear = Eigen::Vector3d(0, 0, 0.1);
-    const Eigen::Vector3d linear_local = base_rotation.transpose() * linear;
-    const Eigen::Vector3d angular_local = base_rotation.transpose() * angular;
-    for (int i = 0; i < 3; ++i) {
-      action[ee_linear_[a] + i] = clipUnit(linear_local[i] / kEeSpeed);
-      action[ee_angular_[a] + i] = clipUnit(angular_local[i] / kEeAngularSpeed);
-    }
+    setEeAction(action, ee_linear_[a], ee_angular_[a], base_rotation, linear, angular);
     action[gripper_[a]] = gripper;
   }
   const Eigen::Vector2d base_local = Eigen::Rotation2Dd(-yaw).toRotationMatrix() * base_velocity;
-  action[base_] = clipUnit(base_local.x() / kBaseSpeed);
-  action[base_ + 1] = clipUnit(base_local.y() / kBaseSpeed);
-  action[base_ + 2] = clipUnit(yaw_rate / kYawSpeed);
-  action[base_ + 3] = clipUnit(lift_rate / kLiftSpeed);
+  setBaseAction(action, base_, base_local, yaw_rate, lift_rate);
   return action;
 }
 

@@ -20,7 +20,9 @@
 namespace open_cabinet {
 
 using manibench::sdk::clipNorm;
-using manibench::sdk::clipUnit;
+using manibench::sdk::MobilePandaSpeeds;
+using manibench::sdk::setBaseAction;
+using manibench::sdk::setEeAction;
 using manibench::sdk::getQuaternion;
 using manibench::sdk::getVector3;
 using manibench::sdk::Error;
@@ -29,8 +31,8 @@ using manibench::sdk::PolicyContext;
 
 namespace {
 
-constexpr double kBaseSpeed = 0.5, kYawSpeed = 3.14, kLiftSpeed = 0.5;  // per unit action
-constexpr double kEeSpeed = 0.5, kEeAngularSpeed = 1.57;
+constexpr double kBaseSpeed = MobilePandaSpeeds::kBase;  // per unit action
+constexpr double kEeSpeed = MobilePandaSpeeds::kEeLinear, kEeAngularSpeed = MobilePandaSpeeds::kEeAngular;
 constexpr double kDoorLead = 0.02;  // m: how far the goal leads a door's handle
 
 
@@ -193,16 +195,8 @@ Eigen::VectorXd OpenCabinetExpert::act(const Observation& observation) {
   angular = clipNorm(angular, kEeAngularSpeed);
 
   Eigen::VectorXd action = Eigen::VectorXd::Zero(action_dim_);
-  action[base_] = clipUnit(base_local.x() / kBaseSpeed);
-  action[base_ + 1] = clipUnit(base_local.y() / kBaseSpeed);
-  action[base_ + 2] = clipUnit(yaw_rate / kYawSpeed);
-  action[base_ + 3] = clipUnit(lift_rate / kLiftSpeed);
-  const Eigen::Vector3d linear_local = base_rotation.transpose() * arm_velocity;
-  const Eigen::Vector3d angular_local = base_rotation.transpose() * angular;
-  for (int i = 0; i < 3; ++i) {
-    action[ee_linear_ + i] = clipUnit(linear_local[i] / kEeSpeed);
-    action[ee_angular_ + i] = clipUnit(angular_local[i] / kEeAngularSpeed);
-  }
+  setBaseAction(action, base_, base_local, yaw_rate, lift_rate);
+  setEeAction(action, ee_linear_, ee_angular_, base_rotation, arm_velocity, angular);
   action[gripper_] = gripper;
   return action;
 }

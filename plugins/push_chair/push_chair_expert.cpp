@@ -22,7 +22,9 @@
 namespace push_chair {
 
 using manibench::sdk::clipNorm;
-using manibench::sdk::clipUnit;
+using manibench::sdk::MobilePandaSpeeds;
+using manibench::sdk::setBaseAction;
+using manibench::sdk::setEeAction;
 using manibench::sdk::getQuaternion;
 using manibench::sdk::getVector3;
 using manibench::sdk::Error;
@@ -32,8 +34,8 @@ using manibench::sdk::kPi;
 
 namespace {
 
-constexpr double kBaseSpeed = 0.5, kYawSpeed = 3.14, kLiftSpeed = 0.5;  // per unit action
-constexpr double kEeSpeed = 0.5, kEeAngularSpeed = 1.57;
+constexpr double kBaseSpeed = MobilePandaSpeeds::kBase;  // per unit action
+constexpr double kEeSpeed = MobilePandaSpeeds::kEeLinear, kEeAngularSpeed = MobilePandaSpeeds::kEeAngular;
 constexpr double kHandForward = 0.55;   // m: TCPs ahead of the base centre
 constexpr double kHandSide = 0.28;      // m: each TCP off the base's middle line
 constexpr double kBelowSeatTop = 0.04;  // m: the hands' height under the cushion's top
@@ -203,10 +205,7 @@ Eigen::VectorXd PushChairExpert::act(const Observation& observation) {
   const double lift_rate = 3.0 * (lift_goal - lift);
 
   Eigen::VectorXd action = Eigen::VectorXd::Zero(action_dim_);
-  action[base_] = clipUnit(base_local.x() / kBaseSpeed);
-  action[base_ + 1] = clipUnit(base_local.y() / kBaseSpeed);
-  action[base_ + 2] = clipUnit(yaw_rate / kYawSpeed);
-  action[base_ + 3] = clipUnit(lift_rate / kLiftSpeed);
+  setBaseAction(action, base_, base_local, yaw_rate, lift_rate);
   for (int a = 0; a < 2; ++a) {
     Eigen::Vector3d velocity = clipNorm(5.0 * (hand_goal[a] - tcp[a]), kEeSpeed);
     // The command is relative to the moving base and lift: take out what
@@ -217,12 +216,7 @@ Eigen::VectorXd PushChairExpert::act(const Observation& observation) {
     const Eigen::AngleAxisd error(base_rotation * nominal_rotation_[a] * tcp_q[a].toRotationMatrix().transpose());
     Eigen::Vector3d angular = clipNorm(4.0 * error.angle() * error.axis(), kEeAngularSpeed);
     angular.z() -= yaw_rate;
-    const Eigen::Vector3d linear_local = base_rotation.transpose() * velocity;
-    const Eigen::Vector3d angular_local = base_rotation.transpose() * angular;
-    for (int i = 0; i < 3; ++i) {
-      action[ee_linear_[a] + i] = clipUnit(linear_local[i] / kEeSpeed);
-      action[ee_angular_[a] + i] = clipUnit(angular_local[i] / kEeAngularSpeed);
-    }
+    setEeAction(action, ee_linear_[a], ee_angular_[a], base_rotation, velocity, angular);
     action[gripper_[a]] = -1.0;  // closed: a compact fist
   }
   return action;
