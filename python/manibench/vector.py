@@ -5,6 +5,13 @@ modes, its own EGL context, as the evaluation kit's workers do). Workers are
 forked while this process has not rendered anything (no EGL context to
 inherit), else spawned (a fresh interpreter importing manibench.vector).
 
+Steps go through a shared memory block (_core.StepBlock,
+python/src/step_block.hpp): the parent stores the actions and waits; each
+worker answers in C++ (Environment.serve_steps) without Python, writing its
+observation into its slot. Everything else (reset, call, close, errors, the
+auto-reset's new episode) goes through the worker's pipe, pickled; the
+block says when a step's result is there instead.
+
 Auto-reset follows gymnasium's next-step convention: the step on which an
 environment terminates or truncates returns that episode's last
 observation, reward and flags; the next step() ignores that environment's
@@ -25,15 +32,23 @@ from . import _core
 from . import spaces as _spaces
 
 
-def _wait_for_command(conn, spin_wait):
-    # Busy-polls up to spin_wait seconds before blocking: a worker that
-    # sleeps between steps lets its core halt, and on virtual machines the
-    # next step then runs 20-40 % slower (cold caches, the wake-up itself).
-    if spin_wait > 0:
-        deadline = time.perf_counter() + spin_wait
-        while not conn.poll(0) and time.perf_counter() < deadline:
-            pass
-    return conn.recv()
+def _field_bytes(description):
+    """The observation's fields (name, shape, dtype) in the order the
+    workers write them into the step block, and their sizes in bytes."""
+    fields = [(name, tuple(f["shape"]), np.dtype(f["dtype"]))
+              for name, f in description["observation"].items()]
+    return fields, [int(np.prod(shape, dtype=np.int64)) * dtype.itemsize
+                    for _, shape, dtype in fields]
+
+
+def _block_layout(description, num_envs):
+    """StepBlock.create's and attach's arguments after the name."""
+    return (num_envs, description["action_dim"], len(description["success_conditions"]),
+            _field_bytes(description)[1])
+
+
+def _send_error(conn, e):
+    conn.send(("error", (type(e).__name__, str(e), traceback.format_exc())))
 
 
 def _worker(conn, make_kwargs, spin_wait=0.0):
@@ -44,28 +59,57 @@ def _worker(conn, make_kwargs, spin_wait=0.0):
         env = ManibenchEnv(**make_kwargs)
         conn.send(("ok", env.description))
     except BaseException as e:  # the parent re-raises it
-        conn.send(("error", (type(e).__name__, str(e), traceback.format_exc())))
+        _send_error(conn, e)
         conn.close()
         return
-    needs_reset = False
+    # The process that started this one: when it is gone, the pipe says so.
+    parent_pid = os.getppid()
+    block, slot = None, None
     try:
         while True:
-            command, payload = _wait_for_command(conn, spin_wait)
+            if block is not None:
+                # Steps are answered in the block without Python until the
+                # parent sends a command through the pipe, or an episode
+                # that ended gets a step (the auto-reset, answered here).
+                try:
+                    reason = env._env.serve_steps(block, slot, spin_wait, env.max_episode_steps,
+                                                  parent_pid)
+                except Exception as e:  # the step's error, through the pipe
+                    # Finished first: the parent reads the pipe only then,
+                    # and a large message would not fit the pipe's buffer.
+                    block.finish_on_pipe(slot)
+                    _send_error(conn, e)
+                    continue
+                if reason == _core.SERVE_AUTO_RESET:
+                    try:
+                        obs, info = env.reset()
+                        block.set_needs_reset(slot, False)
+                        message = ("ok", (obs, 0.0, False, False, info))
+                    except Exception as e:
+                        message = ("error", (type(e).__name__, str(e), traceback.format_exc()))
+                    block.finish_on_pipe(slot)
+                    conn.send(message)
+                    continue
+            # Another worker may hold the parent's end of this pipe (forked
+            # after it was made), so its end-of-file is not enough to notice
+            # that the parent died.
+            while not conn.poll(0.5):
+                if os.getppid() != parent_pid:
+                    return
+            command, payload = conn.recv()
             try:
-                if command == "reset":
+                if command == "attach":
+                    name, slot, layout = payload
+                    block = _core.StepBlock.attach(name, *layout)
+                    conn.send(("ok", None))
+                elif command == "reset":
                     seed, options = payload
                     obs, info = env.reset(seed=seed, options=options)
-                    needs_reset = False
+                    if block is not None:
+                        block.set_needs_reset(slot, False)
                     conn.send(("ok", (obs, info)))
-                elif command == "step":
-                    if needs_reset:
-                        obs, info = env.reset()
-                        result = (obs, 0.0, False, False, info)
-                        needs_reset = False
-                    else:
-                        result = env.step(payload)
-                        needs_reset = result[2] or result[3]
-                    conn.send(("ok", result))
+                elif command == "episode":
+                    conn.send(("ok", (env._env.object_id, env._env.seed)))
                 elif command == "call":
                     name, args = payload
                     conn.send(("ok", getattr(env, name)(*args)))
@@ -76,7 +120,7 @@ def _worker(conn, make_kwargs, spin_wait=0.0):
                 else:
                     raise ValueError(f"unknown worker command {command!r}")
             except Exception as e:
-                conn.send(("error", (type(e).__name__, str(e), traceback.format_exc())))
+                _send_error(conn, e)
     except (EOFError, KeyboardInterrupt):
         pass
     finally:
@@ -156,6 +200,7 @@ class VectorEnv:
         self.env_id = env_id
         self.context = context
         self._closed = False
+        self._block = None
         self._pipes, self._processes = [], []
         ctx = multiprocessing.get_context(context)
         make_kwargs = dict(make_kwargs, env_id=env_id)
@@ -173,12 +218,40 @@ class VectorEnv:
             self.close(terminate=True)
             raise
         self.description = descriptions[0]
+        try:
+            self._attach_block()
+        except BaseException:
+            self.close(terminate=True)
+            raise
         self.obs_mode = self.description["obs_mode"]
         self.single_observation_space = _spaces.make_observation_space(
             self.description["observation"], self.obs_mode)
         self.single_action_space = _spaces.make_action_space(self.description["action_dim"])
         self.observation_space = _spaces.batch_space(self.single_observation_space, num_envs)
         self.action_space = _spaces.batch_space(self.single_action_space, num_envs)
+
+    def _attach_block(self):
+        """Makes the shared step block and has every worker map it (then
+        the name goes: nothing is left in /dev/shm, whatever happens)."""
+        layout = _block_layout(self.description, self.num_envs)
+        self._block = _core.StepBlock.create(*layout)
+        try:
+            for slot, pipe in enumerate(self._pipes):
+                pipe.send(("attach", (self._block.name, slot, layout)))
+            self._receive_all()
+        finally:
+            self._block.unlink_name()
+        self._fields, field_bytes = _field_bytes(self.description)
+        memory = np.frombuffer(memoryview(self._block), dtype=np.uint8)
+        self._views = []
+        for slot in range(self.num_envs):
+            views = {}
+            for index, ((name, shape, dtype), size) in enumerate(zip(self._fields, field_bytes)):
+                offset = self._block.field_offset(slot, index)
+                views[name] = memory[offset:offset + size].view(dtype).reshape(shape)
+            self._views.append(views)
+        self._object_ids = [None] * self.num_envs
+        self._seeds = [None] * self.num_envs
 
     def _receive_all(self):
         results, error = [], None
@@ -198,6 +271,8 @@ class VectorEnv:
     def _send_all(self, command, payloads):
         if self._closed:
             raise _core.Error("the vector environment is closed")
+        if self._block is not None:  # the workers leave their step loops
+            self._block.post_to_pipe()
         for pipe, payload in zip(self._pipes, payloads):
             try:
                 pipe.send((command, payload))
@@ -218,6 +293,8 @@ class VectorEnv:
             raise ValueError(f"expected {self.num_envs} seeds and options")
         self._send_all("reset", list(zip(seeds, options)))
         results = self._receive_all()
+        for i, (_, info) in enumerate(results):
+            self._object_ids[i], self._seeds[i] = info["object_id"], info["seed"]
         return _stack([r[0] for r in results]), _stack_infos([r[1] for r in results])
 
     def step(self, actions):
@@ -225,18 +302,101 @@ class VectorEnv:
         if actions.ndim != 2 or actions.shape[0] != self.num_envs:
             raise ValueError(f"actions must have shape ({self.num_envs}, action_dim), got "
                              f"{actions.shape}")
-        self._send_all("step", list(actions))
-        results = self._receive_all()
-        obs = _stack([r[0] for r in results])
-        rewards = np.array([r[1] for r in results], dtype=np.float64)
-        terminated = np.array([r[2] for r in results], dtype=bool)
-        truncated = np.array([r[3] for r in results], dtype=bool)
-        return obs, rewards, terminated, truncated, _stack_infos([r[4] for r in results])
+        if actions.shape[1] != self.description["action_dim"]:
+            raise _core.InvalidAction(
+                f"actions must have shape ({self.num_envs}, {self.description['action_dim']}) "
+                f"(the controller {self.description['controller']}), got {actions.shape}")
+        if self._closed:
+            raise _core.Error("the vector environment is closed")
+        self._block.post_step(actions)
+        self._wait_block()
+        (rewards, terminated, truncated, success, elapsed, flags, values, on_pipe,
+         points) = self._block.results()
+        piped, error = {}, None
+        for i in np.flatnonzero(on_pipe):  # auto-resets and errors
+            try:
+                status, payload = self._pipes[i].recv()
+            except EOFError:
+                self._processes[i].join(timeout=5)
+                status, payload = "error", ("Error", f"died (exit code "
+                                                     f"{self._processes[i].exitcode})", "")
+            if status == "error":
+                error = error or _make_error(int(i), payload)
+            else:
+                piped[int(i)] = payload
+        if error is not None:
+            raise error
+        obs = _stack([piped[i][0] if i in piped else self._block_obs(i, points[i])
+                      for i in range(self.num_envs)])
+        if not piped:
+            return obs, rewards, terminated, truncated, self._block_infos(
+                elapsed, success, flags, values)
+        infos = []
+        for i in range(self.num_envs):
+            if i in piped:
+                _, rewards[i], terminated[i], truncated[i], info = piped[i]
+                self._object_ids[i], self._seeds[i] = info["object_id"], info["seed"]
+            else:
+                info = self._make_info(i, elapsed[i], success[i], flags[i], values[i])
+            infos.append(info)
+        return obs, rewards, terminated, truncated, _stack_infos(infos)
+
+    def _wait_block(self):
+        """Waits for every worker's step; a worker that died is an error."""
+        pending = self._block.wait_all(0.25)
+        while pending:
+            for i in pending:
+                process = self._processes[i]
+                if not process.is_alive():
+                    process.join(timeout=5)
+                    raise _core.Error(f"worker {i}: died (exit code {process.exitcode})")
+            pending = self._block.wait_all(0.25)
+
+    def _block_obs(self, i, points):
+        views = self._views[i]
+        if self.obs_mode == "state":
+            return views["state"]
+        if self.obs_mode == "pointcloud":  # without padding, fewer rows
+            return {k: v[:points] if k != "agent" else v for k, v in views.items()}
+        return views
+
+    def _make_info(self, i, elapsed, success, flags, values):
+        """Environment i's step info, as ManibenchEnv.step makes it."""
+        conditions = self.description["success_conditions"]
+        return {"object_id": self._object_ids[i], "seed": self._seeds[i],
+                "elapsed_steps": int(elapsed), "success": bool(success),
+                "eval_info": {c: bool(f) for c, f in zip(conditions, flags)},
+                "eval_values": {c: float(v) for c, v in zip(conditions, values)}}
+
+    def _block_infos(self, elapsed, success, flags, values):
+        """_stack_infos of every environment's _make_info, built from the
+        arrays directly (a plain step: every environment has every key)."""
+        n = self.num_envs
+        conditions = self.description["success_conditions"]
+        eval_info, eval_values = {}, {}
+        for k, c in enumerate(conditions):
+            eval_info[c] = flags[:, k].copy()
+            eval_info["_" + c] = np.ones(n, bool)
+        for k, c in enumerate(conditions):
+            eval_values[c] = values[:, k].copy()
+            eval_values["_" + c] = np.ones(n, bool)
+        return {"object_id": np.array(self._object_ids, dtype=object),
+                "_object_id": np.ones(n, bool),
+                "seed": np.array(self._seeds), "_seed": np.ones(n, bool),
+                "elapsed_steps": elapsed, "_elapsed_steps": np.ones(n, bool),
+                "success": success, "_success": np.ones(n, bool),
+                "eval_info": eval_info, "_eval_info": np.ones(n, bool),
+                "eval_values": eval_values, "_eval_values": np.ones(n, bool)}
 
     def call(self, name, *args):
         """Calls method `name` of every environment; returns the results."""
         self._send_all("call", [(name, args)] * self.num_envs)
-        return self._receive_all()
+        results = self._receive_all()
+        # A call (set_state) may have changed the episodes' objects and seeds.
+        self._send_all("episode", [None] * self.num_envs)
+        for i, (object_id, seed) in enumerate(self._receive_all()):
+            self._object_ids[i], self._seeds[i] = object_id, seed
+        return results
 
     def render(self):
         return np.stack(self.call("render"))
@@ -247,6 +407,8 @@ class VectorEnv:
         if self._closed:
             return
         self._closed = True
+        if self._block is not None:  # the workers leave their step loops
+            self._block.post_to_pipe()
         for pipe, process in zip(self._pipes, self._processes):
             if not terminate and process.is_alive():
                 try:

@@ -13,6 +13,10 @@
 #include <manibench/renderer.hpp>
 #include <manibench/task_name.hpp>
 
+#include "step_block.hpp"
+
+#include <unistd.h>
+
 #include <atomic>
 #include <cstring>
 #include <memory>
@@ -22,6 +26,12 @@
 
 namespace py = pybind11;
 namespace mb = manibench;
+using manibench::python::ServeExit;
+using manibench::python::StepBlock;
+using manibench::python::StepBlockLayout;
+using manibench::python::StepCommand;
+using manibench::python::StepResultPlace;
+using manibench::python::StepSlotHeader;
 
 namespace {
 
@@ -226,6 +236,42 @@ class PyEnvironment {
     return out;
   }
 
+  // make_vec's worker loop (python/manibench/vector.py): takes the
+  // parent's Step commands from `slot` of `block` and answers each in the
+  // block (the scalars, flags and values, the observation's fields in
+  // describeObservation's order), without Python, until the parent posts
+  // ToPipe or a Step arrives for an episode that ended (the auto-reset,
+  // which the package does). An exception of a step leaves the loop as
+  // it would leave step(): the package sends it through the pipe.
+  ServeExit serveSteps(StepBlock& block, std::size_t slot, double spin_wait,
+                       int64_t max_episode_steps, int parent_pid) {
+    mb::Environment& env = upd();
+    const StepBlockLayout& layout = block.getLayout();
+    if (slot >= layout.slot_count) throw std::out_of_range("no slot " + std::to_string(slot));
+    if (layout.action_dim != std::size_t(env.getControllerDescription().action_dim) ||
+        layout.condition_count != env.getTaskDescription().success_conditions.size())
+      throw std::invalid_argument("serve_steps: the block's layout is not this environment's");
+    StepSlotHeader& header = block.updHeader(slot);
+    py::gil_scoped_release release;
+    for (;;) {
+      const StepCommand command = block.waitCommand(slot, spin_wait, parent_pid);
+      if (command != StepCommand::Step) return ServeExit::ToPipe;
+      if (header.needs_reset) return ServeExit::AutoReset;
+      action_ = Eigen::Map<const Eigen::VectorXd>(block.updAction(slot), Eigen::Index(layout.action_dim));
+      const mb::StepResult r = env.step(action_);
+      header.reward = r.reward;
+      header.success = r.success;
+      header.terminated = r.success && env.getOptions().stop_on_success;
+      header.elapsed_steps = int64_t(env.getElapsedSteps());
+      header.truncated = header.elapsed_steps >= max_episode_steps;
+      header.needs_reset = header.terminated || header.truncated;
+      std::memcpy(block.updFlags(slot), r.flags.data(), r.flags.size());
+      std::memcpy(block.updValues(slot), r.values.data(), r.values.size() * sizeof(double));
+      writeObservation(block, slot);
+      block.finish(slot, StepResultPlace::InBlock);
+    }
+  }
+
   py::bytes saveState() {
     const std::vector<uint8_t> blob = upd().saveState();
     return py::bytes(reinterpret_cast<const char*>(blob.data()), blob.size());
@@ -292,11 +338,141 @@ class PyEnvironment {
   }
 
  private:
+  // The observation into the slot's fields (getObservation's arrays, in
+  // its order: the state vector last in the visual modes).
+  void writeObservation(StepBlock& block, std::size_t slot) {
+    const mb::Environment& env = get();
+    const std::vector<std::size_t>& bytes = block.getLayout().field_bytes;
+    std::size_t field = 0;
+    auto put = [&](const void* data, std::size_t size) {
+      if (field >= bytes.size() || size > bytes[field])
+        throw std::logic_error("serve_steps: observation field " + std::to_string(field) +
+                               " does not fit the block");
+      std::memcpy(block.updField(slot, field++), data, size);
+    };
+    const Eigen::VectorXd& state = env.getObservation();
+    const mb::VisualObservation& v = env.getVisualObservation();
+    if (v.mode == mb::ObservationMode::PointCloud) {
+      block.updHeader(slot).point_count = uint32_t(v.points.size());
+      put(v.points.xyz.data(), v.points.xyz.size() * sizeof(float));
+      put(v.points.rgb.data(), v.points.rgb.size() * sizeof(float));
+      put(v.points.masks.data(), v.points.masks.size());
+    } else if (v.mode == mb::ObservationMode::Rgbd) {
+      put(v.rgb.data(), v.rgb.size() * sizeof(float));
+      put(v.depth.data(), v.depth.size() * sizeof(float));
+      put(v.masks.data(), v.masks.size());
+    }
+    put(state.data(), std::size_t(state.size()) * sizeof(double));
+  }
+
   mb::ConfigNode config_;
   std::unique_ptr<mb::Environment> env_;
   Eigen::VectorXd action_;
   mb::CameraImages frame_;
 };
+
+// make_vec's shared block (step_block.hpp) as the package uses it: the
+// parent posts and waits and reads the scalars; numpy views of the
+// observation fields come from `memory` and field_offset().
+void bindStepBlock(py::module_& m) {
+  m.attr("SERVE_TO_PIPE") = int(ServeExit::ToPipe);
+  m.attr("SERVE_AUTO_RESET") = int(ServeExit::AutoReset);
+  auto layout = [](std::size_t slots, std::size_t action_dim, std::size_t conditions,
+                   std::vector<std::size_t> field_bytes) {
+    StepBlockLayout l;
+    l.slot_count = slots;
+    l.action_dim = action_dim;
+    l.condition_count = conditions;
+    l.field_bytes = std::move(field_bytes);
+    return l;
+  };
+  py::class_<StepBlock>(m, "StepBlock", py::buffer_protocol())
+      .def_static(
+          "create",
+          [layout](std::size_t slots, std::size_t action_dim, std::size_t conditions,
+                   std::vector<std::size_t> field_bytes) {
+            return StepBlock::create(layout(slots, action_dim, conditions, std::move(field_bytes)));
+          },
+          py::arg("slots"), py::arg("action_dim"), py::arg("conditions"), py::arg("field_bytes"))
+      .def_static(
+          "attach",
+          [layout](const std::string& name, std::size_t slots, std::size_t action_dim,
+                   std::size_t conditions, std::vector<std::size_t> field_bytes) {
+            return StepBlock::attach(name,
+                                     layout(slots, action_dim, conditions, std::move(field_bytes)));
+          },
+          py::arg("name"), py::arg("slots"), py::arg("action_dim"), py::arg("conditions"),
+          py::arg("field_bytes"))
+      .def_property_readonly("name", &StepBlock::getName)
+      .def("unlink_name", &StepBlock::unlinkName)
+      .def_buffer([](StepBlock& b) {
+        return py::buffer_info(b.updData(), 1, py::format_descriptor<uint8_t>::format(), 1,
+                               {py::ssize_t(b.getSize())}, {py::ssize_t(1)});
+      })
+      .def("field_offset", &StepBlock::getFieldOffset, py::arg("slot"), py::arg("field"))
+      .def(
+          "post_step",
+          [](StepBlock& b, py::array_t<double, py::array::c_style | py::array::forcecast> actions) {
+            const StepBlockLayout& l = b.getLayout();
+            if (actions.ndim() != 2 || std::size_t(actions.shape(0)) != l.slot_count ||
+                std::size_t(actions.shape(1)) != l.action_dim)
+              throw std::invalid_argument("post_step: actions must be (" +
+                                          std::to_string(l.slot_count) + ", " +
+                                          std::to_string(l.action_dim) + ")");
+            b.post(StepCommand::Step, actions.data());
+          },
+          py::arg("actions"))
+      .def("post_to_pipe", [](StepBlock& b) { b.post(StepCommand::ToPipe, nullptr); })
+      .def(
+          "wait_all",
+          [](StepBlock& b, double timeout) {
+            py::gil_scoped_release release;
+            return b.waitAll(timeout);
+          },
+          py::arg("timeout"), "Waits for every slot; returns those not done in `timeout` s.")
+      .def(
+          "results",
+          [](StepBlock& b) {
+            // (rewards, terminated, truncated, success, elapsed_steps,
+            //  flags, values, on_pipe, point_count) over the slots.
+            const StepBlockLayout& l = b.getLayout();
+            const py::ssize_t n = py::ssize_t(l.slot_count), c = py::ssize_t(l.condition_count);
+            py::array_t<double> rewards(n), values({n, c});
+            auto bools = [](std::vector<py::ssize_t> shape) {
+              return py::array(py::dtype("bool"), std::move(shape));
+            };
+            py::array terminated = bools({n}), truncated = bools({n}), success = bools({n}),
+                      on_pipe = bools({n}), flags = bools({n, c});
+            py::array_t<int64_t> elapsed(n), points(n);
+            for (py::ssize_t s = 0; s < n; ++s) {
+              const StepSlotHeader& h = b.updHeader(std::size_t(s));
+              rewards.mutable_at(s) = h.reward;
+              static_cast<bool*>(terminated.mutable_data())[s] = h.terminated;
+              static_cast<bool*>(truncated.mutable_data())[s] = h.truncated;
+              static_cast<bool*>(success.mutable_data())[s] = h.success;
+              static_cast<bool*>(on_pipe.mutable_data())[s] =
+                  h.place == uint32_t(StepResultPlace::OnPipe);
+              elapsed.mutable_at(s) = h.elapsed_steps;
+              points.mutable_at(s) = h.point_count;
+              bool* f = static_cast<bool*>(flags.mutable_data()) + s * c;
+              const uint8_t* src = b.updFlags(std::size_t(s));
+              for (py::ssize_t k = 0; k < c; ++k) f[k] = src[k] != 0;
+              if (c > 0)
+                std::memcpy(values.mutable_data() + s * c, b.updValues(std::size_t(s)),
+                            sizeof(double) * std::size_t(c));
+            }
+            return py::make_tuple(rewards, terminated, truncated, success, elapsed, flags, values,
+                                  on_pipe, points);
+          })
+      .def(
+          "finish_on_pipe",
+          [](StepBlock& b, std::size_t slot) { b.finish(slot, StepResultPlace::OnPipe); },
+          py::arg("slot"), "Worker: the taken Step's result went through the pipe.")
+      .def(
+          "set_needs_reset",
+          [](StepBlock& b, std::size_t slot, bool value) { b.updHeader(slot).needs_reset = value; },
+          py::arg("slot"), py::arg("value"));
+}
 
 }  // namespace
 
@@ -396,5 +572,17 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("elapsed_steps",
                              [](const PyEnvironment& e) { return e.get().getElapsedSteps(); })
       .def_property_readonly("closed", &PyEnvironment::isClosed)
-      .def("close", &PyEnvironment::close);
+      .def("close", &PyEnvironment::close)
+      .def(
+          "serve_steps",
+          [](PyEnvironment& e, StepBlock& block, std::size_t slot, double spin_wait,
+             int64_t max_episode_steps, int parent_pid) {
+            return int(e.serveSteps(block, slot, spin_wait, max_episode_steps, parent_pid));
+          },
+          py::arg("block"), py::arg("slot"), py::arg("spin_wait"), py::arg("max_episode_steps"),
+          py::arg("parent_pid"),
+          "make_vec's worker loop: answers the block's steps until the parent posts ToPipe "
+          "(returns SERVE_TO_PIPE) or an ended episode gets a step (SERVE_AUTO_RESET).");
+
+  bindStepBlock(m);
 }

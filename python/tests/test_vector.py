@@ -1,13 +1,29 @@
 """make_vec: worker processes, batched arrays, auto-reset, seeds per
 environment, the same trajectories as sequential environments."""
+import glob
 import os
 import signal
+import subprocess
+import sys
+import textwrap
+import time
 
 import numpy as np
 import pytest
 
 import manibench
 from conftest import assert_same_obs
+
+
+def assert_same_info(a, b):
+    """Equal info dicts: the same keys, arrays of the same dtype and values."""
+    assert a.keys() == b.keys()
+    for key in a:
+        if isinstance(a[key], dict):
+            assert_same_info(a[key], b[key])
+        else:
+            assert a[key].dtype == b[key].dtype, key
+            assert list(a[key]) == list(b[key]), key
 
 
 def sequential_reference(seed, actions, **make_kwargs):
@@ -19,15 +35,15 @@ def sequential_reference(seed, actions, **make_kwargs):
     for i in range(n):
         with manibench.make("Reach-v0", **make_kwargs) as env:
             obs, _ = env.reset(seed=seed + i)
-            rows, needs_reset = [(obs, 0.0, False, False)], False
+            rows, needs_reset = [(obs, 0.0, False, False, None)], False
             for t in range(actions.shape[0]):
                 if needs_reset:
-                    obs, _ = env.reset()
-                    rows.append((obs, 0.0, False, False))
+                    obs, info = env.reset()
+                    rows.append((obs, 0.0, False, False, info))
                     needs_reset = False
                 else:
-                    obs, reward, terminated, truncated, _ = env.step(actions[t, i])
-                    rows.append((obs, reward, terminated, truncated))
+                    obs, reward, terminated, truncated, info = env.step(actions[t, i])
+                    rows.append((obs, reward, terminated, truncated, info))
                     needs_reset = terminated or truncated
             out.append(rows)
     return out
@@ -46,22 +62,25 @@ def test_vector_env_matches_sequential_envs_with_auto_reset():
         obs, info = venv.reset(seed=20)
         assert obs.shape == (2, dim) and obs.dtype == np.float64
         assert list(info["seed"]) == [20, 21]
-        rows = [(obs, np.zeros(2), np.zeros(2, bool), np.zeros(2, bool))]
+        rows = [(obs, np.zeros(2), np.zeros(2, bool), np.zeros(2, bool), info)]
         for t in range(actions.shape[0]):
             obs, rewards, terminated, truncated, info = venv.step(actions[t])
             assert rewards.shape == (2,) and terminated.dtype == bool
-            rows.append((obs, rewards, terminated, truncated))
+            rows.append((obs, rewards, terminated, truncated, info))
             if t == 4:  # the auto-reset step: reset infos, no step keys
                 assert "success" not in info and info["_seed"].all()
             if t == 3:
                 assert truncated.all() and info["_success"].all()
     expected = sequential_reference(20, actions, overrides=overrides)
-    for t, (obs, rewards, terminated, truncated) in enumerate(rows):
+    for t, (obs, rewards, terminated, truncated, info) in enumerate(rows):
         for i in range(2):
-            e_obs, e_reward, e_terminated, e_truncated = expected[i][t]
+            e_obs, e_reward, e_terminated, e_truncated, _ = expected[i][t]
             assert_same_obs(obs[i], e_obs)
             assert rewards[i] == e_reward
             assert terminated[i] == e_terminated and truncated[i] == e_truncated
+        if t > 0:  # the batched info is gymnasium's stacking of the envs' infos
+            assert_same_info(info, manibench.vector._stack_infos(
+                [expected[0][t][4], expected[1][t][4]]))
     # The two environments ran different episodes (seeds 20 and 21).
     assert not np.array_equal(rows[1][0][0], rows[1][0][1])
 
@@ -133,3 +152,54 @@ def test_spin_wait_changes_the_waiting_not_the_trajectories():
         assert venv.spin_wait == manibench.vector.DEFAULT_SPIN_WAIT
     with pytest.raises(ValueError, match="spin_wait"):
         manibench.make_vec("Reach-v0", num_envs=1, spin_wait=-1)
+
+
+@pytest.mark.parametrize("mode", ["state", "pointcloud", "rgbd"])
+def test_shared_block_observations_are_the_workers_observations(mode):
+    # Steps come back through the shared block; each worker's own
+    # get_obs (pickled through its pipe) is the reference.
+    with manibench.make_vec("Reach-v0", num_envs=2, obs_mode=mode,
+                            overrides={"episode.max_steps": 3}) as venv:
+        venv.reset(seed=5)
+        for t, action in enumerate(np.random.default_rng(6).uniform(-1, 1, size=(5, 2, 2))):
+            obs, *_ = venv.step(action)
+            for i, own in enumerate(venv.call("get_obs")):
+                assert_same_obs(obs[i] if mode == "state" else {k: v[i] for k, v in obs.items()},
+                                own)
+
+
+def test_no_shared_memory_is_left_behind():
+    before = set(glob.glob("/dev/shm/manibench-vec-*"))
+    with manibench.make_vec("Reach-v0", num_envs=2) as venv:
+        venv.reset(seed=0)
+        venv.step(np.zeros((2, 2)))
+        assert set(glob.glob("/dev/shm/manibench-vec-*")) == before  # unlinked once mapped
+    assert set(glob.glob("/dev/shm/manibench-vec-*")) == before
+
+
+def test_workers_of_a_killed_parent_end():
+    # The parent dies without closing anything (SIGKILL): its workers,
+    # waiting in their step loop, notice and end instead of waiting forever.
+    program = textwrap.dedent("""
+        import os, signal, sys
+        import numpy as np
+        import manibench
+        venv = manibench.make_vec("Reach-v0", num_envs=2, context=sys.argv[1])
+        venv.reset(seed=0)
+        venv.step(np.zeros((2, 2)))
+        print(" ".join(str(p.pid) for p in venv._processes), flush=True)
+        os.kill(os.getpid(), signal.SIGKILL)
+    """)
+    for context in ("fork", "spawn"):
+        result = subprocess.run([sys.executable, "-c", program, context], capture_output=True,
+                                text=True, timeout=120)
+        assert result.returncode == -signal.SIGKILL, result.stderr
+        pids = [int(p) for p in result.stdout.split()]
+        assert len(pids) == 2
+        deadline = time.monotonic() + 20
+        alive = pids
+        while alive and time.monotonic() < deadline:
+            time.sleep(0.1)
+            alive = [p for p in alive if os.path.exists(f"/proc/{p}")
+                     and open(f"/proc/{p}/stat").read().split(") ")[1][0] != "Z"]
+        assert not alive, f"{context} workers {alive} outlived their parent"
