@@ -113,8 +113,9 @@ StepBlock StepBlock::create(const StepBlockLayout& layout) {
   const int fd = shm_open(name.c_str(), O_RDWR | O_CREAT | O_EXCL, 0600);
   if (fd < 0)
     throw std::system_error(errno, std::generic_category(), "make_vec: shm_open(" + name + ")");
-  if (ftruncate(fd, off_t(size)) != 0) {
-    const int error = errno;
+  // posix_fallocate reserves the pages now: on a full /dev/shm (a
+  // container's 64 MB) a write into a merely truncated object is a SIGBUS.
+  if (const int error = posix_fallocate(fd, 0, off_t(size)); error != 0) {
     close(fd);
     shm_unlink(name.c_str());
     throw std::system_error(error, std::generic_category(),
@@ -130,7 +131,7 @@ StepBlock StepBlock::create(const StepBlockLayout& layout) {
   }
   auto* bytes = static_cast<std::byte*>(base);
   StepBlock block(name, layout, bytes, size, true);
-  // ftruncate zero-fills; the headers' atomics start at their initializers.
+  // The new object reads as zeros; the headers' atomics start at their initializers.
   for (std::size_t s = 0; s < layout.slot_count; ++s)
     new (bytes + s * block.slot_bytes_) StepSlotHeader();
   return block;
