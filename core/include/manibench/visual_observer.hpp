@@ -120,7 +120,7 @@ class VisualObserver {
   void assemblePointCloud(uint64_t sample_seed, PointCloud& out);
   // World point of sample index `index` (camera start + row * width + col).
   Eigen::Vector3f calcSamplePoint(uint32_t index, std::size_t& camera, std::size_t& pixel) const;
-  void assembleImages(VisualObservation& out) const;
+  void assembleImages(VisualObservation& out);
 
   const Scene& scene_;
   const ObservationOptions& options_;
@@ -135,6 +135,8 @@ class VisualObserver {
   // bytes in memory order, for up to 8 masks: the rgbd masks of a pixel are
   // then one store.
   std::vector<std::uint64_t> segment_mask_bytes_;
+  // rgbd: per camera, one row's mask lookup indices (image_rows.hpp).
+  std::vector<std::uint32_t> mask_index_rows_;
   std::vector<uint32_t> camera_starts_;  // per camera: its first sample index
   PointCloudSampler sampler_;
   Times times_;

@@ -1,6 +1,6 @@
 // The rgbd observation's row kernels (image_rows.hpp): scalar definitions,
 // an SSE2 variant and, where the compiler can target it, an AVX2 variant
-// chosen at run time. Profiling the rgbd bench put its time in the divisions
+// chosen at run time (with FMA). Profiling the rgbd bench put its time in the divisions
 // (byte / 255 and the depth linearization, kept as divisions so that every
 // variant gives the scalar floats), in the branch that zeroes missed pixels,
 // and in the mask bytes' two stores per pixel.
@@ -28,6 +28,10 @@ bool isHit(std::uint32_t segment, float depth, std::uint32_t visual_count) {
          (depth < 1.0f);
 }
 
+std::uint32_t calcMaskIndex(std::uint32_t segment, float depth, std::uint32_t visual_count) {
+  return (segment - 1u < visual_count) & (depth < 1.0f) ? segment : 0u;
+}
+
 void convertRgbRowScalar(const std::uint8_t* rgba, std::size_t begin, std::size_t width,
                          float* rgb, std::size_t stride) {
   for (std::size_t col = begin; col < width; ++col)
@@ -36,10 +40,13 @@ void convertRgbRowScalar(const std::uint8_t* rgba, std::size_t begin, std::size_
 
 void linearizeDepthRowScalar(const std::uint32_t* segment, const float* depth, std::size_t begin,
                              std::size_t width, std::uint32_t visual_count, double near,
-                             double far, float* out, std::size_t stride) {
-  for (std::size_t col = begin; col < width; ++col)
+                             double far, float* out, std::size_t stride,
+                             std::uint32_t* mask_index) {
+  for (std::size_t col = begin; col < width; ++col) {
     out[stride * col] =
         isHit(segment[col], depth[col], visual_count) ? calcLinearDepth(depth[col], near, far) : 0.0f;
+    mask_index[col] = calcMaskIndex(segment[col], depth[col], visual_count);
+  }
 }
 
 #if defined(__SSE2__)
@@ -66,18 +73,23 @@ void convertRgbRowSse2(const std::uint8_t* rgba, std::size_t width, float* rgb,
   }
 }
 
-// The hit test of four pixels as a lane mask: segment - 1 < visual_count
-// unsigned (SSE2 compares signed: both sides offset by 2^31), or the ground;
-// and window depth below 1.
-__m128 calcHitMask(__m128i segments, __m128 depths, std::uint32_t visual_count) {
+// The tests of four pixels as lane masks: a visual's segment (segment - 1
+// < visual_count unsigned; SSE2 compares signed: both sides offset by
+// 2^31), the ground's, and window depth below 1 (the far plane).
+struct HitMasks {
+  __m128i visual_before_far;  // a visual's pixel: in its masks
+  __m128 hit;                 // a visual's or the ground's: has a depth
+};
+HitMasks calcHitMasks(__m128i segments, __m128 depths, std::uint32_t visual_count) {
   const __m128i bias = _mm_set1_epi32(int(0x80000000u));
   const __m128i visual = _mm_cmplt_epi32(
       _mm_xor_si128(_mm_sub_epi32(segments, _mm_set1_epi32(1)), bias),
       _mm_set1_epi32(int(visual_count ^ 0x80000000u)));
   const __m128i ground =
       _mm_cmpeq_epi32(segments, _mm_set1_epi32(int(RawCameraImages::kGroundSegment)));
-  return _mm_and_ps(_mm_castsi128_ps(_mm_or_si128(visual, ground)),
-                    _mm_cmplt_ps(depths, _mm_set1_ps(1.0f)));
+  const __m128i before_far = _mm_castps_si128(_mm_cmplt_ps(depths, _mm_set1_ps(1.0f)));
+  return {_mm_and_si128(visual, before_far),
+          _mm_castsi128_ps(_mm_and_si128(_mm_or_si128(visual, ground), before_far))};
 }
 
 void storeStrided(__m128 values, float* out, std::size_t stride) {
@@ -92,7 +104,7 @@ void storeStrided(__m128 values, float* out, std::size_t stride) {
 // branch predictor's).
 void linearizeDepthRowSse2(const std::uint32_t* segment, const float* depth, std::size_t width,
                            std::uint32_t visual_count, double near, double far, float* out,
-                           std::size_t stride) {
+                           std::size_t stride, std::uint32_t* mask_index) {
   const __m128d two = _mm_set1_pd(2.0), one = _mm_set1_pd(1.0),
                 two_nf = _mm_set1_pd(2 * near * far), sum = _mm_set1_pd(far + near),
                 difference = _mm_set1_pd(far - near);
@@ -106,23 +118,37 @@ void linearizeDepthRowSse2(const std::uint32_t* segment, const float* depth, std
     const __m128i s = _mm_loadu_si128(reinterpret_cast<const __m128i*>(segment + col));
     const __m128 z = _mm_movelh_ps(_mm_cvtpd_ps(linearize(_mm_cvtps_pd(d))),
                                    _mm_cvtpd_ps(linearize(_mm_cvtps_pd(_mm_movehl_ps(d, d)))));
-    storeStrided(_mm_and_ps(z, calcHitMask(s, d, visual_count)), out + stride * col, stride);
+    const HitMasks masks = calcHitMasks(s, d, visual_count);
+    storeStrided(_mm_and_ps(z, masks.hit), out + stride * col, stride);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(mask_index + col),
+                     _mm_and_si128(s, masks.visual_before_far));
   }
-  linearizeDepthRowScalar(segment, depth, col, width, visual_count, near, far, out, stride);
+  linearizeDepthRowScalar(segment, depth, col, width, visual_count, near, far, out, stride,
+                          mask_index);
 }
 #endif
 
 #if defined(MANIBENCH_HAVE_AVX2_VARIANT)
-// Two pixels per 8-float division.
+// byte / 255 without a division: the product with the rounded reciprocal,
+// corrected once by its residual (Markstein: q + (x - q * 255) / 255 with
+// fused operations). For every one of the 256 bytes this is the correctly
+// rounded quotient, i.e. exactly float(byte) / 255.0f (checked by
+// image_rows_test for all 256); a division was a third of the rgb row's time.
+__attribute__((target("avx2,fma"))) inline __m256 divideBy255(__m256 x) {
+  const __m256 k255 = _mm256_set1_ps(255.0f), reciprocal = _mm256_set1_ps(1.0f / 255.0f);
+  const __m256 q = _mm256_mul_ps(x, reciprocal);
+  return _mm256_fmadd_ps(_mm256_fnmadd_ps(q, k255, x), reciprocal, q);
+}
+
+// Two pixels per 8 floats.
 template <bool kPad>
-__attribute__((target("avx2"))) void convertRgbRowAvx2(const std::uint8_t* rgba,
-                                                       std::size_t width, float* rgb,
-                                                       std::size_t stride) {
-  const __m256 k255 = _mm256_set1_ps(255.0f);
+__attribute__((target("avx2,fma"))) void convertRgbRowAvx2(const std::uint8_t* rgba,
+                                                           std::size_t width, float* rgb,
+                                                           std::size_t stride) {
   std::size_t col = 0;
   for (; col + 2 <= width; col += 2) {
     const __m128i bytes = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(rgba + 4 * col));
-    const __m256 unit = _mm256_div_ps(_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes)), k255);
+    const __m256 unit = divideBy255(_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes)));
     const __m128 first = _mm256_castps256_ps128(unit), second = _mm256_extractf128_ps(unit, 1);
     float* pixel = rgb + stride * col;
     if constexpr (kPad) {
@@ -145,7 +171,8 @@ __attribute__((target("avx2"))) void convertRgbRowAvx2(const std::uint8_t* rgba,
 // Four doubles per division.
 __attribute__((target("avx2"))) void linearizeDepthRowAvx2(
     const std::uint32_t* segment, const float* depth, std::size_t width,
-    std::uint32_t visual_count, double near, double far, float* out, std::size_t stride) {
+    std::uint32_t visual_count, double near, double far, float* out, std::size_t stride,
+    std::uint32_t* mask_index) {
   const __m256d two = _mm256_set1_pd(2.0), one = _mm256_set1_pd(1.0),
                 two_nf = _mm256_set1_pd(2 * near * far), sum = _mm256_set1_pd(far + near),
                 difference = _mm256_set1_pd(far - near);
@@ -156,42 +183,45 @@ __attribute__((target("avx2"))) void linearizeDepthRowAvx2(
     const __m256d window = _mm256_sub_pd(_mm256_mul_pd(two, _mm256_cvtps_pd(d)), one);
     const __m128 z = _mm256_cvtpd_ps(
         _mm256_div_pd(two_nf, _mm256_sub_pd(sum, _mm256_mul_pd(window, difference))));
-    storeStrided(_mm_and_ps(z, calcHitMask(s, d, visual_count)), out + stride * col, stride);
+    const HitMasks masks = calcHitMasks(s, d, visual_count);
+    storeStrided(_mm_and_ps(z, masks.hit), out + stride * col, stride);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(mask_index + col),
+                     _mm_and_si128(s, masks.visual_before_far));
   }
   _mm256_zeroupper();  // as in convertRgbRowAvx2
-  linearizeDepthRowScalar(segment, depth, col, width, visual_count, near, far, out, stride);
+  linearizeDepthRowScalar(segment, depth, col, width, visual_count, near, far, out, stride,
+                          mask_index);
 }
 #endif
 
 // Every pixel's K bytes as one 8-byte store, in output order: the bytes past
 // its K belong to pixels written after it. The pixels within 8 bytes of the
-// row's end get exactly K (the row ends the buffer on the last row).
+// row's end get exactly K (the row ends the buffer on the last row). With
+// the lookup index ready (linearizeDepthRow), a pixel is a load, a table
+// load and a store.
 template <std::size_t K>
-void writeMaskRowFor(const std::uint32_t* const* segments, const float* const* depths,
-                     std::size_t cameras, std::size_t width, std::uint32_t visual_count,
-                     const std::uint64_t* mask_bytes, std::uint8_t* out) {
+void writeMaskRowFor(const std::uint32_t* const* mask_indices, std::size_t cameras,
+                     std::size_t width, const std::uint64_t* mask_bytes, std::uint8_t* out) {
   const std::size_t pixels = cameras * width;
   const std::size_t wide = pixels * K >= 8 ? (pixels * K - 8) / K + 1 : 0;
-  std::size_t pixel = 0;
-  for (std::size_t col = 0; col < width; ++col)
-    for (std::size_t c = 0; c < cameras; ++c, ++pixel) {
-      const std::uint32_t s = segments[c][col];
-      // Pixels that hit no visual (nothing, the ground, the far plane) are
-      // in no mask: mask_bytes[0] is 0.
-      const std::uint64_t bytes =
-          mask_bytes[s <= visual_count ? s : 0u] & (0 - std::uint64_t(depths[c][col] < 1.0f));
-      if (pixel < wide)
-        std::memcpy(out + K * pixel, &bytes, 8);
-      else
-        std::memcpy(out + K * pixel, &bytes, K);
-    }
+  // Columns whose every pixel is below `wide`.
+  const std::size_t wide_columns = wide >= cameras ? (wide - cameras) / cameras + 1 : 0;
+  std::uint8_t* pixel_out = out;
+  std::size_t col = 0;
+  for (; col < wide_columns; ++col)
+    for (std::size_t c = 0; c < cameras; ++c, pixel_out += K)
+      std::memcpy(pixel_out, &mask_bytes[mask_indices[c][col]], 8);
+  for (std::size_t pixel = col * cameras; col < width; ++col)
+    for (std::size_t c = 0; c < cameras; ++c, ++pixel, pixel_out += K)
+      std::memcpy(pixel_out, &mask_bytes[mask_indices[c][col]], pixel < wide ? 8 : K);
 }
 
 }  // namespace
 
 InstructionSet getBestInstructionSet() {
 #if defined(MANIBENCH_HAVE_AVX2_VARIANT)
-  static const bool avx2 = __builtin_cpu_supports("avx2");
+  // The AVX2 variants use FMA too (every AVX2 processor but a few of VIA's has it).
+  static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
   if (avx2) return InstructionSet::Avx2;
 #endif
 #if defined(__SSE2__)
@@ -221,33 +251,35 @@ void convertRgbRow(const std::uint8_t* rgba, std::size_t width, float* rgb, std:
 
 void linearizeDepthRow(const std::uint32_t* segment, const float* depth, std::size_t width,
                        std::uint32_t visual_count, double near, double far, float* out,
-                       std::size_t stride, InstructionSet set) {
+                       std::size_t stride, std::uint32_t* mask_index, InstructionSet set) {
   switch (set) {
 #if defined(MANIBENCH_HAVE_AVX2_VARIANT)
     case InstructionSet::Avx2:
-      return linearizeDepthRowAvx2(segment, depth, width, visual_count, near, far, out, stride);
+      return linearizeDepthRowAvx2(segment, depth, width, visual_count, near, far, out, stride,
+                                   mask_index);
 #endif
 #if defined(__SSE2__)
     case InstructionSet::Sse2:
-      return linearizeDepthRowSse2(segment, depth, width, visual_count, near, far, out, stride);
+      return linearizeDepthRowSse2(segment, depth, width, visual_count, near, far, out, stride,
+                                   mask_index);
 #endif
     default:
       return linearizeDepthRowScalar(segment, depth, 0, width, visual_count, near, far, out,
-                                     stride);
+                                     stride, mask_index);
   }
 }
 
-void writeMaskRow(const std::uint32_t* const* segments, const float* const* depths,
-                  std::size_t cameras, std::size_t width, std::uint32_t k,
-                  std::uint32_t visual_count, const std::uint64_t* mask_bytes, std::uint8_t* out) {
-  using Writer = void (*)(const std::uint32_t* const*, const float* const*, std::size_t,
-                          std::size_t, std::uint32_t, const std::uint64_t*, std::uint8_t*);
+void writeMaskRow(const std::uint32_t* const* mask_indices, std::size_t cameras,
+                  std::size_t width, std::uint32_t k, const std::uint64_t* mask_bytes,
+                  std::uint8_t* out) {
+  using Writer = void (*)(const std::uint32_t* const*, std::size_t, std::size_t,
+                          const std::uint64_t*, std::uint8_t*);
   static constexpr Writer kWriters[] = {
       nullptr,             &writeMaskRowFor<1>, &writeMaskRowFor<2>, &writeMaskRowFor<3>,
       &writeMaskRowFor<4>, &writeMaskRowFor<5>, &writeMaskRowFor<6>, &writeMaskRowFor<7>,
       &writeMaskRowFor<8>};
   assert(k >= 1 && k <= 8 && "writeMaskRow: k from 1 to 8");
-  kWriters[k](segments, depths, cameras, width, visual_count, mask_bytes, out);
+  kWriters[k](mask_indices, cameras, width, mask_bytes, out);
 }
 
 }  // namespace manibench::image_rows

@@ -28,18 +28,21 @@ void convertRgbRow(const std::uint8_t* rgba, std::size_t width, float* rgb, std:
 
 // out[stride * col] = calcLinearDepth(depth[col], near, far) where the pixel
 // hit a visual (segments 1..visual_count) or the ground (kGroundSegment)
-// before the far plane, else 0.
+// before the far plane, else 0; and mask_index[col] = the segment where it
+// hit a visual, else 0 (the masks' lookup index, for writeMaskRow: the
+// depth row is read once for both).
 void linearizeDepthRow(const std::uint32_t* segment, const float* depth, std::size_t width,
                        std::uint32_t visual_count, double near, double far, float* out,
-                       std::size_t stride, InstructionSet set = getBestInstructionSet());
+                       std::size_t stride, std::uint32_t* mask_index,
+                       InstructionSet set = getBestInstructionSet());
 
 // The mask bytes of one output row of all cameras, in output order:
-// out[(col * cameras + c) * k + m] is bit m of the segment's masks
-// (mask_bytes[s]: byte m is 0 or 1) where camera c's pixel hit a visual
-// before the far plane, else 0. segments[c] and depths[c] are camera c's
-// row. k at most 8.
-void writeMaskRow(const std::uint32_t* const* segments, const float* const* depths,
-                  std::size_t cameras, std::size_t width, std::uint32_t k,
-                  std::uint32_t visual_count, const std::uint64_t* mask_bytes, std::uint8_t* out);
+// out[(col * cameras + c) * k + m] is byte m of mask_bytes[mask_indices[c][col]]
+// (byte m: 0 or 1, bit m of the segment's masks; mask_bytes[0] is 0).
+// mask_indices[c] is camera c's row of linearizeDepthRow's mask_index. k
+// at most 8.
+void writeMaskRow(const std::uint32_t* const* mask_indices, std::size_t cameras,
+                  std::size_t width, std::uint32_t k, const std::uint64_t* mask_bytes,
+                  std::uint8_t* out);
 
 }  // namespace manibench::image_rows

@@ -179,7 +179,7 @@ Eigen::Vector3f VisualObserver::calcSamplePoint(uint32_t index, std::size_t& cam
                         calcLinearDepth(raw.depth[pixel], raw.near, raw.far));
 }
 
-void VisualObserver::assembleImages(VisualObservation& out) const {
+void VisualObserver::assembleImages(VisualObservation& out) {
   const uint32_t k = masks_.getCount();
   const std::size_t cameras = raw_.size();
   const std::size_t h = std::size_t(raw_.front().height), w = std::size_t(raw_.front().width);
@@ -189,9 +189,20 @@ void VisualObserver::assembleImages(VisualObservation& out) const {
   out.rgb.resize(h * w * 3 * cameras);
   out.depth.resize(h * w * cameras);
   out.masks.resize(h * w * k * cameras);
+  mask_index_rows_.resize(cameras * w);
   const image_rows::InstructionSet set = image_rows::getBestInstructionSet();
-  std::vector<const std::uint32_t*> segment_rows(cameras);
-  std::vector<const float*> depth_rows(cameras);
+  std::array<const std::uint32_t*, 16> index_row_array{};
+  std::vector<const std::uint32_t*> index_row_vector;
+  const std::uint32_t** index_rows = index_row_array.data();
+  if (cameras > index_row_array.size()) {
+    index_row_vector.resize(cameras);
+    index_rows = index_row_vector.data();
+  }
+  for (std::size_t c = 0; c < cameras; ++c) index_rows[c] = mask_index_rows_.data() + c * w;
+  // One scene, so one segment numbering for every camera.
+  assert(std::all_of(raw_.begin(), raw_.end(), [&](const RawCameraImages& raw) {
+    return raw.visual_count == raw_.front().visual_count;
+  }));
   // Row by row (the output rows of all cameras stay in cache), each
   // camera's row from its GL row (bottom-up), with no copy in between.
   for (std::size_t row = 0; row < h; ++row) {
@@ -199,39 +210,29 @@ void VisualObserver::assembleImages(VisualObservation& out) const {
     for (std::size_t c = 0; c < cameras; ++c) {
       const RawCameraImages& raw = raw_[c];
       const std::size_t base = raw.getIndex(int(row), 0);
-      segment_rows[c] = raw.segment.data() + base;
-      depth_rows[c] = raw.depth.data() + base;
       // A camera's fourth float is the next camera's red, written after.
       image_rows::convertRgbRow(raw.rgba.data() + 4 * base, w,
                                 out.rgb.data() + p0 * 3 * cameras + 3 * c, 3 * cameras,
                                 /*pad=*/c + 1 < cameras, set);
-      image_rows::linearizeDepthRow(segment_rows[c], depth_rows[c], w, raw.visual_count,
-                                    raw.near, raw.far, out.depth.data() + p0 * cameras + c,
-                                    cameras, set);
+      image_rows::linearizeDepthRow(raw.segment.data() + base, raw.depth.data() + base, w,
+                                    raw.visual_count, raw.near, raw.far,
+                                    out.depth.data() + p0 * cameras + c, cameras,
+                                    mask_index_rows_.data() + c * w, set);
     }
     if (k == 0) continue;
     std::uint8_t* masks = out.masks.data() + p0 * k * cameras;
     if (k <= 8) {
-      // One scene, so one segment numbering for every camera.
-      assert(std::all_of(raw_.begin(), raw_.end(), [&](const RawCameraImages& raw) {
-        return raw.visual_count == raw_.front().visual_count;
-      }));
-      image_rows::writeMaskRow(segment_rows.data(), depth_rows.data(), cameras, w, k,
-                               raw_.front().visual_count, segment_mask_bytes_.data(), masks);
+      image_rows::writeMaskRow(index_rows, cameras, w, k, segment_mask_bytes_.data(), masks);
       continue;
     }
-    for (std::size_t c = 0; c < cameras; ++c) {
-      const std::uint32_t visual_count = raw_[c].visual_count;
+    // Pixels that hit no visual (nothing, the ground, the far plane) have
+    // index 0, in no mask: segment_bits_[0] is 0.
+    for (std::size_t c = 0; c < cameras; ++c)
       for (std::size_t col = 0; col < w; ++col) {
-        const std::uint32_t s = segment_rows[c][col];
-        // Pixels that hit no visual (nothing, the ground, the far plane)
-        // are in no mask: segment_bits_[0] is 0.
-        const std::uint64_t bits = segment_bits_[s <= visual_count ? s : 0u] &
-                                   (0 - std::uint64_t(depth_rows[c][col] < 1.0f));
+        const std::uint64_t bits = segment_bits_[index_rows[c][col]];
         std::uint8_t* pixel_masks = masks + k * (col * cameras + c);
         for (uint32_t m = 0; m < k; ++m) pixel_masks[m] = (bits >> m) & 1u;
       }
-    }
   }
 }
 
