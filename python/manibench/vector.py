@@ -200,6 +200,7 @@ class VectorEnv:
         self.env_id = env_id
         self.context = context
         self._closed = False
+        self._stepping = False  # a step_async not yet waited for
         self._block = None
         self._pipes, self._processes = [], []
         ctx = multiprocessing.get_context(context)
@@ -271,6 +272,8 @@ class VectorEnv:
     def _send_all(self, command, payloads):
         if self._closed:
             raise _core.Error("the vector environment is closed")
+        if self._stepping:
+            raise _core.Error(f"{command}: a step_async is pending (call step_wait first)")
         if self._block is not None:  # the workers leave their step loops
             self._block.post_to_pipe()
         for pipe, payload in zip(self._pipes, payloads):
@@ -298,6 +301,13 @@ class VectorEnv:
         return _stack([r[0] for r in results]), _stack_infos([r[1] for r in results])
 
     def step(self, actions):
+        self.step_async(actions)
+        return self.step_wait()
+
+    def step_async(self, actions):
+        """Starts a step of every environment and returns at once (as
+        gymnasium's AsyncVectorEnv): the policy can work while the workers
+        step; step_wait() returns the results. One step at a time."""
         actions = np.asarray(actions, dtype=np.float64)
         if actions.ndim != 2 or actions.shape[0] != self.num_envs:
             raise ValueError(f"actions must have shape ({self.num_envs}, action_dim), got "
@@ -308,7 +318,18 @@ class VectorEnv:
                 f"(the controller {self.description['controller']}), got {actions.shape}")
         if self._closed:
             raise _core.Error("the vector environment is closed")
+        if self._stepping:
+            raise _core.Error("step_async: the previous step_async has not been waited for "
+                              "(call step_wait first)")
         self._block.post_step(actions)
+        self._stepping = True
+
+    def step_wait(self):
+        """The results of step_async's step: (obs, rewards, terminated,
+        truncated, info), as step() returns them."""
+        if not self._stepping:
+            raise _core.Error("step_wait: no step_async to wait for")
+        self._stepping = False
         self._wait_block()
         (rewards, terminated, truncated, success, elapsed, flags, values, on_pipe,
          points) = self._block.results()

@@ -203,3 +203,31 @@ def test_workers_of_a_killed_parent_end():
             alive = [p for p in alive if os.path.exists(f"/proc/{p}")
                      and open(f"/proc/{p}/stat").read().split(") ")[1][0] != "Z"]
         assert not alive, f"{context} workers {alive} outlived their parent"
+
+
+def test_step_async_and_step_wait_are_step_in_two_halves():
+    actions = np.random.default_rng(11).uniform(-1, 1, size=(6, 2, 2))
+    runs = []
+    for split in (False, True):
+        with manibench.make_vec("Reach-v0", num_envs=2, overrides={"episode.max_steps": 4}) as venv:
+            rows = [venv.reset(seed=12)[0]]
+            for a in actions:
+                if split:
+                    venv.step_async(a)
+                    rows.append(venv.step_wait()[0])
+                else:
+                    rows.append(venv.step(a)[0])
+        runs.append(np.stack(rows))
+    assert runs[0].tobytes() == runs[1].tobytes()
+    with manibench.make_vec("Reach-v0", num_envs=2) as venv:
+        venv.reset(seed=0)
+        with pytest.raises(manibench.Error, match="no step_async"):
+            venv.step_wait()
+        venv.step_async(np.zeros((2, 2)))
+        with pytest.raises(manibench.Error, match="step_wait first"):
+            venv.step_async(np.zeros((2, 2)))
+        with pytest.raises(manibench.Error, match="step_wait first"):
+            venv.reset(seed=1)
+        obs, rewards, *_ = venv.step_wait()
+        assert obs.shape[0] == 2 and rewards.shape == (2,)
+        venv.step_async(np.zeros((2, 2)))  # closing with a step pending is fine
