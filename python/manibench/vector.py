@@ -253,6 +253,11 @@ class VectorEnv:
             self._views.append(views)
         self._object_ids = [None] * self.num_envs
         self._seeds = [None] * self.num_envs
+        self._episode_arrays = None  # object_id and seed arrays, until they change
+        # Every environment has every key of a plain step's info: one
+        # read-only "_key" array serves them all.
+        self._all_envs = np.ones(self.num_envs, bool)
+        self._all_envs.flags.writeable = False
 
     def _receive_all(self):
         results, error = [], None
@@ -298,6 +303,7 @@ class VectorEnv:
         results = self._receive_all()
         for i, (_, info) in enumerate(results):
             self._object_ids[i], self._seeds[i] = info["object_id"], info["seed"]
+        self._episode_arrays = None
         return _stack([r[0] for r in results]), _stack_infos([r[1] for r in results])
 
     def step(self, actions):
@@ -334,7 +340,7 @@ class VectorEnv:
         (rewards, terminated, truncated, success, elapsed, flags, values, on_pipe,
          points) = self._block.results()
         piped, error = {}, None
-        for i in np.flatnonzero(on_pipe):  # auto-resets and errors
+        for i in (np.flatnonzero(on_pipe) if on_pipe.any() else ()):  # auto-resets, errors
             try:
                 status, payload = self._pipes[i].recv()
             except EOFError:
@@ -357,6 +363,7 @@ class VectorEnv:
             if i in piped:
                 _, rewards[i], terminated[i], truncated[i], info = piped[i]
                 self._object_ids[i], self._seeds[i] = info["object_id"], info["seed"]
+                self._episode_arrays = None
             else:
                 info = self._make_info(i, elapsed[i], success[i], flags[i], values[i])
             infos.append(info)
@@ -391,23 +398,31 @@ class VectorEnv:
 
     def _block_infos(self, elapsed, success, flags, values):
         """_stack_infos of every environment's _make_info, built from the
-        arrays directly (a plain step: every environment has every key)."""
-        n = self.num_envs
+        arrays directly (a plain step: every environment has every key).
+        What does not change from step to step (the "_key" arrays, object
+        ids and seeds within episodes) is shared and read-only: this runs
+        in the parent between two steps of every worker."""
+        if self._episode_arrays is None:
+            object_ids = np.array(self._object_ids, dtype=object)
+            seeds = np.array(self._seeds)
+            object_ids.flags.writeable = seeds.flags.writeable = False
+            self._episode_arrays = (object_ids, seeds)
+        object_ids, seeds = self._episode_arrays
+        everyone = self._all_envs
         conditions = self.description["success_conditions"]
         eval_info, eval_values = {}, {}
         for k, c in enumerate(conditions):
-            eval_info[c] = flags[:, k].copy()
-            eval_info["_" + c] = np.ones(n, bool)
+            eval_info[c] = flags[:, k]
+            eval_info["_" + c] = everyone
         for k, c in enumerate(conditions):
-            eval_values[c] = values[:, k].copy()
-            eval_values["_" + c] = np.ones(n, bool)
-        return {"object_id": np.array(self._object_ids, dtype=object),
-                "_object_id": np.ones(n, bool),
-                "seed": np.array(self._seeds), "_seed": np.ones(n, bool),
-                "elapsed_steps": elapsed, "_elapsed_steps": np.ones(n, bool),
-                "success": success, "_success": np.ones(n, bool),
-                "eval_info": eval_info, "_eval_info": np.ones(n, bool),
-                "eval_values": eval_values, "_eval_values": np.ones(n, bool)}
+            eval_values[c] = values[:, k]
+            eval_values["_" + c] = everyone
+        return {"object_id": object_ids, "_object_id": everyone,
+                "seed": seeds, "_seed": everyone,
+                "elapsed_steps": elapsed, "_elapsed_steps": everyone,
+                "success": success, "_success": everyone,
+                "eval_info": eval_info, "_eval_info": everyone,
+                "eval_values": eval_values, "_eval_values": everyone}
 
     def call(self, name, *args):
         """Calls method `name` of every environment; returns the results."""
@@ -417,6 +432,7 @@ class VectorEnv:
         self._send_all("episode", [None] * self.num_envs)
         for i, (object_id, seed) in enumerate(self._receive_all()):
             self._object_ids[i], self._seeds[i] = object_id, seed
+        self._episode_arrays = None
         return results
 
     def render(self):
