@@ -70,6 +70,14 @@ def make_config_files(config):
     return [os.fspath(c) for c in config]
 
 
+def make_step_info(object_id, seed, elapsed_steps, success, conditions, flags, values):
+    """A step's info: ManibenchEnv.step's, and make_vec's for each worker."""
+    return {"object_id": object_id, "seed": seed, "elapsed_steps": int(elapsed_steps),
+            "success": bool(success),
+            "eval_info": {c: bool(f) for c, f in zip(conditions, flags)},
+            "eval_values": {c: float(v) for c, v in zip(conditions, values)}}
+
+
 class ManibenchEnv(_Base):
     """A task (or fixed-object id) with gymnasium's calling convention.
 
@@ -140,10 +148,8 @@ class ManibenchEnv(_Base):
         reward, done, success, flags, values = self._env.step(np.asarray(action, dtype=np.float64))
         terminated = bool(success and self.stop_on_success)
         truncated = self._env.elapsed_steps >= self.max_episode_steps
-        info = self._make_info()
-        info["success"] = bool(success)
-        info["eval_info"] = dict(zip(self.success_conditions, flags))
-        info["eval_values"] = dict(zip(self.success_conditions, values))
+        info = make_step_info(self._env.object_id, self._env.seed, self._env.elapsed_steps,
+                              success, self.success_conditions, flags, values)
         return self._env.get_observation(), float(reward), terminated, truncated, info
 
     def render(self):

@@ -23,13 +23,13 @@ is drawn from the environment's generator, which reset(seed=...) seeds.
 import builtins
 import multiprocessing
 import os
-import time
 import traceback
 
 import numpy as np
 
 from . import _core
 from . import spaces as _spaces
+from .env import make_step_info
 
 
 def _field_bytes(description):
@@ -47,8 +47,13 @@ def _block_layout(description, num_envs):
             _field_bytes(description)[1])
 
 
+def _error_message(e):
+    """An exception as the ("error", ...) message the parent re-raises."""
+    return ("error", (type(e).__name__, str(e), traceback.format_exc()))
+
+
 def _send_error(conn, e):
-    conn.send(("error", (type(e).__name__, str(e), traceback.format_exc())))
+    conn.send(_error_message(e))
 
 
 def _worker(conn, make_kwargs, spin_wait=0.0):
@@ -86,7 +91,7 @@ def _worker(conn, make_kwargs, spin_wait=0.0):
                         block.set_needs_reset(slot, False)
                         message = ("ok", (obs, 0.0, False, False, info))
                     except Exception as e:
-                        message = ("error", (type(e).__name__, str(e), traceback.format_exc()))
+                        message = _error_message(e)
                     block.finish_on_pipe(slot)
                     conn.send(message)
                     continue
@@ -302,8 +307,7 @@ class VectorEnv:
         self._send_all("reset", list(zip(seeds, options)))
         results = self._receive_all()
         for i, (_, info) in enumerate(results):
-            self._object_ids[i], self._seeds[i] = info["object_id"], info["seed"]
-        self._episode_arrays = None
+            self._set_episode(i, info["object_id"], info["seed"])
         return _stack([r[0] for r in results]), _stack_infos([r[1] for r in results])
 
     def step(self, actions):
@@ -362,10 +366,11 @@ class VectorEnv:
         for i in range(self.num_envs):
             if i in piped:
                 _, rewards[i], terminated[i], truncated[i], info = piped[i]
-                self._object_ids[i], self._seeds[i] = info["object_id"], info["seed"]
-                self._episode_arrays = None
+                self._set_episode(i, info["object_id"], info["seed"])
             else:
-                info = self._make_info(i, elapsed[i], success[i], flags[i], values[i])
+                info = make_step_info(self._object_ids[i], self._seeds[i], elapsed[i], success[i],
+                                      self.description["success_conditions"], flags[i],
+                                      values[i])
             infos.append(info)
         return obs, rewards, terminated, truncated, _stack_infos(infos)
 
@@ -388,16 +393,13 @@ class VectorEnv:
             return {k: v[:points] if k != "agent" else v for k, v in views.items()}
         return views
 
-    def _make_info(self, i, elapsed, success, flags, values):
-        """Environment i's step info, as ManibenchEnv.step makes it."""
-        conditions = self.description["success_conditions"]
-        return {"object_id": self._object_ids[i], "seed": self._seeds[i],
-                "elapsed_steps": int(elapsed), "success": bool(success),
-                "eval_info": {c: bool(f) for c, f in zip(conditions, flags)},
-                "eval_values": {c: float(v) for c, v in zip(conditions, values)}}
+    def _set_episode(self, i, object_id, seed):
+        """Environment i's episode (its step infos' object_id and seed)."""
+        self._object_ids[i], self._seeds[i] = object_id, seed
+        self._episode_arrays = None
 
     def _block_infos(self, elapsed, success, flags, values):
-        """_stack_infos of every environment's _make_info, built from the
+        """_stack_infos of every environment's make_step_info, built from the
         arrays directly (a plain step: every environment has every key).
         What does not change from step to step (the "_key" arrays, object
         ids and seeds within episodes) is shared and read-only: this runs
@@ -412,11 +414,8 @@ class VectorEnv:
         conditions = self.description["success_conditions"]
         eval_info, eval_values = {}, {}
         for k, c in enumerate(conditions):
-            eval_info[c] = flags[:, k]
-            eval_info["_" + c] = everyone
-        for k, c in enumerate(conditions):
-            eval_values[c] = values[:, k]
-            eval_values["_" + c] = everyone
+            eval_info[c], eval_info["_" + c] = flags[:, k], everyone
+            eval_values[c], eval_values["_" + c] = values[:, k], everyone
         return {"object_id": object_ids, "_object_id": everyone,
                 "seed": seeds, "_seed": everyone,
                 "elapsed_steps": elapsed, "_elapsed_steps": everyone,
@@ -431,8 +430,7 @@ class VectorEnv:
         # A call (set_state) may have changed the episodes' objects and seeds.
         self._send_all("episode", [None] * self.num_envs)
         for i, (object_id, seed) in enumerate(self._receive_all()):
-            self._object_ids[i], self._seeds[i] = object_id, seed
-        self._episode_arrays = None
+            self._set_episode(i, object_id, seed)
         return results
 
     def render(self):

@@ -193,5 +193,31 @@ TEST(ImageRows, MaskBytesAreTheSegmentsMasksInOutputOrder) {
       }
 }
 
+TEST(ImageRows, CandidateColumnsAreTheHitPixelsInOrder) {
+  std::mt19937 random(4);
+  std::size_t found = 0;
+  for (bool ground_counts : {false, true})
+    for (std::size_t width : kWidths) {
+      SCOPED_TRACE(std::string(ground_counts ? "ground counts" : "visuals only") + " width " +
+                   std::to_string(width));
+      const Row row = makeRow(width, random);
+      std::vector<std::uint32_t> expected;
+      for (std::size_t col = 0; col < width; ++col) {
+        const std::uint32_t s = row.segment[col];
+        const bool visual = s >= 1 && s <= kVisualCount && row.depth[col] < 1.0f;
+        if (ground_counts ? isHitByDefinition(s, row.depth[col]) : visual)
+          expected.push_back(std::uint32_t(col));
+      }
+      std::vector<std::uint32_t> columns(width + 1, 0xDEADBEEF);
+      const std::size_t count = image_rows::findCandidateColumns(
+          row.segment.data(), row.depth.data(), width, kVisualCount, ground_counts,
+          columns.data());
+      ASSERT_EQ(std::vector<std::uint32_t>(columns.begin(), columns.begin() + count), expected);
+      ASSERT_EQ(columns[width], 0xDEADBEEF);
+      found += count;
+    }
+  EXPECT_GT(found, 100u);
+}
+
 }  // namespace
 }  // namespace manibench

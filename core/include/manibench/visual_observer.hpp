@@ -138,6 +138,7 @@ class VisualObserver {
   // rgbd: per camera, one row's mask lookup indices (image_rows.hpp).
   std::vector<std::uint32_t> mask_index_rows_;
   std::vector<uint32_t> camera_starts_;  // per camera: its first sample index
+  std::vector<uint32_t> candidate_columns_;  // pointcloud: one row's candidates
   PointCloudSampler sampler_;
   Times times_;
 };

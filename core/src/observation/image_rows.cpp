@@ -282,4 +282,26 @@ void writeMaskRow(const std::uint32_t* const* mask_indices, std::size_t cameras,
   kWriters[k](mask_indices, cameras, width, mask_bytes, out);
 }
 
+std::size_t findCandidateColumns(const std::uint32_t* segment, const float* depth,
+                                 std::size_t width, std::uint32_t visual_count,
+                                 bool ground_counts, std::uint32_t* columns) {
+  std::size_t count = 0, col = 0;
+#if defined(__SSE2__)
+  for (; col + 4 <= width; col += 4) {
+    const HitMasks masks =
+        calcHitMasks(_mm_loadu_si128(reinterpret_cast<const __m128i*>(segment + col)),
+                     _mm_loadu_ps(depth + col), visual_count);
+    const __m128 candidate =
+        ground_counts ? masks.hit : _mm_castsi128_ps(masks.visual_before_far);
+    for (unsigned lanes = unsigned(_mm_movemask_ps(candidate)); lanes != 0; lanes &= lanes - 1)
+      columns[count++] = std::uint32_t(col) + std::uint32_t(__builtin_ctz(lanes));
+  }
+#endif
+  for (; col < width; ++col)
+    if (ground_counts ? isHit(segment[col], depth[col], visual_count)
+                      : calcMaskIndex(segment[col], depth[col], visual_count) != 0)
+      columns[count++] = std::uint32_t(col);
+  return count;
+}
+
 }  // namespace manibench::image_rows

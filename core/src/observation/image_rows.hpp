@@ -45,4 +45,15 @@ void writeMaskRow(const std::uint32_t* const* mask_indices, std::size_t cameras,
                   std::size_t width, std::uint32_t k, const std::uint64_t* mask_bytes,
                   std::uint8_t* out);
 
+// The point cloud's candidates of one row (VisualObserver::assemblePointCloud):
+// the columns whose pixel hit a visual before the far plane or, with
+// `ground_counts`, the ground before it, in increasing order, into
+// `columns` (room for `width`). Returns how many. Four pixels per SSE2
+// test: most of a view is sky or floor, which then costs one predictable
+// branch per four pixels instead of two or three data-dependent ones per
+// pixel (those were most of the pointcloud assembly).
+std::size_t findCandidateColumns(const std::uint32_t* segment, const float* depth,
+                                 std::size_t width, std::uint32_t visual_count,
+                                 bool ground_counts, std::uint32_t* columns);
+
 }  // namespace manibench::image_rows

@@ -11,10 +11,6 @@
 #include <cassert>
 #include <cstring>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
 namespace manibench {
 
 namespace {
@@ -23,44 +19,6 @@ double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// Calls add(col), in increasing col, for every pixel of a row that is a
-// point-cloud candidate: it hit a visual (segment 1..visual_count) or, with
-// ground_is_background, the ground, before the far plane (window depth
-// below 1). Four pixels per test: most of a view is sky or floor, which
-// then costs one predictable branch per four pixels instead of two or
-// three data-dependent ones per pixel (the classification was most of the
-// pointcloud assembly).
-template <typename Add>
-void forEachCandidate(const std::uint32_t* segment, const float* depth, std::size_t width,
-                      std::uint32_t visual_count, bool ground_is_background, Add&& add) {
-  auto isCandidate = [&](std::size_t col) {
-    const std::uint32_t s = segment[col];
-    return (s - 1u < visual_count ||
-            (s == RawCameraImages::kGroundSegment && ground_is_background)) &&
-           depth[col] < 1.0f;
-  };
-  std::size_t col = 0;
-#if defined(__SSE2__)
-  // Unsigned s - 1 < visual_count as a signed compare: both sides offset by 2^31.
-  const __m128i bias = _mm_set1_epi32(int(0x80000000u)), one = _mm_set1_epi32(1),
-                limit = _mm_set1_epi32(int(visual_count ^ 0x80000000u)),
-                ground = _mm_set1_epi32(int(RawCameraImages::kGroundSegment)),
-                ground_on = _mm_set1_epi32(ground_is_background ? -1 : 0);
-  const __m128 far_plane = _mm_set1_ps(1.0f);
-  for (; col + 4 <= width; col += 4) {
-    const __m128i s = _mm_loadu_si128(reinterpret_cast<const __m128i*>(segment + col));
-    const __m128 d = _mm_loadu_ps(depth + col);
-    const __m128i visual = _mm_cmplt_epi32(_mm_xor_si128(_mm_sub_epi32(s, one), bias), limit);
-    const __m128i on_ground = _mm_and_si128(_mm_cmpeq_epi32(s, ground), ground_on);
-    const __m128 candidate = _mm_and_ps(_mm_castsi128_ps(_mm_or_si128(visual, on_ground)),
-                                        _mm_cmplt_ps(d, far_plane));
-    for (unsigned lanes = unsigned(_mm_movemask_ps(candidate)); lanes != 0; lanes &= lanes - 1)
-      add(col + std::size_t(__builtin_ctz(lanes)));
-  }
-#endif
-  for (; col < width; ++col)
-    if (isCandidate(col)) add(col);
-}
 }  // namespace
 
 VisualObserver::VisualObserver(const Scene& scene, const ObservationOptions& options,
@@ -160,21 +118,24 @@ void VisualObserver::assemblePointCloud(uint64_t sample_seed, PointCloud& out) {
     camera_starts_.push_back(start);
     const std::size_t width = std::size_t(raw.width);
     const std::uint32_t visual_count = raw.visual_count;
+    candidate_columns_.resize(std::max(candidate_columns_.size(), width));
     for (int row = 0; row < raw.height; ++row) {
       const std::size_t base = raw.getIndex(row, 0);
       const std::uint32_t* segment = raw.segment.data() + base;
       const float* depth = raw.depth.data() + base;
       const uint32_t first = start + uint32_t(row) * uint32_t(width);
-      forEachCandidate(segment, depth, width, visual_count, ground_is_background,
-                       [&](std::size_t col) {
-                         const std::uint32_t s = segment[col];
-                         // A visual's (the ground's segment is above visual_count).
-                         const std::uint64_t bits = s <= visual_count ? segment_bits_[s] : 0;
-                         if (bits != 0)
-                           sampler_.addMasked(first + uint32_t(col), bits);
-                         else
-                           sampler_.addBackground(first + uint32_t(col));
-                       });
+      const std::size_t count = image_rows::findCandidateColumns(
+          segment, depth, width, visual_count, ground_is_background, candidate_columns_.data());
+      for (std::size_t j = 0; j < count; ++j) {
+        const std::uint32_t col = candidate_columns_[j];
+        // A visual's, or the ground's (its segment is above visual_count).
+        const std::uint32_t s = segment[col];
+        const std::uint64_t bits = s <= visual_count ? segment_bits_[s] : 0;
+        if (bits != 0)
+          sampler_.addMasked(first + col, bits);
+        else
+          sampler_.addBackground(first + col);
+      }
     }
     start += uint32_t(width * std::size_t(raw.height));
   }
