@@ -231,3 +231,19 @@ def test_step_async_and_step_wait_are_step_in_two_halves():
         obs, rewards, *_ = venv.step_wait()
         assert obs.shape[0] == 2 and rewards.shape == (2,)
         venv.step_async(np.zeros((2, 2)))  # closing with a step pending is fine
+
+
+def test_bad_actions_and_blocks_are_errors_that_say_what():
+    with manibench.make_vec("Reach-v0", num_envs=2) as venv:
+        venv.reset(seed=0)
+        with pytest.raises(manibench.InvalidAction, match=r"\(2, 2\).*got \(2, 5\)"):
+            venv.step(np.zeros((2, 5)))
+        venv.step(np.zeros((2, 2)))  # nothing was posted: the next step works
+    with pytest.raises(RuntimeError, match=r"shm_open\(/manibench-vec-none\): No such file"):
+        manibench._core.StepBlock.attach("/manibench-vec-none", 1, 2, 0, [16])
+    block = manibench._core.StepBlock.create(1, 2, 0, [16])
+    try:
+        with pytest.raises(RuntimeError, match="different observation layouts"):
+            manibench._core.StepBlock.attach(block.name, 1, 2, 0, [4096])
+    finally:
+        block.unlink_name()
