@@ -3,7 +3,7 @@
 // per joint of an object named in its configuration) declares that layout
 // in describe(), before buildScene loads the URDF.
 //
-// The host's rules (core/src/scene/urdf_model.cpp, docs/urdf.md), which
+// The host's rules (core/scene/urdf_model.cpp, docs/urdf.md), which
 // tests/sdk/urdf_joints_test.cpp checks against the host itself: movable
 // joints depth first from the root link, each link's child joints in file
 // order; fixed joints merged (their child's joints follow in place); a
