@@ -4,7 +4,7 @@
 // in describe(), before buildScene loads the URDF.
 //
 // The host's rules (core/scene/urdf_model.cpp, docs/urdf.md), which
-// tests/sdk/urdf_joints_test.cpp checks against the host itself: movable
+// tests/kit/urdf_joints_test.cpp checks against the host itself: movable
 // joints depth first from the root link, each link's child joints in file
 // order; fixed joints merged (their child's joints follow in place); a
 // planar joint is three joints NAME_x, NAME_y (prismatic) and NAME_yaw
@@ -13,7 +13,7 @@
 // refused by the host (a missing mesh, a bad inertia), with its reason.
 #pragma once
 
-#include <manibench/sdk/common.hpp>
+#include <manibench/kit/common.hpp>
 
 #include <boost/property_tree/ptree.hpp>
 #include <boost/property_tree/xml_parser.hpp>
@@ -27,7 +27,7 @@
 #include <string>
 #include <vector>
 
-namespace manibench::sdk {
+namespace manibench::kit::urdf {
 
 struct UrdfJoint {
   std::string name;
@@ -178,4 +178,4 @@ inline UrdfJoints inspectUrdfFile(const std::string& path) {
   return inspectUrdf(text.str(), path);
 }
 
-}  // namespace manibench::sdk
+}  // namespace manibench::kit::urdf

@@ -1,7 +1,7 @@
-// The SDK's mobile Panda facts (sdk/include/manibench/sdk/mobile_panda.hpp)
+// The SDK's mobile Panda facts (sdk/include/manibench/kit/mobile_panda.hpp)
 // on the robots of assets/robots: joints, initial configuration with the
 // task's lift, head cameras at the task's height, the agent state layout.
-#include <manibench/sdk/mobile_panda.hpp>
+#include <manibench/kit/mobile_panda.hpp>
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 
 namespace {
 
-namespace mobile_panda = manibench::sdk::mobile_panda;
+namespace mobile_panda = manibench::kit::mobile_panda;
 const std::string kRobots = std::string(MANIBENCH_TEST_SOURCE_DIR) + "/assets/robots";
 
 TEST(MobilePanda, FactsOfBothRobotsForATask) {

@@ -17,7 +17,7 @@
 // header knows folders, URDF structure and geometry, nothing else.
 #pragma once
 
-#include <manibench/sdk/common.hpp>
+#include <manibench/kit/common.hpp>
 
 #include <boost/property_tree/ptree.hpp>
 #include <boost/property_tree/xml_parser.hpp>
@@ -34,7 +34,7 @@
 #include <string>
 #include <vector>
 
-namespace manibench::sdk::partnet {
+namespace manibench::kit::partnet {
 
 // An axis-aligned box grown point by point; empty until the first point.
 struct Bounds {
@@ -563,4 +563,4 @@ inline Object loadObject(const std::string& folder, const std::string& id, doubl
   return object;
 }
 
-}  // namespace manibench::sdk::partnet
+}  // namespace manibench::kit::partnet

@@ -1,9 +1,9 @@
-// sdk::inspectUrdf: the joint vector a plugin can know before its scene
+// kit::urdf::inspectUrdf: the joint vector a plugin can know before its scene
 // exists must be the one the host builds. Checked against the host's own
 // Scene on the robots, the PartNet fixture and a file written to exercise
 // the ordering rules (out-of-order children, fixed joints, planar, limits).
 #include <manibench/scene.hpp>
-#include <manibench/sdk/urdf_joints.hpp>
+#include <manibench/kit/urdf.hpp>
 
 #include <gtest/gtest.h>
 
@@ -27,7 +27,7 @@ const char* typeName(JointType type) {
 }
 
 // The SDK's reading of `path` equals the host's joint vector of it.
-void expectSameAsTheHost(const sdk::UrdfJoints& inspected, Scene& scene, int articulation) {
+void expectSameAsTheHost(const kit::urdf::UrdfJoints& inspected, Scene& scene, int articulation) {
   const std::vector<JointDescription>& host = scene.getJoints(articulation);
   ASSERT_EQ(inspected.joints.size(), host.size());
   for (std::size_t i = 0; i < host.size(); ++i) {
@@ -49,7 +49,7 @@ TEST(UrdfJoints, TheRobotsAndAPartNetObjectGiveTheHostsJointVector) {
     Scene scene;
     const int a = scene.addUrdfFile(path, "a", Pose(), true);
     scene.finalize();
-    const sdk::UrdfJoints inspected = sdk::inspectUrdfFile(path);
+    const kit::urdf::UrdfJoints inspected = kit::urdf::inspectUrdfFile(path);
     EXPECT_GT(inspected.joints.size(), 1u);
     expectSameAsTheHost(inspected, scene, a);
   }
@@ -76,7 +76,7 @@ TEST(UrdfJoints, OrderFixedJointsPlanarAndLimitsFollowTheHostsRules) {
   Scene scene;
   const int r = scene.addUrdfString(urdf, "", "r", Pose(), true);
   scene.finalize();
-  const sdk::UrdfJoints inspected = sdk::inspectUrdf(urdf, "ordering.urdf");
+  const kit::urdf::UrdfJoints inspected = kit::urdf::inspectUrdf(urdf, "ordering.urdf");
   expectSameAsTheHost(inspected, scene, r);
   ASSERT_EQ(inspected.joints.size(), 7u);
   EXPECT_EQ(inspected.joints[0].name, "planar_x");
@@ -85,17 +85,17 @@ TEST(UrdfJoints, OrderFixedJointsPlanarAndLimitsFollowTheHostsRules) {
 }
 
 TEST(UrdfJoints, BadFilesAreRefusedNamingThem) {
-  expectMentions(catchMessage<sdk::Error>([] { sdk::inspectUrdf("<robot name=\"r\">", "cut.urdf"); }),
+  expectMentions(catchMessage<sdk::Error>([] { kit::urdf::inspectUrdf("<robot name=\"r\">", "cut.urdf"); }),
                  {"cut.urdf:1", "not valid XML"});
-  expectMentions(catchMessage<sdk::Error>([] { sdk::inspectUrdfFile("/no/such.urdf"); }),
+  expectMentions(catchMessage<sdk::Error>([] { kit::urdf::inspectUrdfFile("/no/such.urdf"); }),
                  {"/no/such.urdf", "cannot read"});
   expectMentions(catchMessage<sdk::Error>([] {
-                   sdk::inspectUrdf("<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/></robot>", "two.urdf");
+                   kit::urdf::inspectUrdf("<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/></robot>", "two.urdf");
                  }),
                  {"two.urdf", "expected one root link, found 2"});
   expectMentions(
       catchMessage<sdk::Error>([] {
-        sdk::inspectUrdf("<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/><joint name=\"j\" type=\"revolute\">"
+        kit::urdf::inspectUrdf("<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/><joint name=\"j\" type=\"revolute\">"
                          "<parent link=\"a\"/><child link=\"b\"/><limit lower=\"x\" upper=\"1\"/></joint></robot>",
                          "nan.urdf");
       }),

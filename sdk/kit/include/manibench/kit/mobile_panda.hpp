@@ -3,11 +3,10 @@
 // their YAML facts (joints, initial configuration with the task's lift
 // height, head cameras at the task's height) and the robot's own part of
 // a state observation (ManiSkill's agent vector with every joint, then each
-// arm's TCP pose). Header-only; include <manibench/sdk/mobile_panda.hpp>.
+// arm's TCP pose). Header-only; include <manibench/kit/mobile_panda.hpp>.
 #pragma once
 
-#include <manibench/sdk/common.hpp>
-#include <manibench/sdk/scene_view.hpp>
+#include <manibench/kit/common.hpp>
 
 #include <yaml-cpp/yaml.h>
 
@@ -15,7 +14,7 @@
 #include <string>
 #include <vector>
 
-namespace manibench::sdk::mobile_panda {
+namespace manibench::kit::mobile_panda {
 
 // Finger pad centre in its finger's frame (the URDF's pad collision box).
 inline const Eigen::Vector3d& getPadOffset() {
@@ -186,4 +185,4 @@ class AgentState {
   std::vector<mb_id> fingers_, tcps_;
 };
 
-}  // namespace manibench::sdk::mobile_panda
+}  // namespace manibench::kit::mobile_panda

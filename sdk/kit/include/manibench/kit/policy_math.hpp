@@ -4,7 +4,7 @@
 // controllers' actions.
 #pragma once
 
-#include <manibench/sdk/numbers.hpp>
+#include <manibench/kit/common.hpp>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -13,7 +13,7 @@
 #include <cmath>
 #include <cstdint>
 
-namespace manibench::sdk {
+namespace manibench::kit {
 
 // The 3 values of `state` from `at`.
 inline Eigen::Vector3d getVector3(const Eigen::VectorXd& state, uint32_t at) { return state.segment<3>(at); }
@@ -71,4 +71,4 @@ inline void setEeAction(Eigen::VectorXd& action, uint32_t linear_at, uint32_t an
   }
 }
 
-}  // namespace manibench::sdk
+}  // namespace manibench::kit

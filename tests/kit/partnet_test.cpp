@@ -1,10 +1,10 @@
-// The SDK's PartNet-Mobility reader (sdk/include/manibench/sdk/partnet.hpp)
+// The SDK's PartNet-Mobility reader (sdk/include/manibench/kit/partnet.hpp)
 // on the hand-made fixture tests/fixtures/partnet_mini and on broken copies
 // of it: folders and splits, the URDF as a kinematic model, semantics,
 // completed and scaled URDF text (which the real scene must load), and
 // errors that name the file and the element.
 #include <manibench/scene.hpp>
-#include <manibench/sdk/partnet.hpp>
+#include <manibench/kit/partnet.hpp>
 
 #include <gtest/gtest.h>
 
@@ -17,7 +17,7 @@
 namespace {
 
 namespace fs = std::filesystem;
-namespace partnet = manibench::sdk::partnet;
+namespace partnet = manibench::kit::partnet;
 using manibench::sdk::Error;
 
 const std::string kMini = std::string(MANIBENCH_TEST_SOURCE_DIR) + "/tests/fixtures/partnet_mini";
