@@ -18,19 +18,6 @@
 #include <cmath>
 
 namespace move_bucket {
-
-using manibench::kit::clipNorm;
-using manibench::kit::MobilePandaSpeeds;
-using manibench::kit::setBaseAction;
-using manibench::kit::setEeAction;
-using manibench::kit::getQuaternion;
-using manibench::kit::getVector3;
-using manibench::kit::wrapAngle;
-using manibench::sdk::Error;
-using manibench::sdk::kPi;
-using manibench::sdk::Observation;
-using manibench::sdk::PolicyContext;
-
 namespace {
 
 constexpr double kBaseSpeed = MobilePandaSpeeds::kBase;  // per unit action
@@ -42,7 +29,6 @@ constexpr double kPreGraspHeight = 0.08;  // above the rim
 constexpr double kGripDepth = 0.013;      // TCP below the rim top (pads 4 mm below it)
 constexpr double kLiftBy = 0.25;          // the platform is 0.2 m tall
 constexpr double kCarrySpeed = 0.4, kCarryAcceleration = 0.6;  // m/s, m/s^2
-
 
 // TCP orientation pointing down with the fingers opening along `across`
 // (horizontal): z = -world z, y = across, x = y cross z.
@@ -56,56 +42,24 @@ Eigen::Matrix3d pointingDown(const Eigen::Vector3d& across) {
 
 }  // namespace
 
-MoveBucketExpert::MoveBucketExpert(const PolicyContext& context) : action_dim_(context.action.dim) {
-  if (context.task_name != "MoveBucket-v0")
-    throw Error("move_bucket_expert drives MoveBucket-v0, not '" + context.task_name + "'", MB_INVALID_ARGUMENT);
-  if (context.observation_mode != "state" || context.observation.dim != ObservationLayout::kDim)
-    throw Error("move_bucket_expert needs the state observation (" + std::to_string(ObservationLayout::kDim) +
-                    " values), got mode '" + context.observation_mode + "' with " +
-                    std::to_string(context.observation.dim),
-                MB_INVALID_ARGUMENT);
-  const std::vector<std::pair<std::string, uint32_t>> wanted = {
-      {"base_forward", 1},     {"base_left", 1},       {"base_yaw", 1},       {"lift", 1},
-      {"right_ee_linear", 3},  {"right_ee_angular", 3}, {"right_gripper", 1}, {"left_ee_linear", 3},
-      {"left_ee_angular", 3},  {"left_gripper", 1}};
-  for (const auto& [name, size] : wanted) {
-    const manibench::sdk::SegmentInfo* s = context.action.find(name);
-    if (s == nullptr || s->size != size)
-      throw Error("move_bucket_expert needs the mobile_panda_ee controller on the dual-arm robot (action segment '" +
-                      name + "' of size " + std::to_string(size) + " is missing); run it with --controller "
-                      "mobile_panda_ee",
-                  MB_INVALID_ARGUMENT);
-  }
-  base_ = context.action.get("base_forward").offset;
-  if (context.action.get("base_left").offset != base_ + 1 || context.action.get("base_yaw").offset != base_ + 2 ||
-      context.action.get("lift").offset != base_ + 3)
-    throw Error("move_bucket_expert: base_forward, base_left, base_yaw, lift must be consecutive", MB_INVALID_ARGUMENT);
-  int i = 0;
-  for (const char* side : {"right", "left"}) {
-    ee_linear_[std::size_t(i)] = context.action.get(std::string(side) + "_ee_linear").offset;
-    ee_angular_[std::size_t(i)] = context.action.get(std::string(side) + "_ee_angular").offset;
-    gripper_[std::size_t(i)] = context.action.get(std::string(side) + "_gripper").offset;
-    ++i;
-  }
-}
+MoveBucketExpert::MoveBucketExpert(const sdk::PolicyContext& context)
+    : Expert(context, "move_bucket_expert", {"MoveBucket-v0"}, ObservationLayout::kDim, 2) {}
 
-void MoveBucketExpert::reset(uint64_t) {
-  phase_ = Phase::kApproach;
-  phase_steps_ = 0;
+void MoveBucketExpert::reset(uint64_t seed) {
+  Expert::reset(seed);
   carry_speed_ = 0;
   settled_steps_ = 0;
 }
 
-Eigen::VectorXd MoveBucketExpert::act(const Observation& observation) {
+Eigen::VectorXd MoveBucketExpert::act(const sdk::Observation& observation) {
   using L = ObservationLayout;
   const Eigen::VectorXd& s = observation.state;
-  const Eigen::Vector2d base(s[L::kBasePosition], s[L::kBasePosition + 1]);
-  const double yaw = s[L::kBaseYaw];
-  const double lift = s[L::kJointPositions + 3];
-  const Eigen::Matrix3d base_rotation = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  const std::array<Eigen::Vector3d, 2> tcp = {getVector3(s, L::kRightTcpPose), getVector3(s, L::kLeftTcpPose)};
-  const std::array<Eigen::Matrix3d, 2> tcp_rotation = {getQuaternion(s, L::kRightTcpPose + 3).toRotationMatrix(),
-                                                       getQuaternion(s, L::kLeftTcpPose + 3).toRotationMatrix()};
+  const mobile_panda::AgentOffsets::Reading robot = agent_.read(s);
+  const Eigen::Vector2d& base = robot.base;
+  const double yaw = robot.yaw, lift = robot.lift;
+  const Eigen::Matrix3d& base_rotation = robot.base_rotation;
+  const std::vector<Eigen::Vector3d>& tcp = robot.tcp;
+  const std::vector<Eigen::Matrix3d>& tcp_rotation = robot.tcp_rotation;
   const Eigen::Vector3d bucket = getVector3(s, L::kBucketPose);
   const Eigen::Matrix3d bucket_rotation = getQuaternion(s, L::kBucketPose + 3).toRotationMatrix();
   const Eigen::Vector3d bucket_velocity = getVector3(s, L::kBucketVelocity);
@@ -115,10 +69,6 @@ Eigen::VectorXd MoveBucketExpert::act(const Observation& observation) {
   constexpr double dt = 0.05;  // one env step
 
   ++phase_steps_;
-  auto next = [this](Phase p) {
-    phase_ = p;
-    phase_steps_ = 0;
-  };
 
   // The grip axis: the bucket's y in the plane. At the start the base's y
   // axis is put along it, whichever sign turns the base less; each arm's
@@ -137,7 +87,7 @@ Eigen::VectorXd MoveBucketExpert::act(const Observation& observation) {
   // reaching, else the arms hold; base velocity (world), yaw rate, lift
   // rate, grippers.
   bool reaching = false;
-  std::array<Eigen::Vector3d, 2> goal = tcp;
+  std::array<Eigen::Vector3d, 2> goal = {tcp[0], tcp[1]};
   Eigen::Vector2d base_velocity = Eigen::Vector2d::Zero();
   double yaw_rate = 0, lift_rate = 0, gripper = 1.0;
   const double side[2] = {-1.0, 1.0};  // right arm on the base's -y side
@@ -163,7 +113,7 @@ Eigen::VectorXd MoveBucketExpert::act(const Observation& observation) {
       reaching = true;
       rimGoal(kPreGraspHeight);
       const double base_error = approach(rim_centre.z() + kPreGraspHeight);
-      if ((base_error < 0.02 && tcpError() < 0.015) || (phase_steps_ > 80 && tcpError() < 0.03)) next(Phase::kDescend);
+      if ((base_error < 0.02 && tcpError() < 0.015) || (phase_steps_ > 80 && tcpError() < 0.03)) enter(Phase::kDescend);
       break;
     }
     case Phase::kDescend:
@@ -171,7 +121,7 @@ Eigen::VectorXd MoveBucketExpert::act(const Observation& observation) {
       rimGoal(-kGripDepth);
       approach(rim_centre.z() + kPreGraspHeight);
       lift_rate = 0;
-      if (tcpError() < 0.003 || phase_steps_ > 25) next(Phase::kSqueeze);
+      if (tcpError() < 0.003 || phase_steps_ > 25) enter(Phase::kSqueeze);
       break;
     case Phase::kSqueeze:
       reaching = true;
@@ -180,13 +130,13 @@ Eigen::VectorXd MoveBucketExpert::act(const Observation& observation) {
       if (phase_steps_ >= 8) {
         grasp_lift_ = lift;
         held_yaw_ = yaw;
-        next(Phase::kLift);
+        enter(Phase::kLift);
       }
       break;
     case Phase::kLift:
       gripper = -1.0;
       lift_rate = std::clamp(3.0 * (grasp_lift_ + kLiftBy - lift), -0.3, 0.3);
-      if (lift > grasp_lift_ + kLiftBy - 0.02 || phase_steps_ > 30) next(Phase::kCarry);
+      if (lift > grasp_lift_ + kLiftBy - 0.02 || phase_steps_ > 30) enter(Phase::kCarry);
       break;
     case Phase::kCarry: {
       gripper = -1.0;
@@ -197,7 +147,7 @@ Eigen::VectorXd MoveBucketExpert::act(const Observation& observation) {
       carry_speed_ = std::min(wanted, carry_speed_ + kCarryAcceleration * dt);
       base_velocity = distance > 1e-6 ? Eigen::Vector2d(carry_speed_ * error / distance) : Eigen::Vector2d::Zero();
       yaw_rate = std::clamp(2.5 * wrapAngle(held_yaw_ - yaw), -0.5, 0.5);
-      if (distance < 0.015 && bucket_velocity.head<2>().norm() < 0.05) next(Phase::kLower);
+      if (distance < 0.015 && bucket_velocity.head<2>().norm() < 0.05) enter(Phase::kLower);
       break;
     }
     case Phase::kLower: {
@@ -205,12 +155,12 @@ Eigen::VectorXd MoveBucketExpert::act(const Observation& observation) {
       const double clearance = bucket.z() - platform_top;
       lift_rate = -std::clamp(3.0 * (clearance + 0.01), 0.03, 0.25);
       settled_steps_ = clearance < 0.004 && std::abs(bucket_velocity.z()) < 0.02 ? settled_steps_ + 1 : 0;
-      if (settled_steps_ >= 2) next(Phase::kRelease);
+      if (settled_steps_ >= 2) enter(Phase::kRelease);
       break;
     }
     case Phase::kRelease:
       gripper = 1.0;
-      if (phase_steps_ >= 6) next(Phase::kRetreat);
+      if (phase_steps_ >= 6) enter(Phase::kRetreat);
       break;
     case Phase::kRetreat:
       gripper = 1.0;
@@ -221,7 +171,7 @@ Eigen::VectorXd MoveBucketExpert::act(const Observation& observation) {
   // Arms: servo the TCPs to their goals, pointing down with the fingers
   // across the rim; the command is relative to the moving base, so take
   // out what the base, its turning and the lift do to the TCP.
-  Eigen::VectorXd action = Eigen::VectorXd::Zero(action_dim_);
+  Eigen::VectorXd action = Eigen::VectorXd::Zero(action_.dim);
   for (std::size_t a = 0; a < 2; ++a) {
     Eigen::Vector3d linear = Eigen::Vector3d::Zero(), angular = Eigen::Vector3d::Zero();
     if (reaching) {
@@ -234,11 +184,11 @@ Eigen::VectorXd MoveBucketExpert::act(const Observation& observation) {
       angular.z() -= yaw_rate;
     }
     if (phase_ == Phase::kRetreat && phase_steps_ <= 8) linear = Eigen::Vector3d(0, 0, 0.1);
-    setEeAction(action, ee_linear_[a], ee_angular_[a], base_rotation, linear, angular);
-    action[gripper_[a]] = gripper;
+    setEeAction(action, action_.arms[a].linear, action_.arms[a].angular, base_rotation, linear, angular);
+    action[action_.arms[a].gripper] = gripper;
   }
   const Eigen::Vector2d base_local = Eigen::Rotation2Dd(-yaw).toRotationMatrix() * base_velocity;
-  setBaseAction(action, base_, base_local, yaw_rate, lift_rate);
+  setBaseAction(action, action_.base, base_local, yaw_rate, lift_rate);
   return action;
 }
 

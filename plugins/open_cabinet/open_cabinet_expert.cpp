@@ -18,70 +18,30 @@
 #include <cmath>
 
 namespace open_cabinet {
-
-using manibench::kit::clipNorm;
-using manibench::kit::MobilePandaSpeeds;
-using manibench::kit::setBaseAction;
-using manibench::kit::setEeAction;
-using manibench::kit::getQuaternion;
-using manibench::kit::getVector3;
-using manibench::sdk::Error;
-using manibench::sdk::Observation;
-using manibench::sdk::PolicyContext;
-
 namespace {
 
 constexpr double kBaseSpeed = MobilePandaSpeeds::kBase;  // per unit action
 constexpr double kEeSpeed = MobilePandaSpeeds::kEeLinear, kEeAngularSpeed = MobilePandaSpeeds::kEeAngular;
 constexpr double kDoorLead = 0.02;  // m: how far the goal leads a door's handle
 
-
 }  // namespace
 
-OpenCabinetExpert::OpenCabinetExpert(const PolicyContext& context) : action_dim_(context.action.dim) {
-  if (context.task_name != "OpenCabinetDoor-v0" && context.task_name != "OpenCabinetDrawer-v0")
-    throw Error("open_cabinet_expert drives OpenCabinetDoor-v0 and OpenCabinetDrawer-v0, not '" + context.task_name + "'",
-                MB_INVALID_ARGUMENT);
-  if (context.observation_mode != "state" || context.observation.dim != ObservationLayout::kDim)
-    throw Error("open_cabinet_expert needs the state observation (" + std::to_string(ObservationLayout::kDim) +
-                    " values), got mode '" + context.observation_mode + "' with " +
-                    std::to_string(context.observation.dim),
-                MB_INVALID_ARGUMENT);
-  const std::vector<std::pair<const char*, uint32_t>> wanted = {
-      {"base_forward", 1}, {"base_left", 1}, {"base_yaw", 1}, {"lift", 1},
-      {"right_ee_linear", 3}, {"right_ee_angular", 3}, {"right_gripper", 1}};
-  for (const auto& [name, size] : wanted) {
-    const manibench::sdk::SegmentInfo* s = context.action.find(name);
-    if (s == nullptr || s->size != size)
-      throw Error(std::string("open_cabinet_expert needs the mobile_panda_ee controller (action segment '") + name +
-                      "' of size " + std::to_string(size) +
-                      " is missing); run it with --controller mobile_panda_ee",
-                  MB_INVALID_ARGUMENT);
-  }
-  base_ = context.action.get("base_forward").offset;
-  if (context.action.get("base_left").offset != base_ + 1 || context.action.get("base_yaw").offset != base_ + 2 ||
-      context.action.get("lift").offset != base_ + 3)
-    throw Error("open_cabinet_expert: base_forward, base_left, base_yaw, lift must be consecutive", MB_INVALID_ARGUMENT);
-  ee_linear_ = context.action.get("right_ee_linear").offset;
-  ee_angular_ = context.action.get("right_ee_angular").offset;
-  gripper_ = context.action.get("right_gripper").offset;
-}
+OpenCabinetExpert::OpenCabinetExpert(const sdk::PolicyContext& context)
+    : Expert(context, "open_cabinet_expert", {"OpenCabinetDoor-v0", "OpenCabinetDrawer-v0"}, ObservationLayout::kDim, 1) {}
 
-void OpenCabinetExpert::reset(uint64_t) {
-  phase_ = Phase::kApproach;
-  phase_steps_ = 0;
+void OpenCabinetExpert::reset(uint64_t seed) {
+  Expert::reset(seed);
   nominal_ready_ = false;
 }
 
-Eigen::VectorXd OpenCabinetExpert::act(const Observation& observation) {
+Eigen::VectorXd OpenCabinetExpert::act(const sdk::Observation& observation) {
   using L = ObservationLayout;
   const Eigen::VectorXd s = observation.state;
-  const Eigen::Vector2d base(s[L::kBasePosition], s[L::kBasePosition + 1]);
-  const double yaw = s[L::kBaseYaw];
-  const double lift = s[L::kJointPositions + 3];
-  const Eigen::Matrix3d base_rotation = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  const Eigen::Vector3d tcp = getVector3(s, L::kTcpPose);
-  const Eigen::Quaterniond tcp_q = getQuaternion(s, L::kTcpPose + 3);
+  const mobile_panda::AgentOffsets::Reading robot = agent_.read(s);
+  const Eigen::Vector2d& base = robot.base;
+  const double yaw = robot.yaw, lift = robot.lift;
+  const Eigen::Matrix3d& base_rotation = robot.base_rotation;
+  const Eigen::Vector3d& tcp = robot.tcp[0];
   const Eigen::Vector3d handle = getVector3(s, L::kHandlePose);
   const Eigen::Matrix3d hr = getQuaternion(s, L::kHandlePose + 3).toRotationMatrix();
   const Eigen::Vector3d hx = hr.col(0), hy = hr.col(1), hz = hr.col(2);
@@ -89,7 +49,7 @@ Eigen::VectorXd OpenCabinetExpert::act(const Observation& observation) {
   const double q = s[L::kTargetJoint], lower = s[L::kTargetJoint + 2], upper = s[L::kTargetJoint + 3];
   const double open_fraction = (q - lower) / (upper - lower);
   const Eigen::Vector3d axis = getVector3(s, L::kJointAxis), origin = getVector3(s, L::kJointOrigin);
-  const double fingers = s[L::kJointPositions + 11] + s[L::kJointPositions + 12];  // opening, m
+  const double fingers = s[agent_.joint_positions + 11] + s[agent_.joint_positions + 12];  // opening, m
 
   if (!nominal_ready_) {  // the canonical arm pose's TCP, relative to the base
     const Eigen::Vector3d offset = base_rotation.transpose() * (tcp - Eigen::Vector3d(base.x(), base.y(), 0));
@@ -100,17 +60,13 @@ Eigen::VectorXd OpenCabinetExpert::act(const Observation& observation) {
 
   // The phase's TCP goal and gripper.
   ++phase_steps_;
-  auto next = [this](Phase p) {
-    phase_ = p;
-    phase_steps_ = 0;
-  };
   Eigen::Vector3d goal = handle;
   double gripper = 1.0;
   double lead_speed = 0.0;  // m/s along the motion while pulling
   Eigen::Vector3d motion = door ? axis.cross(handle - origin) : axis;
   motion = motion.norm() > 1e-9 ? Eigen::Vector3d(motion.normalized()) : Eigen::Vector3d(hx);
   const Eigen::Matrix3d grasp_rotation = (Eigen::Matrix3d() << hz, hy, -hx).finished();
-  const Eigen::AngleAxisd orientation_error(grasp_rotation * tcp_q.toRotationMatrix().transpose());
+  const Eigen::AngleAxisd orientation_error(grasp_rotation * robot.tcp_rotation[0].transpose());
   const double angle_error = std::abs(orientation_error.angle());
   switch (phase_) {
     case Phase::kApproach:
@@ -121,17 +77,17 @@ Eigen::VectorXd OpenCabinetExpert::act(const Observation& observation) {
         break;
       }
       const double error = (goal - tcp).norm();
-      if ((error < 0.025 && angle_error < 0.1) || (phase_steps_ > 90 && error < 0.04)) next(Phase::kGrasp);
+      if ((error < 0.025 && angle_error < 0.1) || (phase_steps_ > 90 && error < 0.04)) enter(Phase::kGrasp);
       break;
     }
     case Phase::kGrasp: {
       goal = handle + 0.005 * hx;
-      if ((goal - tcp).norm() < 0.01 || phase_steps_ > 20) next(Phase::kClose);
+      if ((goal - tcp).norm() < 0.01 || phase_steps_ > 20) enter(Phase::kClose);
       break;
     }
     case Phase::kClose:
       gripper = -1.0;
-      if (phase_steps_ > 5) next(Phase::kPull);
+      if (phase_steps_ > 5) enter(Phase::kPull);
       break;
     case Phase::kPull: {
       gripper = -1.0;
@@ -144,9 +100,9 @@ Eigen::VectorXd OpenCabinetExpert::act(const Observation& observation) {
       goal = handle + (door ? kDoorLead : lead_speed / 5.0) * motion;
       const bool empty = fingers < 0.004;  // closed on nothing: the handle slipped out
       if (open_fraction > 0.94) {
-        next(Phase::kHold);
+        enter(Phase::kHold);
       } else if ((empty || (handle - tcp).norm() > 0.05) && phase_steps_ > 3) {
-        next(Phase::kPreGrasp);  // let go and grasp again
+        enter(Phase::kPreGrasp);  // let go and grasp again
       }
       break;
     }
@@ -194,10 +150,10 @@ Eigen::VectorXd OpenCabinetExpert::act(const Observation& observation) {
   if (phase_ == Phase::kPull && door) angular += axis * qdot;  // turn with the door
   angular = clipNorm(angular, kEeAngularSpeed);
 
-  Eigen::VectorXd action = Eigen::VectorXd::Zero(action_dim_);
-  setBaseAction(action, base_, base_local, yaw_rate, lift_rate);
-  setEeAction(action, ee_linear_, ee_angular_, base_rotation, arm_velocity, angular);
-  action[gripper_] = gripper;
+  Eigen::VectorXd action = Eigen::VectorXd::Zero(action_.dim);
+  setBaseAction(action, action_.base, base_local, yaw_rate, lift_rate);
+  setEeAction(action, action_.arms[0].linear, action_.arms[0].angular, base_rotation, arm_velocity, angular);
+  action[action_.arms[0].gripper] = gripper;
   return action;
 }
 

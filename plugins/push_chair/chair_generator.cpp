@@ -20,24 +20,13 @@
 
 namespace push_chair {
 
-using manibench::sdk::Error;
-using manibench::sdk::kPi;
-
 namespace {
 
 constexpr double kDensity = 200;  // kg/m^3, ManiSkill's chairs
-constexpr int kTrainFirst = 3000, kTrainCount = 30, kTestFirst = 3100, kTestCount = 10;
+const NumberedIds kIds{{3000, 30}, {3100, 10}};
 constexpr double kMechanismHeight = 0.05;  // seat mechanism box under the cushion
 constexpr double kMaxChairHeight = 1.2;    // stays below the robot's arms at lift 0.9
 constexpr double kSurfaceSpacing = 0.03;   // reward point sampling, m
-
-std::optional<bool> classifyId(const std::string& id) {  // is it a test chair?
-  if (id.size() != 4 || !std::all_of(id.begin(), id.end(), ::isdigit)) return std::nullopt;
-  const int n = std::stoi(id);
-  if (n >= kTrainFirst && n < kTrainFirst + kTrainCount) return false;
-  if (n >= kTestFirst && n < kTestFirst + kTestCount) return true;
-  return std::nullopt;
-}
 
 using Color = std::array<double, 3>;
 
@@ -272,20 +261,11 @@ std::string toString(ArmrestType type) {
   return "?";
 }
 
-std::vector<std::string> listGeneratedChairs(const std::string& split) {
-  if (split != "train" && split != "test")
-    throw Error("unknown split '" + split + "' (use train or test)", MB_INVALID_ARGUMENT);
-  const bool test = split == "test";
-  std::vector<std::string> ids;
-  for (int i = 0; i < (test ? kTestCount : kTrainCount); ++i)
-    ids.push_back(std::to_string((test ? kTestFirst : kTrainFirst) + i));
-  return ids;
-}
+std::vector<std::string> listGeneratedChairs(const std::string& split) { return kIds.list(split); }
 
 ChairParams getChairParams(const std::string& chair_id) {
-  const std::optional<bool> test = classifyId(chair_id);
-  if (!test)
-    throw Error("no generated chair '" + chair_id + "' (train 3000-3029, test 3100-3109)", MB_NOT_FOUND);
+  const std::optional<bool> test = kIds.classify(chair_id);
+  if (!test) throw Error("no generated chair '" + chair_id + "' (" + kIds.describe() + ")", MB_NOT_FOUND);
   Random rng(hashString("manibench.push_chair.v1:" + chair_id));
   ChairParams p;
   // base: 0.66-0.71 m across the leg ends

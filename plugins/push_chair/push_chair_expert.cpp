@@ -20,18 +20,6 @@
 #include <cmath>
 
 namespace push_chair {
-
-using manibench::kit::clipNorm;
-using manibench::kit::MobilePandaSpeeds;
-using manibench::kit::setBaseAction;
-using manibench::kit::setEeAction;
-using manibench::kit::getQuaternion;
-using manibench::kit::getVector3;
-using manibench::sdk::Error;
-using manibench::sdk::Observation;
-using manibench::sdk::PolicyContext;
-using manibench::sdk::kPi;
-
 namespace {
 
 constexpr double kBaseSpeed = MobilePandaSpeeds::kBase;  // per unit action
@@ -52,70 +40,35 @@ Eigen::Vector2d unit(double angle) { return {std::cos(angle), std::sin(angle)}; 
 
 }  // namespace
 
-PushChairExpert::PushChairExpert(const PolicyContext& context) : action_dim_(context.action.dim) {
-  if (context.task_name != "PushChair-v0")
-    throw Error("push_chair_expert drives PushChair-v0, not '" + context.task_name + "'", MB_INVALID_ARGUMENT);
-  if (context.observation_mode != "state" || context.observation.dim != ObservationLayout::kDim)
-    throw Error("push_chair_expert needs the state observation (" + std::to_string(ObservationLayout::kDim) +
-                    " values), got mode '" + context.observation_mode + "' with " +
-                    std::to_string(context.observation.dim),
-                MB_INVALID_ARGUMENT);
-  const std::vector<std::pair<const char*, uint32_t>> wanted = {
-      {"base_forward", 1},    {"base_left", 1},       {"base_yaw", 1},        {"lift", 1},
-      {"right_ee_linear", 3}, {"right_ee_angular", 3}, {"right_gripper", 1}, {"left_ee_linear", 3},
-      {"left_ee_angular", 3}, {"left_gripper", 1}};
-  for (const auto& [name, size] : wanted) {
-    const manibench::sdk::SegmentInfo* s = context.action.find(name);
-    if (s == nullptr || s->size != size)
-      throw Error(std::string("push_chair_expert needs the dual-arm mobile_panda_ee controller (action segment '") +
-                      name + "' of size " + std::to_string(size) +
-                      " is missing); run it with --controller mobile_panda_ee",
-                  MB_INVALID_ARGUMENT);
-  }
-  base_ = context.action.get("base_forward").offset;
-  if (context.action.get("base_left").offset != base_ + 1 || context.action.get("base_yaw").offset != base_ + 2 ||
-      context.action.get("lift").offset != base_ + 3)
-    throw Error("push_chair_expert: base_forward, base_left, base_yaw, lift must be consecutive", MB_INVALID_ARGUMENT);
-  const char* sides[2] = {"right", "left"};
-  for (int a = 0; a < 2; ++a) {
-    ee_linear_[a] = context.action.get(std::string(sides[a]) + "_ee_linear").offset;
-    ee_angular_[a] = context.action.get(std::string(sides[a]) + "_ee_angular").offset;
-    gripper_[a] = context.action.get(std::string(sides[a]) + "_gripper").offset;
-  }
-}
+PushChairExpert::PushChairExpert(const sdk::PolicyContext& context)
+    : Expert(context, "push_chair_expert", {"PushChair-v0"}, ObservationLayout::kDim, 2) {}
 
-void PushChairExpert::reset(uint64_t) {
-  phase_ = Phase::kApproach;
-  phase_steps_ = 0;
+void PushChairExpert::reset(uint64_t seed) {
+  Expert::reset(seed);
   nominal_ready_ = false;
   orbit_sign_ = 0;
   orbiting_ = false;
 }
 
-Eigen::VectorXd PushChairExpert::act(const Observation& observation) {
+Eigen::VectorXd PushChairExpert::act(const sdk::Observation& observation) {
   using L = ObservationLayout;
   const Eigen::VectorXd s = observation.state;
-  const Eigen::Vector2d base(s[L::kBasePosition], s[L::kBasePosition + 1]);
-  const double yaw = s[L::kBaseYaw];
-  const double lift = s[L::kJointPositions + 3];
-  const Eigen::Matrix3d base_rotation = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  const std::array<Eigen::Vector3d, 2> tcp = {getVector3(s, L::kRightTcpPose), getVector3(s, L::kLeftTcpPose)};
-  const std::array<Eigen::Quaterniond, 2> tcp_q = {getQuaternion(s, L::kRightTcpPose + 3), getQuaternion(s, L::kLeftTcpPose + 3)};
+  const mobile_panda::AgentOffsets::Reading robot = agent_.read(s);
+  const Eigen::Vector2d& base = robot.base;
+  const double yaw = robot.yaw, lift = robot.lift;
+  const Eigen::Matrix3d& base_rotation = robot.base_rotation;
+  const std::array<Eigen::Vector3d, 2> tcp = {robot.tcp[0], robot.tcp[1]};
   const Eigen::Vector2d chair = s.segment<2>(L::kChairPose);
   const Eigen::Vector2d chair_velocity = s.segment<2>(L::kChairVelocity);
   const Eigen::Vector2d target = s.segment<2>(L::kTarget);
   const double seat_top = s[L::kSeatTop + 2];
 
   if (!nominal_ready_) {  // the hands' starting orientation (relative to the base) and height above the lift
-    for (int a = 0; a < 2; ++a) nominal_rotation_[a] = base_rotation.transpose() * tcp_q[a].toRotationMatrix();
+    for (int a = 0; a < 2; ++a) nominal_rotation_[a] = base_rotation.transpose() * robot.tcp_rotation[a];
     nominal_height_ = 0.5 * (tcp[0].z() + tcp[1].z()) - lift;
     nominal_ready_ = true;
   }
   ++phase_steps_;
-  auto next = [this](Phase p) {
-    phase_ = p;
-    phase_steps_ = 0;
-  };
 
   // The push line: from the chair to the target.
   const Eigen::Vector2d to_target = target - chair;
@@ -160,7 +113,7 @@ Eigen::VectorXd PushChairExpert::act(const Observation& observation) {
         const double hand_error =
             std::max((tcp[0] - hand_goal[0]).head<2>().norm(), (tcp[1] - hand_goal[1]).head<2>().norm());
         if (((goal - base).norm() < 0.12 && yaw_error < 0.2 && hand_error < 0.1) || phase_steps_ > 100)
-          next(Phase::kPush);
+          enter(Phase::kPush);
       }
       break;
     }
@@ -179,7 +132,7 @@ Eigen::VectorXd PushChairExpert::act(const Observation& observation) {
       }
       if (distance < kReleaseDistance || (distance < 0.09 && chair_velocity.dot(d) < 0.02 && phase_steps_ > 10) ||
           offset.dot(d) > 0)
-        next(Phase::kRelease);
+        enter(Phase::kRelease);
       break;
     }
     case Phase::kRelease:
@@ -188,7 +141,7 @@ Eigen::VectorXd PushChairExpert::act(const Observation& observation) {
       if (phase_steps_ <= 6) base_velocity = -0.25 * unit(yaw);
       yaw_goal = yaw;
       if (phase_steps_ > 6 && distance > kRetryDistance && chair_velocity.norm() < 0.05) {
-        next(Phase::kApproach);
+        enter(Phase::kApproach);
         orbit_sign_ = 0;
       }
       break;
@@ -204,8 +157,8 @@ Eigen::VectorXd PushChairExpert::act(const Observation& observation) {
   const double lift_goal = std::clamp(hand_height - nominal_height_, 0.0, 1.5);
   const double lift_rate = 3.0 * (lift_goal - lift);
 
-  Eigen::VectorXd action = Eigen::VectorXd::Zero(action_dim_);
-  setBaseAction(action, base_, base_local, yaw_rate, lift_rate);
+  Eigen::VectorXd action = Eigen::VectorXd::Zero(action_.dim);
+  setBaseAction(action, action_.base, base_local, yaw_rate, lift_rate);
   for (int a = 0; a < 2; ++a) {
     Eigen::Vector3d velocity = clipNorm(5.0 * (hand_goal[a] - tcp[a]), kEeSpeed);
     // The command is relative to the moving base and lift: take out what
@@ -213,11 +166,11 @@ Eigen::VectorXd PushChairExpert::act(const Observation& observation) {
     const Eigen::Vector3d lever = tcp[a] - Eigen::Vector3d(base.x(), base.y(), tcp[a].z());
     velocity -= Eigen::Vector3d(base_velocity.x(), base_velocity.y(), lift_rate) +
                 Eigen::Vector3d(0, 0, yaw_rate).cross(lever);
-    const Eigen::AngleAxisd error(base_rotation * nominal_rotation_[a] * tcp_q[a].toRotationMatrix().transpose());
+    const Eigen::AngleAxisd error(base_rotation * nominal_rotation_[a] * robot.tcp_rotation[a].transpose());
     Eigen::Vector3d angular = clipNorm(4.0 * error.angle() * error.axis(), kEeAngularSpeed);
     angular.z() -= yaw_rate;
-    setEeAction(action, ee_linear_[a], ee_angular_[a], base_rotation, velocity, angular);
-    action[gripper_[a]] = -1.0;  // closed: a compact fist
+    setEeAction(action, action_.arms[a].linear, action_.arms[a].angular, base_rotation, velocity, angular);
+    action[action_.arms[a].gripper] = -1.0;  // closed: a compact fist
   }
   return action;
 }

@@ -1,0 +1,31 @@
+// Environments of the build tree's plugins as the configuration makes them,
+// for the tests of the families and the layers above config (links
+// manibench::config and the registries).
+#pragma once
+
+#include <manibench/config.hpp>
+#include <manibench/environment.hpp>
+#include <manibench/plugin_instances.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "test_registry.hpp"
+
+namespace manibench::testing {
+
+// `task` (or a fixed-object id) with its configuration layers and
+// `overrides` (KEY=VALUE, as --set) on top.
+std::unique_ptr<Environment> makeEnvironment(const std::string& task, const std::vector<std::string>& overrides = {});
+
+// A scripted expert and its environment: `task` with the mobile_panda_ee
+// controller (`overrides` after it), `policy` on the state observation.
+struct ExpertSetup {
+  std::unique_ptr<Environment> env;
+  std::unique_ptr<PolicyInstance> expert;
+};
+ExpertSetup makeExpertSetup(const std::string& task, const std::string& policy,
+                            const std::vector<std::string>& overrides = {});
+
+}  // namespace manibench::testing
