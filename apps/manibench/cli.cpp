@@ -53,7 +53,7 @@ uint64_t parseSeed(const std::string& text, const char* usage, const std::string
   try {
     std::size_t used = 0;
     const unsigned long long value = std::stoull(text, &used);
-    if (used != text.size() || text.find('-') != std::string::npos) throw std::invalid_argument(text);
+    if (used != text.size() || text.find('-') != std::string::npos) throw InvalidArgument(text);
     return value;
   } catch (const std::exception&) {
     throw UsageError(option + " needs a non-negative integer, got '" + text + "'", usage);

@@ -37,10 +37,10 @@ int commandDemo(int argc, char** argv);     // command_demo.cpp
 int commandDemos(int argc, char** argv);    // command_demos.cpp
 
 // A usage error carries the usage text of the command it concerns.
-class UsageError : public std::runtime_error {
+class UsageError : public Error {
  public:
   UsageError(const std::string& message, const char* usage)
-      : std::runtime_error(message), usage_(usage) {}
+      : Error(message), usage_(usage) {}
   const char* usage() const { return usage_; }
 
  private:

@@ -138,12 +138,11 @@ std::string toString(BucketShape shape) {
 std::vector<std::string> listGeneratedBuckets(const std::string& split) { return kIds.list(split); }
 
 BucketParams getBucketParams(const std::string& bucket_id) {
-  const std::optional<bool> test = kIds.classify(bucket_id);
-  if (!test) throw Error("no generated bucket '" + bucket_id + "' (" + kIds.describe() + ")", MB_NOT_FOUND);
+  const bool test = kIds.requireTest(bucket_id, "generated bucket");
   Random rng(hashString("manibench.move_bucket.v1:" + bucket_id));
   BucketParams p;
   const int index = std::stoi(bucket_id) % 100;
-  if (*test) {  // alternate square / oval
+  if (test) {  // alternate square / oval
     if (index % 2 == 0) {
       p.shape = BucketShape::kPolygon;
       p.sides = 4;

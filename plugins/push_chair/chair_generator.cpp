@@ -264,8 +264,7 @@ std::string toString(ArmrestType type) {
 std::vector<std::string> listGeneratedChairs(const std::string& split) { return kIds.list(split); }
 
 ChairParams getChairParams(const std::string& chair_id) {
-  const std::optional<bool> test = kIds.classify(chair_id);
-  if (!test) throw Error("no generated chair '" + chair_id + "' (" + kIds.describe() + ")", MB_NOT_FOUND);
+  const bool test = kIds.requireTest(chair_id, "generated chair");
   Random rng(hashString("manibench.push_chair.v1:" + chair_id));
   ChairParams p;
   // base: 0.66-0.71 m across the leg ends
@@ -277,13 +276,13 @@ ChairParams getChairParams(const std::string& chair_id) {
   p.hub_height = p.wheel_radius + p.caster_drop + rng.uniform(0.035, 0.055);
   p.column_radius = rng.uniform(0.025, 0.03);
   // seat
-  p.seat_height = *test ? rng.uniform(0.44, 0.52) : rng.uniform(0.42, 0.50);
-  p.seat_width = *test ? rng.uniform(0.50, 0.56) : rng.uniform(0.44, 0.52);
-  p.seat_depth = *test ? rng.uniform(0.44, 0.52) : rng.uniform(0.42, 0.50);
+  p.seat_height = test ? rng.uniform(0.44, 0.52) : rng.uniform(0.42, 0.50);
+  p.seat_width = test ? rng.uniform(0.50, 0.56) : rng.uniform(0.44, 0.52);
+  p.seat_depth = test ? rng.uniform(0.44, 0.52) : rng.uniform(0.42, 0.50);
   p.seat_thickness = rng.uniform(0.06, 0.09);
   p.seat_offset = rng.uniform(0.0, 0.04);
   // backrest
-  p.backrest = *test ? (rng.chance(0.5) ? BackrestShape::kHeadrest : BackrestShape::kCurved)
+  p.backrest = test ? (rng.chance(0.5) ? BackrestShape::kHeadrest : BackrestShape::kCurved)
                      : (rng.chance(0.5) ? BackrestShape::kRectangular : BackrestShape::kRounded);
   p.backrest_width = p.seat_width * rng.uniform(0.85, 1.0);
   p.backrest_height = rng.uniform(0.40, 0.60);
@@ -293,7 +292,7 @@ ChairParams getChairParams(const std::string& chair_id) {
   p.reclining = rng.chance(0.5);
   // armrests
   const double a = rng.uniform(0, 1);
-  if (*test)
+  if (test)
     p.armrest = a < 0.3 ? ArmrestType::kNone : a < 0.65 ? ArmrestType::kLoop : ArmrestType::kAdjustableT;
   else
     p.armrest = a < 0.4 ? ArmrestType::kNone : ArmrestType::kFixedT;

@@ -58,10 +58,9 @@ std::string makeArmUrdf(const ArmGeometry& g) {
 }  // namespace
 
 ArmGeometry getArmGeometry(const std::string& object_id) {
-  const std::optional<bool> test = kIds.classify(object_id);
-  if (!test) throw Error("Reach has no object '" + object_id + "' (" + kIds.describe() + ")", MB_NOT_FOUND);
+  const bool test = kIds.requireTest(object_id, "Reach object");
   const int id = *NumberedIds::parse(object_id);
-  if (!*test)  // train: upper 0.35-0.45 m, forearm 0.25-0.31 m
+  if (!test)  // train: upper 0.35-0.45 m, forearm 0.25-0.31 m
     return {0.35 + 0.1 * (id % 4) / 3.0, 0.25 + 0.02 * (id / 4) * 3.0};
   // test: longer arms than any train object (0.50-0.55 m / 0.33-0.36 m)
   const int k = id - kIds.test.first;

@@ -12,8 +12,8 @@ prefix, the build tree). docs/python.md has the whole story.
 """
 
 from . import _core
-from ._core import (ConfigError, EpisodeFailure, Error, InvalidAction, PluginCallError,
-                    PluginError)
+from ._core import (ConfigError, EpisodeFailure, Error, InvalidAction, InvalidArgument,
+                    PluginCallError, PluginError)
 from .env import OBS_MODES, ManibenchEnv
 from .env import make_config_files as _make_config_files
 from .env import make_overrides as _make_overrides
@@ -22,7 +22,7 @@ from .vector import VectorEnv, make_vec
 __version__ = _core.get_version()
 
 __all__ = [
-    "ConfigError", "EpisodeFailure", "Error", "InvalidAction", "ManibenchEnv", "OBS_MODES",
+    "ConfigError", "EpisodeFailure", "Error", "InvalidAction", "InvalidArgument", "ManibenchEnv", "OBS_MODES",
     "PluginCallError", "PluginError", "VectorEnv", "info", "list_plugins", "list_tasks", "make",
     "make_vec", "objects",
 ]

@@ -163,7 +163,7 @@ class PyEnvironment {
   py::tuple step(py::array_t<double, py::array::c_style | py::array::forcecast> action) {
     mb::Environment& env = upd();
     if (action.ndim() != 1)
-      throw std::invalid_argument("the action must be a 1-d array, got " +
+      throw mb::InvalidArgument("the action must be a 1-d array, got " +
                                   std::to_string(action.ndim()) + " dimensions");
     const Eigen::Map<const Eigen::VectorXd> view(action.data(), action.shape(0));
     action_ = view;
@@ -175,7 +175,7 @@ class PyEnvironment {
     py::list flags, values;
     for (uint8_t f : r.flags) flags.append(bool(f));
     for (double v : r.values) values.append(v);
-    return py::make_tuple(r.reward, r.done, r.success, flags, values);
+    return py::make_tuple(r.reward, r.terminated, r.truncated, r.success, flags, values);
   }
 
   // The current observation: the state vector, or a dict of arrays in the
@@ -204,29 +204,19 @@ class PyEnvironment {
   }
 
   // A third-person RGB image (height x width x 3, uint8) of the current
-  // state, from the front-right and above the robot's root, as the CLI's
-  // videos (apps/manibench/video.cpp).
+  // state: the CLI's videos' view (calcThirdPersonView), aimed at the
+  // robot's root where it is now.
   py::array_t<std::uint8_t> render(int width, int height) {
     mb::Environment& env = upd();
     if (width <= 0 || height <= 0)
-      throw std::invalid_argument("render size must be positive, got " + std::to_string(width) +
+      throw mb::InvalidArgument("render size must be positive, got " + std::to_string(width) +
                                   "x" + std::to_string(height));
-    mb::CameraSpec camera;
-    camera.name = "python_render";
-    camera.width = width;
-    camera.height = height;
-    camera.fovy = 1.0;
-    camera.far = 20;
-    const mb::Scene& scene = env.getScene();
-    const int robot = scene.findArticulation(env.getTaskDescription().robot_articulation);
-    const Eigen::Vector3d target =
-        (robot >= 0 ? scene.getRootPose(robot).position : Eigen::Vector3d::Zero()) +
-        Eigen::Vector3d(0, 0, 0.6);
-    const mb::Pose pose = mb::calcLookAtPose(target + Eigen::Vector3d(2.5, -2.5, 1.6), target);
+    const mb::ThirdPersonView view =
+        mb::calcThirdPersonView(env.getScene(), env.getTaskDescription().robot_articulation, width, height);
     g_rendered = true;
     {
       py::gil_scoped_release release;
-      env.updObserver().updRenderer().render(camera, pose, frame_);
+      env.updObserver().updRenderer().render(view.camera, view.pose, frame_);
     }
     py::array_t<std::uint8_t> out({py::ssize_t(height), py::ssize_t(width), py::ssize_t(3)});
     std::uint8_t* dst = out.mutable_data();
@@ -243,14 +233,17 @@ class PyEnvironment {
   // ToPipe or a Step arrives for an episode that ended (the auto-reset,
   // which the package does). An exception of a step leaves the loop as
   // it would leave step(): the package sends it through the pipe.
+  // Terminated and truncated are the step's (StepResult);
+  // `max_episode_steps`, which the package passes, is the same limit and
+  // no longer read here.
   ServeExit serveSteps(StepBlock& block, std::size_t slot, double spin_wait,
-                       int64_t max_episode_steps, int parent_pid) {
+                       int64_t /*max_episode_steps*/, int parent_pid) {
     mb::Environment& env = upd();
     const StepBlockLayout& layout = block.getLayout();
     if (slot >= layout.slot_count) throw std::out_of_range("no slot " + std::to_string(slot));
     if (layout.action_dim != std::size_t(env.getControllerDescription().action_dim) ||
         layout.condition_count != env.getTaskDescription().success_conditions.size())
-      throw std::invalid_argument("serve_steps: the block's layout is not this environment's");
+      throw mb::InvalidArgument("serve_steps: the block's layout is not this environment's");
     StepSlotHeader& header = block.updHeader(slot);
     py::gil_scoped_release release;
     for (;;) {
@@ -261,9 +254,9 @@ class PyEnvironment {
       const mb::StepResult r = env.step(action_);
       header.reward = r.reward;
       header.success = r.success;
-      header.terminated = r.success && env.getOptions().stop_on_success;
+      header.terminated = r.terminated;
+      header.truncated = r.truncated;
       header.elapsed_steps = int64_t(env.getElapsedSteps());
-      header.truncated = header.elapsed_steps >= max_episode_steps;
       header.needs_reset = header.terminated || header.truncated;
       std::memcpy(block.updFlags(slot), r.flags.data(), r.flags.size());
       std::memcpy(block.updValues(slot), r.values.data(), r.values.size() * sizeof(double));
@@ -324,7 +317,7 @@ class PyEnvironment {
 
   std::vector<std::string> listObjects(const std::string& split) const {
     if (split != "train" && split != "test")
-      throw std::invalid_argument("split must be 'train' or 'test', got '" + split + "'");
+      throw mb::InvalidArgument("split must be 'train' or 'test', got '" + split + "'");
     return get().listObjects(split);
   }
 
@@ -416,7 +409,7 @@ void bindStepBlock(py::module_& m) {
             const StepBlockLayout& l = b.getLayout();
             if (actions.ndim() != 2 || std::size_t(actions.shape(0)) != l.slot_count ||
                 std::size_t(actions.shape(1)) != l.action_dim)
-              throw std::invalid_argument("post_step: actions must be (" +
+              throw mb::InvalidArgument("post_step: actions must be (" +
                                           std::to_string(l.slot_count) + ", " +
                                           std::to_string(l.action_dim) + ")");
             b.post(StepCommand::Step, actions.data());
@@ -480,9 +473,11 @@ PYBIND11_MODULE(_core, m) {
   m.doc() = "manibench's C++ core: environments over the plugin registry (use the manibench package)";
 
   // Exceptions carry the C++ message under classes that say what went
-  // wrong; other std::exceptions keep pybind11's mapping (invalid_argument:
-  // ValueError, the rest: RuntimeError). The classes are made here with
-  // type() so that ConfigError and InvalidAction can also be ValueErrors;
+  // wrong, mapped onto manibench::Error's (manibench/error.hpp): every
+  // mb::Error is a manibench.Error, the user-input ones (InvalidArgument,
+  // ConfigError, InvalidAction) also ValueErrors; other std::exceptions
+  // keep pybind11's mapping. The classes are made here with type() so that
+  // those can be ValueErrors too;
   // they live as long as the process (never decref'd: no destructor runs
   // after the interpreter is gone).
   const py::object make_type = py::reinterpret_borrow<py::object>(reinterpret_cast<PyObject*>(&PyType_Type));
@@ -507,6 +502,9 @@ PYBIND11_MODULE(_core, m) {
   static PyObject* invalid_action =
       make_error("InvalidAction", py::make_tuple(base, py::handle(PyExc_ValueError)),
                  "An action of the wrong size, or with NaN or infinity.");
+  static PyObject* invalid_argument =
+      make_error("InvalidArgument", py::make_tuple(base, py::handle(PyExc_ValueError)),
+                 "A bad value: an option, an argument, an object id, a state blob.");
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
@@ -520,6 +518,10 @@ PYBIND11_MODULE(_core, m) {
       PyErr_SetString(plugin_error, e.what());
     } catch (const mb::EpisodeFailure& e) {
       PyErr_SetString(episode_failure, e.what());
+    } catch (const mb::InvalidArgument& e) {
+      PyErr_SetString(invalid_argument, e.what());
+    } catch (const mb::Error& e) {
+      PyErr_SetString(error, e.what());
     }
   });
 

@@ -481,7 +481,7 @@ TEST(ObservationModes, CameraErrorsNameTheCamera) {
   try {
     Environment env(getRegistry(), "RobotTestbed-v0", none);
     FAIL() << "no error";
-  } catch (const std::invalid_argument& e) {
+  } catch (const manibench::InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("needs at least one camera"), std::string::npos) << e.what();
   }
   EnvironmentOptions sizes = makeOptions(
@@ -489,7 +489,7 @@ TEST(ObservationModes, CameraErrorsNameTheCamera) {
   try {
     Environment env(getRegistry(), "RobotTestbed-v0", sizes);
     FAIL() << "no error";
-  } catch (const std::invalid_argument& e) {
+  } catch (const manibench::InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("camera 'a' is 64x48, camera 'b' is 32x48"), std::string::npos)
         << e.what();
   }

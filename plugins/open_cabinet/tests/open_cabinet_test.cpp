@@ -227,7 +227,7 @@ TEST(OpenCabinet, RandomPolicyNeverSucceeds) {
         for (Eigen::Index i = 0; i < action.size(); ++i) action[i] = u(rng);
         r = env->step(action);
         most_open = std::max(most_open, r.values[0]);
-      } while (!r.done);
+      } while (!r.isDone());
       EXPECT_FALSE(r.success) << task << " seed " << seed;
       EXPECT_LT(most_open, 0.9) << task << " seed " << seed;
     }

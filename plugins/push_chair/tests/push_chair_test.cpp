@@ -278,7 +278,7 @@ TEST(PushChair, RandomPolicyNeverSucceeds) {
       for (Eigen::Index i = 0; i < action.size(); ++i) action[i] = u(rng);
       r = env->step(action);
       EXPECT_TRUE(env->getObservation().allFinite());
-    } while (!r.done);
+    } while (!r.isDone());
     EXPECT_FALSE(r.success) << "seed " << seed;
     EXPECT_FALSE(r.flags[0]) << "seed " << seed;
   }

@@ -35,6 +35,13 @@ struct NumberedIds {
     if (test.contains(*n)) return true;
     return std::nullopt;
   }
+  // Whether `id` is a test id; any other text is an error (MB_NOT_FOUND)
+  // naming `what` ("generated chair") and the ranges.
+  bool requireTest(const std::string& id, const std::string& what) const {
+    const std::optional<bool> test = classify(id);
+    if (!test) throw Error("no " + what + " '" + id + "' (" + describe() + ")", MB_NOT_FOUND);
+    return *test;
+  }
   // "train 3000-3029, test 3100-3109", for errors.
   std::string describe() const {
     return "train " + std::to_string(train.first) + "-" + std::to_string(train.last()) + ", test " +
