@@ -24,10 +24,7 @@ class MobilePandaController : public sdk::Controller, public sdk::Stateful {
  public:
   MobilePandaController(const Config& config, const ControllerContext& context)
       : context_(context), settings_(config, "mobile_panda"), joints_(context, "mobile_panda") {
-    // The filtered quantities are the velocity actions (base x/y still
-    // egocentric), so that a yawing base keeps a steady command.
-    stage_ = std::make_unique<VelocityStage>(4 + kPandaArmJoints * joints_.arms.size(),
-                                             readLowPassAlpha(config, context.control_frequency));
+    stage_ = makeVelocityStage(config, context, joints_);
   }
 
   ControllerSpec describe() const override {

@@ -77,8 +77,7 @@ class MobilePandaEeController : public sdk::Controller, public sdk::Stateful {
         max_position_error_(requirePositive(config, "ee_max_position_error", 0.02)),
         max_orientation_error_(requirePositive(config, "ee_max_orientation_error", 0.1)),
         targets_(joints_.arms.size(), Eigen::Isometry3d::Identity()) {
-    stage_ = std::make_unique<VelocityStage>(4 + kPandaArmJoints * joints_.arms.size(),
-                                             readLowPassAlpha(config, context.control_frequency));
+    stage_ = makeVelocityStage(config, context, joints_);
   }
 
   ControllerSpec describe() const override {

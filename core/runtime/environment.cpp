@@ -1,5 +1,6 @@
 #include <manibench/environment.hpp>
 #include <manibench/sdk/state.hpp>
+#include <manibench/stopwatch.hpp>
 #include <manibench/task_name.hpp>
 
 #include <algorithm>
@@ -10,13 +11,6 @@
 #include <string>
 
 namespace manibench {
-
-namespace {
-using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-}  // namespace
 
 Environment::Environment(const PluginRegistry& registry, const std::string& environment_id,
                          EnvironmentOptions options)

@@ -55,9 +55,6 @@ Eigen::VectorXd MoveBucketExpert::act(const sdk::Observation& observation) {
   using L = ObservationLayout;
   const Eigen::VectorXd& s = observation.state;
   const mobile_panda::AgentOffsets::Reading robot = agent_.read(s);
-  const Eigen::Vector2d& base = robot.base;
-  const double yaw = robot.yaw, lift = robot.lift;
-  const Eigen::Matrix3d& base_rotation = robot.base_rotation;
   const std::vector<Eigen::Vector3d>& tcp = robot.tcp;
   const std::vector<Eigen::Matrix3d>& tcp_rotation = robot.tcp_rotation;
   const Eigen::Vector3d bucket = getVector3(s, L::kBucketPose);
@@ -77,7 +74,7 @@ Eigen::VectorXd MoveBucketExpert::act(const sdk::Observation& observation) {
   grip_axis = grip_axis.norm() > 1e-6 ? Eigen::Vector2d(grip_axis.normalized()) : Eigen::Vector2d(0, 1);
   if (phase_ == Phase::kApproach && phase_steps_ == 1) {
     const double yaw_a = std::atan2(grip_axis.y(), grip_axis.x()) - kPi / 2;
-    grip_side_ = std::abs(wrapAngle(yaw_a - yaw)) <= kPi / 2 ? 1.0 : -1.0;
+    grip_side_ = std::abs(wrapAngle(yaw_a - robot.yaw)) <= kPi / 2 ? 1.0 : -1.0;
   }
   const Eigen::Vector2d across = grip_side_ * grip_axis;  // the base's +y at the grasp
   const Eigen::Vector3d across3(across.x(), across.y(), 0);
@@ -100,11 +97,11 @@ Eigen::VectorXd MoveBucketExpert::act(const sdk::Observation& observation) {
   auto approach = [&](double tcp_height) {
     const double yaw_goal = std::atan2(across.y(), across.x()) - kPi / 2;
     const Eigen::Vector2d forward(std::cos(yaw_goal), std::sin(yaw_goal));
-    base_velocity = clipNorm(Eigen::Vector2d(2.0 * (bucket.head<2>() - kReach * forward - base)), kBaseSpeed);
-    yaw_rate = std::clamp(2.5 * wrapAngle(yaw_goal - yaw), -1.5, 1.5);
+    base_velocity = clipNorm(Eigen::Vector2d(2.0 * (bucket.head<2>() - kReach * forward - robot.base)), kBaseSpeed);
+    yaw_rate = std::clamp(2.5 * wrapAngle(yaw_goal - robot.yaw), -1.5, 1.5);
     const double lift_goal = std::clamp(tcp_height + kShoulderDrop - kShoulderAboveLift, 0.0, 1.5);
-    lift_rate = std::clamp(3.0 * (lift_goal - lift), -0.4, 0.4);
-    return (bucket.head<2>() - kReach * forward - base).norm() + 0.3 * std::abs(wrapAngle(yaw_goal - yaw));
+    lift_rate = std::clamp(3.0 * (lift_goal - robot.lift), -0.4, 0.4);
+    return (bucket.head<2>() - kReach * forward - robot.base).norm() + 0.3 * std::abs(wrapAngle(yaw_goal - robot.yaw));
   };
   auto tcpError = [&] { return std::max((goal[0] - tcp[0]).norm(), (goal[1] - tcp[1]).norm()); };
 
@@ -128,25 +125,25 @@ Eigen::VectorXd MoveBucketExpert::act(const sdk::Observation& observation) {
       rimGoal(-kGripDepth);
       gripper = -1.0;
       if (phase_steps_ >= 8) {
-        grasp_lift_ = lift;
-        held_yaw_ = yaw;
+        grasp_lift_ = robot.lift;
+        held_yaw_ = robot.yaw;
         enter(Phase::kLift);
       }
       break;
     case Phase::kLift:
       gripper = -1.0;
-      lift_rate = std::clamp(3.0 * (grasp_lift_ + kLiftBy - lift), -0.3, 0.3);
-      if (lift > grasp_lift_ + kLiftBy - 0.02 || phase_steps_ > 30) enter(Phase::kCarry);
+      lift_rate = std::clamp(3.0 * (grasp_lift_ + kLiftBy - robot.lift), -0.3, 0.3);
+      if (robot.lift > grasp_lift_ + kLiftBy - 0.02 || phase_steps_ > 30) enter(Phase::kCarry);
       break;
     case Phase::kCarry: {
       gripper = -1.0;
-      lift_rate = std::clamp(3.0 * (grasp_lift_ + kLiftBy - lift), -0.3, 0.3);
+      lift_rate = std::clamp(3.0 * (grasp_lift_ + kLiftBy - robot.lift), -0.3, 0.3);
       const Eigen::Vector2d error = platform.head<2>() - bucket.head<2>();
       const double distance = error.norm();
       const double wanted = std::min(kCarrySpeed, std::sqrt(2 * kCarryAcceleration * std::max(distance - 0.005, 0.0)));
       carry_speed_ = std::min(wanted, carry_speed_ + kCarryAcceleration * dt);
       base_velocity = distance > 1e-6 ? Eigen::Vector2d(carry_speed_ * error / distance) : Eigen::Vector2d::Zero();
-      yaw_rate = std::clamp(2.5 * wrapAngle(held_yaw_ - yaw), -0.5, 0.5);
+      yaw_rate = std::clamp(2.5 * wrapAngle(held_yaw_ - robot.yaw), -0.5, 0.5);
       if (distance < 0.015 && bucket_velocity.head<2>().norm() < 0.05) enter(Phase::kLower);
       break;
     }
@@ -178,16 +175,16 @@ Eigen::VectorXd MoveBucketExpert::act(const sdk::Observation& observation) {
       linear = clipNorm(Eigen::Vector3d(5.0 * (goal[a] - tcp[a])), kEeSpeed);
       const Eigen::AngleAxisd turn(pointingDown(finger_sign_[a] * across3) * tcp_rotation[a].transpose());
       angular = clipNorm(Eigen::Vector3d(4.0 * turn.angle() * turn.axis()), kEeAngularSpeed);
-      const Eigen::Vector3d lever = tcp[a] - Eigen::Vector3d(base.x(), base.y(), tcp[a].z());
+      const Eigen::Vector3d lever = tcp[a] - Eigen::Vector3d(robot.base.x(), robot.base.y(), tcp[a].z());
       linear -= Eigen::Vector3d(base_velocity.x(), base_velocity.y(), lift_rate) +
                 Eigen::Vector3d(0, 0, yaw_rate).cross(lever);
       angular.z() -= yaw_rate;
     }
     if (phase_ == Phase::kRetreat && phase_steps_ <= 8) linear = Eigen::Vector3d(0, 0, 0.1);
-    setEeAction(action, action_.arms[a].linear, action_.arms[a].angular, base_rotation, linear, angular);
+    setEeAction(action, action_.arms[a].linear, action_.arms[a].angular, robot.base_rotation, linear, angular);
     action[action_.arms[a].gripper] = gripper;
   }
-  const Eigen::Vector2d base_local = Eigen::Rotation2Dd(-yaw).toRotationMatrix() * base_velocity;
+  const Eigen::Vector2d base_local = Eigen::Rotation2Dd(-robot.yaw).toRotationMatrix() * base_velocity;
   setBaseAction(action, action_.base, base_local, yaw_rate, lift_rate);
   return action;
 }

@@ -38,9 +38,6 @@ Eigen::VectorXd OpenCabinetExpert::act(const sdk::Observation& observation) {
   using L = ObservationLayout;
   const Eigen::VectorXd s = observation.state;
   const mobile_panda::AgentOffsets::Reading robot = agent_.read(s);
-  const Eigen::Vector2d& base = robot.base;
-  const double yaw = robot.yaw, lift = robot.lift;
-  const Eigen::Matrix3d& base_rotation = robot.base_rotation;
   const Eigen::Vector3d& tcp = robot.tcp[0];
   const Eigen::Vector3d handle = getVector3(s, L::kHandlePose);
   const Eigen::Matrix3d hr = getQuaternion(s, L::kHandlePose + 3).toRotationMatrix();
@@ -52,9 +49,9 @@ Eigen::VectorXd OpenCabinetExpert::act(const sdk::Observation& observation) {
   const double fingers = s[agent_.joint_positions + 11] + s[agent_.joint_positions + 12];  // opening, m
 
   if (!nominal_ready_) {  // the canonical arm pose's TCP, relative to the base
-    const Eigen::Vector3d offset = base_rotation.transpose() * (tcp - Eigen::Vector3d(base.x(), base.y(), 0));
+    const Eigen::Vector3d offset = robot.base_rotation.transpose() * (tcp - Eigen::Vector3d(robot.base.x(), robot.base.y(), 0));
     nominal_offset_ = Eigen::Vector2d(offset.x(), offset.y());
-    nominal_height_ = tcp.z() - lift;
+    nominal_height_ = tcp.z() - robot.lift;
     nominal_ready_ = true;
   }
 
@@ -118,7 +115,7 @@ Eigen::VectorXd OpenCabinetExpert::act(const sdk::Observation& observation) {
   const double yaw_goal = std::atan2(-hx.y(), -hx.x());
   const Eigen::Matrix2d goal_rotation = Eigen::Rotation2Dd(yaw_goal).toRotationMatrix();
   const Eigen::Vector2d base_goal = goal.head<2>() - goal_rotation * nominal_offset_;
-  Eigen::Vector2d base_velocity = 3.0 * (base_goal - base);
+  Eigen::Vector2d base_velocity = 3.0 * (base_goal - robot.base);
   const double qdot = s[L::kTargetJoint + 1];
   const Eigen::Vector3d handle_velocity = door ? Eigen::Vector3d(qdot * axis.cross(handle - origin)) : Eigen::Vector3d(qdot * axis);
   if (phase_ == Phase::kPull)
@@ -127,14 +124,14 @@ Eigen::VectorXd OpenCabinetExpert::act(const sdk::Observation& observation) {
   base_velocity += 1.5 * (goal - tcp).head<2>();
   if (phase_ == Phase::kHold || phase_ == Phase::kClose) base_velocity.setZero();
   base_velocity = clipNorm(base_velocity, kBaseSpeed);
-  const Eigen::Vector2d base_local = Eigen::Rotation2Dd(-yaw).toRotationMatrix() * base_velocity;
-  double yaw_rate = 2.0 * std::remainder(yaw_goal - yaw, 2 * M_PI);
+  const Eigen::Vector2d base_local = Eigen::Rotation2Dd(-robot.yaw).toRotationMatrix() * base_velocity;
+  double yaw_rate = 2.0 * std::remainder(yaw_goal - robot.yaw, 2 * M_PI);
   if (phase_ == Phase::kPull) yaw_rate *= yaw_follow_;
   if (phase_ == Phase::kHold || phase_ == Phase::kClose) yaw_rate = 0.0;
   yaw_rate = std::clamp(yaw_rate, -1.0, 1.0);
   // Lift: the goal's height at the arm's nominal height.
   const double lift_goal = std::clamp(goal.z() - nominal_height_, 0.0, 1.5);
-  const double lift_rate = holding ? 0.0 : 3.0 * (lift_goal - lift);
+  const double lift_rate = holding ? 0.0 : 3.0 * (lift_goal - robot.lift);
   // Arm: the rest of the way, in the base frame.
   const double gain = phase_ == Phase::kPull && door ? door_speed_ / kDoorLead : 5.0;
   Eigen::Vector3d tcp_velocity = clipNorm(gain * (goal - tcp), kEeSpeed);
@@ -142,7 +139,7 @@ Eigen::VectorXd OpenCabinetExpert::act(const sdk::Observation& observation) {
   Eigen::Vector3d arm_velocity = tcp_velocity;
   // The arm's command is relative to the moving base: take out what the
   // base's own motion does to the TCP.
-  const Eigen::Vector3d lever = tcp - Eigen::Vector3d(base.x(), base.y(), tcp.z());
+  const Eigen::Vector3d lever = tcp - Eigen::Vector3d(robot.base.x(), robot.base.y(), tcp.z());
   arm_velocity -= Eigen::Vector3d(base_velocity.x(), base_velocity.y(), 0) +
                   Eigen::Vector3d(0, 0, yaw_rate).cross(lever);
   Eigen::Vector3d angular = 4.0 * orientation_error.angle() * orientation_error.axis();
@@ -152,7 +149,7 @@ Eigen::VectorXd OpenCabinetExpert::act(const sdk::Observation& observation) {
 
   Eigen::VectorXd action = Eigen::VectorXd::Zero(action_.dim);
   setBaseAction(action, action_.base, base_local, yaw_rate, lift_rate);
-  setEeAction(action, action_.arms[0].linear, action_.arms[0].angular, base_rotation, arm_velocity, angular);
+  setEeAction(action, action_.arms[0].linear, action_.arms[0].angular, robot.base_rotation, arm_velocity, angular);
   action[action_.arms[0].gripper] = gripper;
   return action;
 }

@@ -54,9 +54,6 @@ Eigen::VectorXd PushChairExpert::act(const sdk::Observation& observation) {
   using L = ObservationLayout;
   const Eigen::VectorXd s = observation.state;
   const mobile_panda::AgentOffsets::Reading robot = agent_.read(s);
-  const Eigen::Vector2d& base = robot.base;
-  const double yaw = robot.yaw, lift = robot.lift;
-  const Eigen::Matrix3d& base_rotation = robot.base_rotation;
   const std::array<Eigen::Vector3d, 2> tcp = {robot.tcp[0], robot.tcp[1]};
   const Eigen::Vector2d chair = s.segment<2>(L::kChairPose);
   const Eigen::Vector2d chair_velocity = s.segment<2>(L::kChairVelocity);
@@ -64,8 +61,8 @@ Eigen::VectorXd PushChairExpert::act(const sdk::Observation& observation) {
   const double seat_top = s[L::kSeatTop + 2];
 
   if (!nominal_ready_) {  // the hands' starting orientation (relative to the base) and height above the lift
-    for (int a = 0; a < 2; ++a) nominal_rotation_[a] = base_rotation.transpose() * robot.tcp_rotation[a];
-    nominal_height_ = 0.5 * (tcp[0].z() + tcp[1].z()) - lift;
+    for (int a = 0; a < 2; ++a) nominal_rotation_[a] = robot.base_rotation.transpose() * robot.tcp_rotation[a];
+    nominal_height_ = 0.5 * (tcp[0].z() + tcp[1].z()) - robot.lift;
     nominal_ready_ = true;
   }
   ++phase_steps_;
@@ -73,15 +70,15 @@ Eigen::VectorXd PushChairExpert::act(const sdk::Observation& observation) {
   // The push line: from the chair to the target.
   const Eigen::Vector2d to_target = target - chair;
   const double distance = to_target.norm();
-  const Eigen::Vector2d d = distance > 1e-6 ? Eigen::Vector2d(to_target / distance) : unit(yaw);
+  const Eigen::Vector2d d = distance > 1e-6 ? Eigen::Vector2d(to_target / distance) : unit(robot.yaw);
   const Eigen::Vector2d side(-d.y(), d.x());
   const double hand_height = seat_top - kBelowSeatTop;
 
   // Where the hands go: ahead of the base, right arm to the right.
   std::array<Eigen::Vector3d, 2> hand_goal;
   for (int a = 0; a < 2; ++a)
-    hand_goal[a] = Eigen::Vector3d(base.x(), base.y(), hand_height + (orbiting_ ? kOrbitHandRise : 0.0)) +
-                   base_rotation * Eigen::Vector3d(kHandForward, a == 0 ? -kHandSide : kHandSide, 0);
+    hand_goal[a] = Eigen::Vector3d(robot.base.x(), robot.base.y(), hand_height + (orbiting_ ? kOrbitHandRise : 0.0)) +
+                   robot.base_rotation * Eigen::Vector3d(kHandForward, a == 0 ? -kHandSide : kHandSide, 0);
 
   Eigen::Vector2d base_velocity = Eigen::Vector2d::Zero();
   double yaw_goal = std::atan2(d.y(), d.x());
@@ -91,12 +88,12 @@ Eigen::VectorXd PushChairExpert::act(const sdk::Observation& observation) {
       // target), on a circle that keeps the hands clear of it, turned 45
       // degrees towards the way round: the base moves diagonally in its own
       // frame, where both its axes add up to 0.7 m/s.
-      const Eigen::Vector2d from_chair = base - chair;
+      const Eigen::Vector2d from_chair = robot.base - chair;
       const double here = std::atan2(from_chair.y(), from_chair.x());
       const double staging = std::atan2(-d.y(), -d.x());
       const double to_go = std::remainder(staging - here, 2 * kPi);
       if (orbit_sign_ == 0) orbit_sign_ = to_go >= 0 ? 1 : -1;
-      const Eigen::Vector2d look = chair - base;
+      const Eigen::Vector2d look = chair - robot.base;
       yaw_goal = std::atan2(look.y(), look.x());
       orbiting_ = std::abs(to_go) > 0.35;
       if (orbiting_) {
@@ -106,13 +103,13 @@ Eigen::VectorXd PushChairExpert::act(const sdk::Observation& observation) {
         yaw_goal += way * kPi / 4;
       } else {
         const Eigen::Vector2d goal = chair - kOrbitRadius * d;
-        base_velocity = 3.0 * (goal - base);
-        const double yaw_error = std::abs(std::remainder(yaw_goal - yaw, 2 * kPi));
+        base_velocity = 3.0 * (goal - robot.base);
+        const double yaw_error = std::abs(std::remainder(yaw_goal - robot.yaw, 2 * kPi));
         // (the hands' height is what the lift and arm reach: only where
         // they are in the plane counts)
         const double hand_error =
             std::max((tcp[0] - hand_goal[0]).head<2>().norm(), (tcp[1] - hand_goal[1]).head<2>().norm());
-        if (((goal - base).norm() < 0.12 && yaw_error < 0.2 && hand_error < 0.1) || phase_steps_ > 100)
+        if (((goal - robot.base).norm() < 0.12 && yaw_error < 0.2 && hand_error < 0.1) || phase_steps_ > 100)
           enter(Phase::kPush);
       }
       break;
@@ -122,13 +119,13 @@ Eigen::VectorXd PushChairExpert::act(const sdk::Observation& observation) {
       // Along the push line at a speed that falls with the distance still
       // to go; sideways back onto the line through the chair's centre.
       const double speed = std::clamp(kPushGain * (distance - kStopLead), 0.0, kPushSpeed);
-      const Eigen::Vector2d offset = base - chair;
+      const Eigen::Vector2d offset = robot.base - chair;
       base_velocity = speed * d - 2.0 * offset.dot(side) * side;
       // Close to the target the line turns quickly with the chair's
       // sideways drift: hold the heading and line there.
       if (distance < 0.3) {
-        yaw_goal = yaw;
-        base_velocity = speed * unit(yaw);
+        yaw_goal = robot.yaw;
+        base_velocity = speed * unit(robot.yaw);
       }
       if (distance < kReleaseDistance || (distance < 0.09 && chair_velocity.dot(d) < 0.02 && phase_steps_ > 10) ||
           offset.dot(d) > 0)
@@ -138,8 +135,8 @@ Eigen::VectorXd PushChairExpert::act(const sdk::Observation& observation) {
     case Phase::kRelease:
       // Back off a little, then stay; a chair that stopped short (or
       // drifted off) is pushed again from where it is now.
-      if (phase_steps_ <= 6) base_velocity = -0.25 * unit(yaw);
-      yaw_goal = yaw;
+      if (phase_steps_ <= 6) base_velocity = -0.25 * unit(robot.yaw);
+      yaw_goal = robot.yaw;
       if (phase_steps_ > 6 && distance > kRetryDistance && chair_velocity.norm() < 0.05) {
         enter(Phase::kApproach);
         orbit_sign_ = 0;
@@ -147,15 +144,15 @@ Eigen::VectorXd PushChairExpert::act(const sdk::Observation& observation) {
       break;
   }
   // Each base axis runs at up to kBaseSpeed: scale the command down as a whole.
-  Eigen::Vector2d base_local = Eigen::Rotation2Dd(-yaw).toRotationMatrix() * base_velocity;
+  Eigen::Vector2d base_local = Eigen::Rotation2Dd(-robot.yaw).toRotationMatrix() * base_velocity;
   base_local /= std::max(1.0, base_local.cwiseAbs().maxCoeff() / kBaseSpeed);
-  base_velocity = Eigen::Rotation2Dd(yaw).toRotationMatrix() * base_local;
-  double yaw_rate = std::clamp(3.0 * std::remainder(yaw_goal - yaw, 2 * kPi), -2.0, 2.0);
+  base_velocity = Eigen::Rotation2Dd(robot.yaw).toRotationMatrix() * base_local;
+  double yaw_rate = std::clamp(3.0 * std::remainder(yaw_goal - robot.yaw, 2 * kPi), -2.0, 2.0);
   if (phase_ == Phase::kRelease) yaw_rate = 0;
 
   // Lift: the hands at the cushion, the arms at their starting height above it.
   const double lift_goal = std::clamp(hand_height - nominal_height_, 0.0, 1.5);
-  const double lift_rate = 3.0 * (lift_goal - lift);
+  const double lift_rate = 3.0 * (lift_goal - robot.lift);
 
   Eigen::VectorXd action = Eigen::VectorXd::Zero(action_.dim);
   setBaseAction(action, action_.base, base_local, yaw_rate, lift_rate);
@@ -163,13 +160,13 @@ Eigen::VectorXd PushChairExpert::act(const sdk::Observation& observation) {
     Eigen::Vector3d velocity = clipNorm(5.0 * (hand_goal[a] - tcp[a]), kEeSpeed);
     // The command is relative to the moving base and lift: take out what
     // they do to the TCP.
-    const Eigen::Vector3d lever = tcp[a] - Eigen::Vector3d(base.x(), base.y(), tcp[a].z());
+    const Eigen::Vector3d lever = tcp[a] - Eigen::Vector3d(robot.base.x(), robot.base.y(), tcp[a].z());
     velocity -= Eigen::Vector3d(base_velocity.x(), base_velocity.y(), lift_rate) +
                 Eigen::Vector3d(0, 0, yaw_rate).cross(lever);
-    const Eigen::AngleAxisd error(base_rotation * nominal_rotation_[a] * robot.tcp_rotation[a].transpose());
+    const Eigen::AngleAxisd error(robot.base_rotation * nominal_rotation_[a] * robot.tcp_rotation[a].transpose());
     Eigen::Vector3d angular = clipNorm(4.0 * error.angle() * error.axis(), kEeAngularSpeed);
     angular.z() -= yaw_rate;
-    setEeAction(action, action_.arms[a].linear, action_.arms[a].angular, base_rotation, velocity, angular);
+    setEeAction(action, action_.arms[a].linear, action_.arms[a].angular, robot.base_rotation, velocity, angular);
     action[action_.arms[a].gripper] = -1.0;  // closed: a compact fist
   }
   return action;

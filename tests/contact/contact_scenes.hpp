@@ -3,31 +3,27 @@
 #pragma once
 
 #include <gtest/gtest.h>
-#include <manibench/sdk/numbers.hpp>
+#include <manibench/scene.hpp>
 #include <unistd.h>
 
 #include <cmath>
 #include <cstring>
 #include <fstream>
-#include <manibench/scene.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "../scene/scene_urdf.hpp"
+
 namespace manibench {
 namespace contact_scenes {
 
-using sdk::kPi;
-constexpr double kG = 9.81;
+// The scene tests' constants and number format (scene/scene_urdf.hpp).
+using scene_testing::kG;
+using scene_testing::kPi;
+using scene_testing::num;
 
 // --- URDF building blocks -------------------------------------------------------
-
-inline std::string num(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  return s.str();
-}
 
 inline std::string origin(const Eigen::Vector3d& xyz,
                           const Eigen::Vector3d& rpy = Eigen::Vector3d::Zero()) {

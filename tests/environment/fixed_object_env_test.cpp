@@ -173,12 +173,7 @@ TEST(FixedObjectEnv, CommandsTakeFixedIds) {
   EXPECT_TRUE(contains(list.out, "<Task>_<object>-v<N>")) << list.out;
 }
 
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using manibench::testing::readFile;
 
 TEST(FixedObjectEnv, EvalOnAFixedIdMatchesTheTaskOnThatObject) {
   char dir[] = "/tmp/manibench_fixed_XXXXXX";

@@ -32,12 +32,7 @@ const std::string kFixturePath = "MANIBENCH_PLUGIN_PATH=" + kEvalFixtureDir;
 
 using testing::contains;
 
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using manibench::testing::readFile;
 
 // A fresh directory, removed with the object.
 class TempDir {

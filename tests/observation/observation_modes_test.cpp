@@ -506,12 +506,7 @@ TEST(ObservationModes, CameraErrorsNameTheCamera) {
 
 // ---- manibench render ------------------------------------------------------------------------
 
-std::string readFile(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using manibench::testing::readFile;
 
 TEST(RenderCommand, WritesImagesMasksAndPointClouds) {
   const std::filesystem::path dir =

@@ -19,6 +19,10 @@ namespace manibench::testing {
 // `overrides` (KEY=VALUE, as --set) on top.
 std::unique_ptr<Environment> makeEnvironment(const std::string& task, const std::vector<std::string>& overrides = {});
 
+// Resetting `object` with a seed after an episode of `other` gives the
+// start that seed gave before (the episode does not depend on what ran).
+void expectSameStartAfterAnotherObject(Environment& env, const std::string& object, const std::string& other);
+
 // A scripted expert and its environment: `task` with the mobile_panda_ee
 // controller (`overrides` after it), `policy` on the state observation.
 struct ExpertSetup {

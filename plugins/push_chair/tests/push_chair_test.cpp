@@ -134,12 +134,7 @@ TEST(PushChair, ResetPlacesChairAndRobotAtTheirDistancesFacingTheChair) {
     bearings.insert(std::atan2(chair.y() - target.y(), chair.x() - target.x()));
   }
   EXPECT_GE(bearings.size(), 10u) << "the placement is randomized";
-  // same seed, same episode start, after another object
-  env->reset(object, 5);
-  const Eigen::VectorXd a = env->getObservation();
-  env->reset(env->listObjects("test").back(), 1);
-  env->reset(object, 5);
-  EXPECT_EQ(a, env->getObservation());
+  mb::testing::expectSameStartAfterAnotherObject(*env, object, env->listObjects("test").back());
 }
 
 TEST(PushChair, EveryRewardStageStrictlyExceedsTheOneBefore) {
