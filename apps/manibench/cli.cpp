@@ -10,12 +10,9 @@
 
 namespace manibench::cli {
 
-namespace {
-const std::vector<std::string> kRepeatable = {"config", "set"};
-}  // namespace
-
 Arguments parseArguments(int argc, char** argv, int first, const std::vector<std::string>& valued,
-                         const std::vector<std::string>& flags, const char* usage) {
+                         const std::vector<std::string>& flags, const char* usage,
+                         const std::vector<std::string>& repeatable) {
   Arguments args;
   for (int i = first; i < argc; ++i) {
     const std::string word = argv[i];
@@ -38,7 +35,7 @@ Arguments parseArguments(int argc, char** argv, int first, const std::vector<std
       }
       if (is_flag && eq != std::string::npos)
         throw UsageError("option '--" + key + "' takes no value", usage);
-      if (std::find(kRepeatable.begin(), kRepeatable.end(), key) != kRepeatable.end())
+      if (std::find(repeatable.begin(), repeatable.end(), key) != repeatable.end())
         args.repeated[key].push_back(value);
       else
         args.options[key] = value;

@@ -57,9 +57,11 @@ struct Arguments {
 };
 
 // Parses argv[first..]: `valued` options take a value, `flags` do not;
-// --config and --set repeat. Unknown options are a UsageError with `usage`.
+// those named in `repeatable` (--config and --set unless told otherwise)
+// keep every value. Unknown options are a UsageError with `usage`.
 Arguments parseArguments(int argc, char** argv, int first, const std::vector<std::string>& valued,
-                         const std::vector<std::string>& flags, const char* usage);
+                         const std::vector<std::string>& flags, const char* usage,
+                         const std::vector<std::string>& repeatable = {"config", "set"});
 // A non-negative integer, or a UsageError naming `option` with `usage`.
 uint64_t parseSeed(const std::string& text, const char* usage, const std::string& option = "--seed");
 std::string valueOr(const Arguments& args, const std::string& key, const std::string& fallback);

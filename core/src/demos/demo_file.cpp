@@ -221,7 +221,7 @@ void readObservations(const Handle& group, const DemoFileInfo& info, Trajectory&
   }
 }
 
-void readTrajectory(const Handle& group, const DemoFileInfo& info, Trajectory& t) {
+void readTrajectory(const Handle& group, const DemoFileInfo& info, bool with_env_states, Trajectory& t) {
   readSummaryInto(group, t);
   const hsize_t steps = t.steps;
   const std::vector<hsize_t> action_dims = expectDims(group, "actions", {steps, 0});
@@ -237,6 +237,7 @@ void readTrajectory(const Handle& group, const DemoFileInfo& info, Trajectory& t
   expectDims(group, "conditions", {steps, t.condition_count});
   t.conditions = readDataset<uint8_t>(group, "conditions");
   readObservations(group, info, t);
+  if (!with_env_states) return;
   expectDims(group, "env_state_offsets", {steps + 2});
   t.env_state_offsets = readDataset<uint64_t>(group, "env_state_offsets");
   t.env_states = readDataset<uint8_t>(group, "env_states");
@@ -364,12 +365,12 @@ const std::string& DemoReader::getPath() const { return impl_->path; }
 const DemoFileInfo& DemoReader::getInfo() const { return impl_->info; }
 const std::vector<std::string>& DemoReader::getTrajectoryNames() const { return impl_->names; }
 
-Trajectory DemoReader::read(const std::string& name) const {
+Trajectory DemoReader::read(const std::string& name, bool with_env_states) const {
   return withContext("'" + impl_->path + "', trajectory " + name, [&] {
     if (!hasLink(impl_->file, name)) throw DemoError("no such trajectory");
     const Handle group = openGroup(impl_->file, name);
     Trajectory t;
-    readTrajectory(group, impl_->info, t);
+    readTrajectory(group, impl_->info, with_env_states, t);
     return t;
   });
 }
