@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <random>
@@ -139,6 +140,16 @@ std::string resolvePolicy(mb::PluginRegistry& registry, const std::string& polic
     throw std::runtime_error("library " + policy + " registers " + std::to_string(policies.size()) +
                              " policies; give one by name with MANIBENCH_PLUGIN_PATH instead");
   return policies.front();
+}
+
+std::string readPolicyConfig(const Arguments& args) {
+  const auto it = args.options.find("policy-config");
+  if (it == args.options.end()) return "";
+  std::ifstream in(it->second);
+  if (!in) throw std::runtime_error("cannot read the policy configuration '" + it->second + "'");
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
 }
 
 std::string chooseObject(const std::vector<std::string>& objects, uint64_t seed,

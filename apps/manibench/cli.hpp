@@ -83,6 +83,9 @@ std::unique_ptr<mb::Environment> makeEnvironment(const mb::PluginRegistry& regis
                                                  const mb::ConfigSources& sources,
                                                  bool stop_on_success);
 void printSegments(const std::vector<mb::SegmentDescription>& segments);
+// The YAML of --policy-config FILE handed to the policy's create ("" when
+// not given); an unreadable file is an error naming it.
+std::string readPolicyConfig(const Arguments& args);
 // Resolves --policy: a registered name, or a library path to load first.
 std::string resolvePolicy(mb::PluginRegistry& registry, const std::string& policy);
 // A deterministic object of `objects` for `seed`.

@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -176,6 +177,12 @@ torch::Tensor poolMaxMean(const torch::Tensor& features, const torch::Tensor& ma
 
 }  // namespace
 
+namespace {
+std::atomic<bool> g_pointnet_definition{false};
+}  // namespace
+
+void setPointNetDefinitionMode(bool on) { g_pointnet_definition = on; }
+
 PointNetImpl::PointNetImpl(int64_t mask_count, int64_t state_input,
                            const std::vector<int64_t>& layers, bool activate_last)
     : output_dim_(layers.back()) {
@@ -186,6 +193,7 @@ PointNetImpl::PointNetImpl(int64_t mask_count, int64_t state_input,
 torch::Tensor PointNetImpl::forward(const torch::Tensor& xyz, const torch::Tensor& rgb,
                                     const torch::Tensor& seg, const torch::Tensor& state,
                                     const torch::Tensor& mask) {
+  if (g_pointnet_definition) return forwardDefinition(xyz, rgb, seg, state, mask);
   const int64_t batch = xyz.size(0), points = xyz.size(1), masks = seg.size(2);
   const int64_t most = std::max<int64_t>(1, int64_t(mask.sum(1).max().item<float>()));
   torch::Tensor gxyz = xyz, grgb = rgb, gseg = seg, gmask = mask;
@@ -400,20 +408,25 @@ class PnTransformerNetwork : public Network {
     return masks;
   }
 
-  torch::Tensor forward(const ObservationBatch& obs, const torch::Tensor& extra) override {
+  // The tokens after the task embedding, [B, T - 1, W], and whether each
+  // has points ([B, T - 1]; the state's always does).
+  std::pair<torch::Tensor, torch::Tensor> calcTokens(const ObservationBatch& obs, const torch::Tensor& extra) {
     if (!obs.hasPoints()) throw LearningError("the pn_transformer network needs point clouds");
-    const int64_t b = obs.size();
     const torch::Tensor s = calcStateInput(obs, extra);
     const std::vector<torch::Tensor> masks = calcPointMasks(obs);
     std::vector<torch::Tensor> tokens{state_mlp_->forward(s)};
-    std::vector<torch::Tensor> present{torch::ones({b}, s.options())};
+    std::vector<torch::Tensor> present{torch::ones({obs.size()}, s.options())};
     for (std::size_t i = 0; i < masks.size(); ++i) {
       tokens.push_back(globals_[i]->forward(pointnets_[i]->forward(obs.xyz, obs.rgb, obs.seg, s, masks[i])));
       present.push_back((masks[i].sum(1) > 0).to(torch::kFloat32));
     }
-    torch::Tensor x = torch::cat({task_embedding_.expand({b, 1, task_embedding_.size(2)}),
-                                  torch::stack(tokens, 1)}, 1);  // [B, T, W]
-    const torch::Tensor p = torch::stack(present, 1);             // [B, T - 1]
+    return {torch::stack(tokens, 1), torch::stack(present, 1)};
+  }
+
+  torch::Tensor forward(const ObservationBatch& obs, const torch::Tensor& extra) override {
+    const int64_t b = obs.size();
+    const auto [tokens, p] = calcTokens(obs, extra);  // [B, T - 1, W], [B, T - 1]
+    torch::Tensor x = torch::cat({task_embedding_.expand({b, 1, task_embedding_.size(2)}), tokens}, 1);
     torch::Tensor mask = p.unsqueeze(2) * p.unsqueeze(1);         // [B, T - 1, T - 1]
     mask = torch::cat({torch::ones({b, 1, mask.size(2)}, mask.options()), mask}, 1);
     mask = torch::cat({torch::ones({b, mask.size(1), 1}, mask.options()), mask}, 2);  // [B, T, T]
@@ -452,6 +465,12 @@ std::shared_ptr<Network> makeNetwork(const NetOptions& options, const Observatio
       return std::make_shared<PnTransformerNetwork>(options, spec, extra_dim, output_dim);
   }
   throw LearningError("unknown network kind");
+}
+
+torch::Tensor calcTransformerTokens(Network& network, const ObservationBatch& obs, const torch::Tensor& extra) {
+  auto* transformer = dynamic_cast<PnTransformerNetwork*>(&network);
+  if (transformer == nullptr) throw LearningError("not a pn_transformer network");
+  return transformer->calcTokens(obs, extra).first;
 }
 
 int64_t countParameters(torch::nn::Module& module) {

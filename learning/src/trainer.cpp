@@ -167,7 +167,7 @@ class Trainer {
   TrainResult resume(int64_t iterations) {
     const std::string newest = findNewestCheckpoint(dir_.string());
     if (newest.empty()) throw LearningError("'" + dir_.string() + "' has no checkpoint to resume from");
-    LoadedCheckpoint loaded = loadCheckpoint(newest, device_, true, {"torch_generator", "sampler"});
+    LoadedCheckpoint loaded = loadCheckpoint(newest, device_, true, {"torch_generator", "sampler", "log_row"});
     loaded.info.spec.checkSame(spec_, "the checkpoint '" + newest + "'", "the demonstrations");
     algorithm_ = std::move(loaded.algorithm);
     if (iterations > 0) options_.iterations = iterations;
@@ -180,6 +180,7 @@ class Trainer {
                                               algorithm_->needsNextObservations());
     const torch::Tensor s = loaded.extras.at("sampler");
     sampler_->setPosition({uint64_t(s[0].item<int64_t>()), s[1].item<int64_t>(), s[2].item<int64_t>()});
+    log_row_ = loaded.extras.at("log_row");
     truncateCsv(dir_ / "log.csv", loaded.info.iteration);
     truncateCsv(dir_ / "eval.csv", loaded.info.iteration);
     say("resuming from " + newest + " (iteration " + std::to_string(loaded.info.iteration) + ")");
@@ -214,7 +215,9 @@ class Trainer {
     const torch::Tensor sampler = torch::tensor({int64_t(p.epoch_seed), p.epoch, p.batch}, torch::kInt64);
     const fs::path path = fs::absolute(dir_ / "checkpoints" / checkpointName(iteration));
     saveCheckpoint(path.string(), info, *algorithm_,
-                   {{"torch_generator", at::detail::getDefaultCPUGenerator().get_state()}, {"sampler", sampler}});
+                   {{"torch_generator", at::detail::getDefaultCPUGenerator().get_state()},
+                    {"sampler", sampler},
+                    {"log_row", log_row_}});
     writeText(dir_ / "policy.yaml", "# manibench eval TASK --policy torch_policy --policy-config " +
                                         (dir_ / "policy.yaml").string() + "\ncheckpoint: '" + path.string() + "'\n");
     last_checkpoint_ = path.string();
@@ -242,8 +245,10 @@ class Trainer {
     using clock = std::chrono::steady_clock;
     const auto started = clock::now();
     const std::vector<std::string> names = algorithm_->getLossNames();
-    std::vector<double> sums(names.size(), 0.0);
-    int64_t in_row = 0;
+    // The log row in progress: its iteration count, then each loss's sum
+    // (in checkpoints, so a resumed run's rows equal an uninterrupted one's).
+    if (!log_row_.defined()) log_row_ = torch::zeros({int64_t(names.size()) + 1}, torch::kFloat64);
+    double* row = log_row_.data_ptr<double>();
     auto row_started = clock::now();
     std::ofstream log(dir_ / "log.csv", std::ios::app);
     TrainResult result;
@@ -262,10 +267,10 @@ class Trainer {
                               (last_checkpoint_.empty() ? std::string("no checkpoint was written")
                                                         : "the newest checkpoint, " + last_checkpoint_ + ", is intact") +
                               "): try a lower --lr, --normalize-state, or check the demonstrations");
-        sums[i] += losses[i];
+        row[i + 1] += losses[i];
       }
       ++iteration;
-      ++in_row;
+      row[0] += 1;
       const double elapsed = std::chrono::duration<double>(clock::now() - started).count();
       if (hooks_.on_progress)
         hooks_.on_progress({iteration, options_.iterations, names, losses, elapsed,
@@ -273,12 +278,9 @@ class Trainer {
       if (iteration % options_.log_every == 0 || iteration == options_.iterations) {
         const double row_seconds = std::chrono::duration<double>(clock::now() - row_started).count();
         log << iteration << "," << formatNumber(elapsed);
-        for (double& s : sums) {
-          log << "," << formatNumber(s / double(in_row));
-          s = 0;
-        }
-        log << "," << formatNumber(double(in_row) / std::max(row_seconds, 1e-9)) << "\n" << std::flush;
-        in_row = 0;
+        for (std::size_t i = 0; i < names.size(); ++i) log << "," << formatNumber(row[i + 1] / row[0]);
+        log << "," << formatNumber(row[0] / std::max(row_seconds, 1e-9)) << "\n" << std::flush;
+        log_row_.zero_();
         row_started = clock::now();
       }
       const bool checkpoint = iteration % options_.checkpoint_every == 0 || iteration == options_.iterations;
@@ -303,6 +305,7 @@ class Trainer {
   ObservationSpec spec_;
   std::unique_ptr<Algorithm> algorithm_;
   std::unique_ptr<BatchSampler> sampler_;
+  torch::Tensor log_row_;
   std::string last_checkpoint_;
 };
 

@@ -92,6 +92,12 @@ class Network : public torch::nn::Module {
 std::shared_ptr<Network> makeNetwork(const NetOptions& options, const ObservationSpec& spec,
                                      int64_t extra_dim, int64_t output_dim);
 
+// The tokens a pn_transformer network feeds its Transformer, before the
+// task embedding: [B, K + 3, width], the state MLP's, then one per
+// PointNet (points in no mask, masks 1..K, the whole cloud). For the tests;
+// throws for other networks.
+torch::Tensor calcTransformerTokens(Network& network, const ObservationBatch& obs, const torch::Tensor& extra);
+
 // Trainable parameters of a module (for docs and logs).
 int64_t countParameters(torch::nn::Module& module);
 
@@ -142,5 +148,10 @@ class PointNetImpl : public torch::nn::Module {
   int64_t output_dim_;
 };
 TORCH_MODULE(PointNet);
+
+// Makes every PointNet of this process run forwardDefinition() (the
+// benchmark's like-for-like comparison with a straightforward
+// implementation; results equal up to rounding).
+void setPointNetDefinitionMode(bool on);
 
 }  // namespace manibench::learning
