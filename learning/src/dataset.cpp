@@ -56,9 +56,23 @@ void checkShape(const Shape& expected, const Shape& got, const std::string& wher
 
 // --- DataChunk -----------------------------------------------------------------------------
 
-ObservationBatch DataChunk::gatherObservations(const torch::Tensor& rows) const {
+ObservationBatch DataChunk::gatherObservations(const torch::Tensor& rows, const NetOptions& inputs) const {
   ObservationBatch b;
   b.state = state.index_select(0, rows);
+  if (inputs.history > 1 || inputs.previous_action) {
+    // [s_t, s_t-1, ..., a_t-1], as InputHistory builds it while acting.
+    const torch::Tensor first = obs_first.index_select(0, rows);
+    std::vector<torch::Tensor> parts{b.state};
+    for (int64_t k = 1; k < inputs.history; ++k)
+      parts.push_back(state.index_select(0, torch::max(rows - k, first)));
+    if (inputs.previous_action) {
+      const torch::Tensor has_previous = rows > first;
+      const torch::Tensor previous = obs_transition.index_select(0, torch::where(has_previous, rows - 1, rows));
+      const torch::Tensor action = actions.index_select(0, previous.clamp_min(0));
+      parts.push_back(action * has_previous.unsqueeze(1).to(torch::kFloat32));
+    }
+    b.state = torch::cat(parts, 1);
+  }
   if (xyz.defined()) {
     b.xyz = xyz.index_select(0, rows);
     b.rgb = rgb.index_select(0, rows);
@@ -69,11 +83,11 @@ ObservationBatch DataChunk::gatherObservations(const torch::Tensor& rows) const 
   return b;
 }
 
-TransitionBatch DataChunk::gather(const torch::Tensor& index, bool with_next) const {
+TransitionBatch DataChunk::gather(const torch::Tensor& index, bool with_next, const NetOptions& inputs) const {
   TransitionBatch b;
   const torch::Tensor rows = obs_index.index_select(0, index);
-  b.obs = gatherObservations(rows);
-  if (with_next) b.next_obs = gatherObservations(rows + 1);
+  b.obs = gatherObservations(rows, inputs);
+  if (with_next) b.next_obs = gatherObservations(rows + 1, inputs);
   b.actions = actions.index_select(0, index);
   b.rewards = rewards.index_select(0, index);
   b.dones = dones.index_select(0, index);
@@ -195,11 +209,15 @@ DataChunk DemoDataset::load(const std::vector<std::size_t>& indices) const {
   c.rewards = torch::empty({transitions}, torch::kFloat32);
   c.dones = torch::empty({transitions}, torch::kFloat32);
   c.obs_index = torch::empty({transitions}, torch::kInt64);
+  c.obs_first = torch::empty({observations}, torch::kInt64);
+  c.obs_transition = torch::full({observations}, int64_t(-1), torch::kInt64);
   float* state = c.state.data_ptr<float>();
   float* actions = c.actions.data_ptr<float>();
   float* rewards = c.rewards.data_ptr<float>();
   float* dones = c.dones.data_ptr<float>();
   int64_t* obs_index = c.obs_index.data_ptr<int64_t>();
+  int64_t* obs_first = c.obs_first.data_ptr<int64_t>();
+  int64_t* obs_transition = c.obs_transition.data_ptr<int64_t>();
   int64_t o = 0, m = 0;
   for (std::size_t i : indices) {
     const TrajectoryRef& ref = trajectories_[i];
@@ -225,7 +243,9 @@ DataChunk DemoDataset::load(const std::vector<std::size_t>& indices) const {
       rewards[m + s] = float(t.rewards[s]);
       dones[m + s] = t.terminated[s] ? 1.0f : 0.0f;
       obs_index[m + s] = o + s;
+      obs_transition[o + s] = m + s;
     }
+    for (int64_t s = 0; s < obs; ++s) obs_first[o + s] = o;
     o += obs;
     m += t.steps;
   }
@@ -299,8 +319,9 @@ ObservationSpec calcDemoSpec(const PluginRegistry& registry, const DemoDataset& 
 
 // --- BatchSampler --------------------------------------------------------------------------
 
-BatchSampler::BatchSampler(const DemoDataset& dataset, int64_t batch_size, uint64_t seed, bool with_next)
-    : dataset_(dataset), batch_size_(batch_size), with_next_(with_next) {
+BatchSampler::BatchSampler(const DemoDataset& dataset, int64_t batch_size, uint64_t seed, bool with_next,
+                           const NetOptions& inputs)
+    : dataset_(dataset), batch_size_(batch_size), with_next_(with_next), inputs_(inputs) {
   if (batch_size <= 0) throw LearningError("the batch size must be positive");
   if (dataset.getTransitionCount() < uint64_t(batch_size))
     throw LearningError("the demonstrations hold " + std::to_string(dataset.getTransitionCount()) +
@@ -380,7 +401,7 @@ TransitionBatch BatchSampler::next() {
   const torch::Tensor index =
       torch::from_blob(order_.data() + first, {batch_size_}, torch::kInt64).clone();
   ++position_.batch;
-  return chunk_.gather(index, with_next_);
+  return chunk_.gather(index, with_next_, inputs_);
 }
 
 void BatchSampler::setPosition(const Position& position) {

@@ -26,20 +26,31 @@ class CheckpointPolicy : public InferencePolicy {
       : device_(parseDevice(options.device)), generator_(at::detail::createCPUGenerator(0)) {
     loaded_ = loadCheckpoint(options.checkpoint, device_, false);
     loaded_.info.spec.checkSame(host, "the checkpoint '" + options.checkpoint + "'", "the environment");
+    history_ = std::make_unique<InputHistory>(loaded_.info.network, loaded_.info.spec);
     name_ = "checkpoint '" + options.checkpoint + "' (" + loaded_.info.algorithm.name + ", " +
             toString(loaded_.info.network.kind) + ", iteration " + std::to_string(loaded_.info.iteration) + ")";
   }
-  void reset(uint64_t seed) override { generator_.set_current_seed(seed); }
+  void reset(uint64_t seed) override {
+    generator_.set_current_seed(seed);
+    history_->reset();
+  }
   torch::Tensor act(const ObservationBatch& obs) override {
     checkPoints(loaded_.info.spec, obs, "the " + name_);
-    return loaded_.algorithm->act(obs.to(device_), generator_).to(torch::kCPU).squeeze(0);
+    if (obs.state.size(1) != loaded_.info.spec.state_dim)
+      throw LearningError("the " + name_ + " takes a state of " + std::to_string(loaded_.info.spec.state_dim) +
+                          " values; the observation has " + std::to_string(obs.state.size(1)));
+    ObservationBatch input = obs;
+    input.state = history_->makeInput(obs.state);
+    const torch::Tensor action = loaded_.algorithm->act(input.to(device_), generator_).to(torch::kCPU).squeeze(0);
+    history_->setAction(action);
+    return action;
   }
   std::string describe() const override { return name_; }
-  Algorithm& getAlgorithm() { return *loaded_.algorithm; }
 
  private:
   torch::Device device_;
   LoadedCheckpoint loaded_;
+  std::unique_ptr<InputHistory> history_;
   at::Generator generator_;
   std::string name_;
 };

@@ -73,6 +73,8 @@ const char* toString(NetKind kind) {
 
 void NetOptions::writeYaml(YAML::Node& node) const {
   node["kind"] = toString(kind);
+  node["history"] = history;
+  node["previous_action"] = previous_action;
   node["mlp_hidden"] = mlp_hidden;
   node["point_layers"] = point_layers;
   node["pointnet_head"] = pointnet_head;
@@ -88,6 +90,8 @@ void NetOptions::writeYaml(YAML::Node& node) const {
 NetOptions NetOptions::readYaml(const YAML::Node& node) {
   NetOptions o;
   o.kind = parseNetKind(node["kind"].as<std::string>());
+  o.history = node["history"].as<int64_t>(1);
+  o.previous_action = node["previous_action"].as<bool>(false);
   o.mlp_hidden = node["mlp_hidden"].as<std::vector<int64_t>>();
   o.point_layers = node["point_layers"].as<std::vector<int64_t>>();
   o.pointnet_head = node["pointnet_head"].as<std::vector<int64_t>>();
@@ -252,8 +256,8 @@ namespace {
 class MlpNetwork : public Network {
  public:
   MlpNetwork(const NetOptions& o, const ObservationSpec& spec, int64_t extra, int64_t out)
-      : Network(spec.state_dim, extra, out) {
-    mlp_ = register_module("mlp", Mlp(spec.state_dim + extra, append(o.mlp_hidden, out), false));
+      : Network(calcInputStateDim(o, spec), extra, out) {
+    mlp_ = register_module("mlp", Mlp(state_dim_ + extra, append(o.mlp_hidden, out), false));
   }
   torch::Tensor forward(const ObservationBatch& obs, const torch::Tensor& extra) override {
     return mlp_->forward(calcStateInput(obs, extra));
@@ -266,9 +270,9 @@ class MlpNetwork : public Network {
 class PointNetNetwork : public Network {
  public:
   PointNetNetwork(const NetOptions& o, const ObservationSpec& spec, int64_t extra, int64_t out)
-      : Network(spec.state_dim, extra, out) {
+      : Network(calcInputStateDim(o, spec), extra, out) {
     pointnet_ = register_module(
-        "pointnet", PointNet(spec.mask_count, spec.state_dim + extra, o.point_layers, true));
+        "pointnet", PointNet(spec.mask_count, state_dim_ + extra, o.point_layers, true));
     head_ = register_module("head", Mlp(pointnet_->getOutputDim(), append(o.pointnet_head, out), false));
   }
   torch::Tensor forward(const ObservationBatch& obs, const torch::Tensor& extra) override {
@@ -380,8 +384,8 @@ TORCH_MODULE(AttentionPooling);
 class PnTransformerNetwork : public Network {
  public:
   PnTransformerNetwork(const NetOptions& o, const ObservationSpec& spec, int64_t extra, int64_t out)
-      : Network(spec.state_dim, extra, out), mask_count_(spec.mask_count) {
-    const int64_t state_input = spec.state_dim + extra;
+      : Network(calcInputStateDim(o, spec), extra, out), mask_count_(spec.mask_count) {
+    const int64_t state_input = state_dim_ + extra;
     for (int64_t i = 0; i < mask_count_ + 2; ++i) {
       pointnets_.push_back(register_module("pointnet" + std::to_string(i),
                                            PointNet(mask_count_, state_input, std::vector<int64_t>{o.width, o.width}, false)));
@@ -448,8 +452,39 @@ class PnTransformerNetwork : public Network {
 
 }  // namespace
 
+int64_t calcInputStateDim(const NetOptions& options, const ObservationSpec& spec) {
+  return options.history * int64_t(spec.state_dim) + (options.previous_action ? int64_t(spec.action_dim) : 0);
+}
+
+InputHistory::InputHistory(const NetOptions& options, const ObservationSpec& spec)
+    : history_(options.history), previous_action_(options.previous_action) {
+  action_ = torch::zeros({1, int64_t(spec.action_dim)});
+}
+
+void InputHistory::reset() {
+  states_.clear();
+  action_.zero_();
+}
+
+torch::Tensor InputHistory::makeInput(const torch::Tensor& state) {
+  if (history_ == 1 && !previous_action_) return state;
+  if (states_.empty()) states_.assign(std::size_t(history_), state);
+  else {
+    states_.pop_back();
+    states_.insert(states_.begin(), state);
+  }
+  std::vector<torch::Tensor> parts = states_;
+  if (previous_action_) parts.push_back(action_);
+  return torch::cat(parts, 1);
+}
+
+void InputHistory::setAction(const torch::Tensor& action) {
+  action_.copy_(action.reshape({1, -1}).clamp(-1, 1));
+}
+
 std::shared_ptr<Network> makeNetwork(const NetOptions& options, const ObservationSpec& spec,
                                      int64_t extra_dim, int64_t output_dim) {
+  if (options.history < 1) throw LearningError("the history must be at least 1 observation");
   if (options.kind != NetKind::Mlp && !spec.isPointCloud())
     throw LearningError(std::string("the ") + toString(options.kind) +
                         " network needs pointcloud observations, but the data are " + spec.mode +

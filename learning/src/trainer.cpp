@@ -152,11 +152,18 @@ class Trainer {
     algorithm_ = makeAlgorithm(options_.algorithm, options_.network, spec_, device_);
     if (options_.normalize_state) {
       auto [mean, std] = dataset_->calcStateStatistics();
-      const torch::Tensor scale = torch::where(std > 1e-6, 1.0 / std, torch::ones_like(std));
+      torch::Tensor scale = torch::where(std > 1e-6, 1.0 / std, torch::ones_like(std));
+      // Every stacked observation alike; the previous action as it is.
+      mean = mean.repeat({options_.network.history});
+      scale = scale.repeat({options_.network.history});
+      if (options_.network.previous_action) {
+        mean = torch::cat({mean, torch::zeros({int64_t(spec_.action_dim)})});
+        scale = torch::cat({scale, torch::ones({int64_t(spec_.action_dim)})});
+      }
       algorithm_->setStateNormalization(mean.to(device_), scale.to(device_));
     }
     sampler_ = std::make_unique<BatchSampler>(*dataset_, options_.algorithm.batch_size, options_.seed,
-                                              algorithm_->needsNextObservations());
+                                              algorithm_->needsNextObservations(), options_.network);
     for (const auto& [name, network] : algorithm_->getNetworks())
       say("network " + name + ": " + toString(options_.network.kind) + ", " +
           std::to_string(countParameters(*network)) + " parameters");
@@ -177,7 +184,7 @@ class Trainer {
     at::Generator generator = at::detail::getDefaultCPUGenerator();  // shares the default's state
     generator.set_state(loaded.extras.at("torch_generator"));
     sampler_ = std::make_unique<BatchSampler>(*dataset_, options_.algorithm.batch_size, options_.seed,
-                                              algorithm_->needsNextObservations());
+                                              algorithm_->needsNextObservations(), options_.network);
     const torch::Tensor s = loaded.extras.at("sampler");
     sampler_->setPosition({uint64_t(s[0].item<int64_t>()), s[1].item<int64_t>(), s[2].item<int64_t>()});
     log_row_ = loaded.extras.at("log_row");

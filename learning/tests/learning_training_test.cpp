@@ -188,22 +188,23 @@ std::unique_ptr<Environment> makeEnvironmentOf(const std::string& demos) {
 }
 
 TEST_F(LearningTraining, ThePolicyPluginActsAsTheNetwork) {
-  for (const std::string data : {"reach.h5", "reach_pc.h5"}) {
+  for (const std::string data : {"reach.h5", "reach_pc.h5", "history"}) {
     SCOPED_TRACE(data);
     TrainOptions o = makeOptions("bc", "plugin_" + data, 20);
-    o.data.paths = {file(data)};
-    o.network.kind = data == "reach.h5" ? NetKind::Mlp : NetKind::PnTransformer;
+    o.data.paths = {file(data == "history" ? "reach.h5" : data)};
+    o.network.kind = data == "reach_pc.h5" ? NetKind::PnTransformer : NetKind::Mlp;
     o.network.layers = 1;
+    if (data == "history") o.network.history = 3;
     const TrainResult r = train(getBuildTreeRegistry(), o, {});
     const LoadedCheckpoint loaded = loadCheckpoint(r.checkpoint, torch::kCPU, false);
-    const auto env = makeEnvironmentOf(file(data));
+    const auto env = makeEnvironmentOf(o.data.paths[0]);
     PolicyInstance policy(getBuildTreeRegistry(), "torch_policy", "checkpoint: '" + r.checkpoint + "'",
                           env->calcPolicyLayout());
     policy.reset(0);
-    DemoReader reader(file(data));
+    DemoReader reader(o.data.paths[0]);
     const Trajectory t = reader.read("traj_0", false);
     DatasetOptions d;
-    d.paths = {file(data)};
+    d.paths = o.data.paths;
     const DemoDataset dataset(d);
     const DataChunk chunk = dataset.load({0});
     at::Generator generator = at::detail::createCPUGenerator(0);
@@ -211,8 +212,32 @@ TEST_F(LearningTraining, ThePolicyPluginActsAsTheNetwork) {
       Eigen::VectorXd action(2);
       policy.act(t.getObservationState(i), i, action, t.getVisualObservation(i));
       const torch::Tensor expected =
-          loaded.algorithm->act(chunk.gatherObservations(torch::tensor({int64_t(i)})), generator);
+          loaded.algorithm->act(chunk.gatherObservations(torch::tensor({int64_t(i)}), o.network), generator);
       for (int j = 0; j < 2; ++j) EXPECT_EQ(action[j], double(expected[0][j].item<float>())) << "step " << i;
+    }
+  }
+}
+
+TEST_F(LearningTraining, InputsWithHistoryAreBuiltAlikeWhileActingAndTraining) {
+  DatasetOptions d;
+  d.paths = {file("reach.h5")};
+  const DemoDataset dataset(d);
+  const DataChunk chunk = dataset.load({1, 0});  // the second trajectory first: rows do not start at 0
+  const ObservationSpec spec = calcDemoSpec(getBuildTreeRegistry(), dataset);
+  NetOptions inputs;
+  inputs.history = 3;
+  inputs.previous_action = true;
+  EXPECT_EQ(calcInputStateDim(inputs, spec), 3 * 15 + 2);
+  InputHistory history(inputs, spec);
+  const int64_t first = dataset.getTrajectories()[1].steps + 1;  // trajectory 0's first row
+  for (int episode = 0; episode < 2; ++episode) {  // reset() starts over
+    history.reset();
+    for (int64_t t = 0; t < 6; ++t) {
+      const torch::Tensor row = torch::tensor({first + t});
+      const torch::Tensor acting = history.makeInput(chunk.state.index_select(0, row));
+      const torch::Tensor training = chunk.gatherObservations(row, inputs).state;
+      ASSERT_TRUE(torch::equal(acting, training)) << "step " << t << "\n" << acting << training;
+      history.setAction(chunk.actions[chunk.obs_transition[first + t].item<int64_t>()]);
     }
   }
 }

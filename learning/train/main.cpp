@@ -56,6 +56,9 @@ Data:
 Network:
   --net NAME              mlp (state), pointnet or pn_transformer (pointcloud);
                           default mlp for state, pn_transformer for pointcloud
+  --history N             the state input stacks the last N observations' state
+                          (or agent) vectors (default 1: the current one)
+  --previous-action       the state input includes the previous action
   --hidden N,N,...        mlp hidden layers (default 256,256,256)
   --point-layers N,N      pointnet per-point layers (default 256,512)
   --width N               pn_transformer width (default 256)
@@ -198,13 +201,13 @@ void drawProgress(const ml::TrainProgress& p) {
 
 int run(int argc, char** argv) {
   const std::vector<std::string> valued = {
-      "demos", "objects", "per-object", "cache-gb", "net", "hidden", "point-layers", "width", "layers", "heads",
+      "demos", "objects", "per-object", "cache-gb", "net", "history", "hidden", "point-layers", "width", "layers", "heads",
       "dropout", "iterations", "batch-size", "lr", "weight-decay", "seed", "threads", "device", "gamma", "tau",
       "alpha", "action-noise", "noise-clip", "policy-delay", "phi", "lambda", "train-samples", "eval-samples",
       "out", "checkpoint-every", "log-every", "eval-every", "eval-task", "eval-split", "eval-objects",
       "eval-episodes", "eval-workers", "resume"};
   const mb::cli::Arguments args =
-      mb::cli::parseArguments(argc, argv, 2, valued, {"normalize-state", "no-progress"}, kUsage, {"demos"});
+      mb::cli::parseArguments(argc, argv, 2, valued, {"normalize-state", "previous-action", "no-progress"}, kUsage, {"demos"});
   if (args.help) {
     std::cout << kUsage;
     return 0;
@@ -253,6 +256,8 @@ int run(int argc, char** argv) {
       o.data.cache_bytes = uint64_t(parseNumber(value("cache-gb"), "--cache-gb") * double(uint64_t(1) << 30));
     o.normalize_state = has("normalize-state");
     if (has("net")) o.network.kind = ml::parseNetKind(value("net"));
+    if (has("history")) o.network.history = parseInteger(value("history"), "--history", 1);
+    o.network.previous_action = has("previous-action");
     if (has("hidden")) o.network.mlp_hidden = parseLayers(value("hidden"), "--hidden");
     if (has("point-layers")) o.network.point_layers = parseLayers(value("point-layers"), "--point-layers");
     if (has("width")) o.network.width = parseInteger(value("width"), "--width", 1);

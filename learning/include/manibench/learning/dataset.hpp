@@ -54,10 +54,13 @@ struct DataChunk {
   torch::Tensor actions;        // [M, A] float32, clipped to [-1, 1]
   torch::Tensor rewards, dones;  // [M] float32
   torch::Tensor obs_index;      // [M] int64: transition i starts at observation obs_index[i]
+  torch::Tensor obs_first;      // [O] int64: the first observation of each observation's trajectory
+  torch::Tensor obs_transition; // [O] int64: the transition starting at each observation (-1: the last)
   int64_t getTransitionCount() const { return actions.size(0); }
-  // The transitions `index` ([B] int64), with next observations if asked.
-  TransitionBatch gather(const torch::Tensor& index, bool with_next) const;
-  ObservationBatch gatherObservations(const torch::Tensor& obs_rows) const;
+  // The transitions `index` ([B] int64), with next observations if asked;
+  // the state inputs as `inputs` asks (NetOptions::history, previous_action).
+  TransitionBatch gather(const torch::Tensor& index, bool with_next, const NetOptions& inputs) const;
+  ObservationBatch gatherObservations(const torch::Tensor& obs_rows, const NetOptions& inputs) const;
 };
 
 class DemoDataset {
@@ -108,7 +111,8 @@ ObservationSpec calcDemoSpec(const PluginRegistry& registry, const DemoDataset& 
 // that a checkpoint saves and restores.
 class BatchSampler {
  public:
-  BatchSampler(const DemoDataset& dataset, int64_t batch_size, uint64_t seed, bool with_next);
+  BatchSampler(const DemoDataset& dataset, int64_t batch_size, uint64_t seed, bool with_next,
+               const NetOptions& inputs = NetOptions());
   TransitionBatch next();
 
   struct Position {
@@ -127,6 +131,7 @@ class BatchSampler {
   const DemoDataset& dataset_;
   int64_t batch_size_;
   bool with_next_;
+  NetOptions inputs_;
   Position position_;
   uint64_t next_epoch_seed_ = 0;
   // This epoch: windows of trajectories, each window's transition order.

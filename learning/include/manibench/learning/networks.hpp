@@ -50,6 +50,13 @@ const char* toString(NetKind kind);
 
 struct NetOptions {
   NetKind kind = NetKind::Mlp;
+  // Inputs beyond the current observation, for experts whose phase the
+  // state does not show: the state vectors of the last `history`
+  // observations (1: the current one only; an episode's first observation
+  // stands in for those before it), and the previous action (zeros at the
+  // first step).
+  int64_t history = 1;
+  bool previous_action = false;
   // mlp: hidden layers (Table 6's 3 x 256).
   std::vector<int64_t> mlp_hidden{256, 256, 256};
   // pointnet: per-point layers [256, 512], head [512, 256, out] (D.2).
@@ -87,6 +94,29 @@ class Network : public torch::nn::Module {
 
   int64_t state_dim_, extra_dim_, output_dim_;
   torch::Tensor state_mean_, state_scale_;
+};
+
+// The width of the state input: history x the spec's state (or agent)
+// vector, plus the action with previous_action.
+int64_t calcInputStateDim(const NetOptions& options, const ObservationSpec& spec);
+
+// The state input of one step at a time (what a policy acting in an
+// episode feeds its network): [s_t, s_t-1, ..., s_t-history+1, a_t-1].
+// The training batches are built the same way (DataChunk).
+class InputHistory {
+ public:
+  InputHistory(const NetOptions& options, const ObservationSpec& spec);
+  void reset();  // a new episode
+  // `state` [1, S] -> [1, calcInputStateDim()].
+  torch::Tensor makeInput(const torch::Tensor& state);
+  // The action taken ([A] or [1, A]), clipped to [-1, 1] as the environment does.
+  void setAction(const torch::Tensor& action);
+
+ private:
+  int64_t history_;
+  bool previous_action_;
+  std::vector<torch::Tensor> states_;  // newest first
+  torch::Tensor action_;
 };
 
 std::shared_ptr<Network> makeNetwork(const NetOptions& options, const ObservationSpec& spec,
