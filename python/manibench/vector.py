@@ -232,7 +232,9 @@ class VectorEnv:
         self.obs_mode = self.description["obs_mode"]
         self.single_observation_space = _spaces.make_observation_space(
             self.description["observation"], self.obs_mode)
-        self.single_action_space = _spaces.make_action_space(self.description["action_dim"])
+        self.single_action_space = _spaces.make_action_space(
+            self.description["action_dim"],
+            np.float64 if make_kwargs.get("dtypes") == "cpp" else np.float32)
         self.observation_space = _spaces.batch_space(self.single_observation_space, num_envs)
         self.action_space = _spaces.batch_space(self.single_action_space, num_envs)
 
@@ -420,6 +422,7 @@ class VectorEnv:
                 "seed": seeds, "_seed": everyone,
                 "elapsed_steps": elapsed, "_elapsed_steps": everyone,
                 "success": success, "_success": everyone,
+                "is_success": success, "_is_success": everyone,
                 "eval_info": eval_info, "_eval_info": everyone,
                 "eval_values": eval_values, "_eval_values": everyone}
 

@@ -84,9 +84,20 @@ py::list toSegments(const std::vector<mb::SegmentDescription>& segments) {
   return out;
 }
 
+// The state vector (and the visual modes' agent vector) as a new numpy
+// array: float64 as the environment computes it, or rounded to float32
+// (make()'s dtypes="compact").
+py::array copyVector(const Eigen::VectorXd& v, bool float32) {
+  if (!float32) return copyArray(v.data(), {py::ssize_t(v.size())});
+  py::array_t<float> out(py::ssize_t(v.size()));
+  float* dst = out.mutable_data();
+  for (Eigen::Index i = 0; i < v.size(); ++i) dst[i] = float(v[i]);
+  return std::move(out);
+}
+
 // The observation's arrays in the environment's mode: the shape, dtype
 // and bounds of each, as the package's spaces are built from them.
-py::dict describeObservation(const mb::Environment& env) {
+py::dict describeObservation(const mb::Environment& env, bool float32) {
   const mb::TaskDescription& task = env.getTaskDescription();
   const mb::ObservationOptions& o = env.getOptions().observation;
   const double inf = std::numeric_limits<double>::infinity();
@@ -94,11 +105,12 @@ py::dict describeObservation(const mb::Environment& env) {
     return py::dict(py::arg("shape") = py::tuple(py::cast(shape)), py::arg("dtype") = dtype,
                     py::arg("low") = low, py::arg("high") = high);
   };
+  const char* vector = float32 ? "float32" : "float64";
   py::dict fields;
   const py::ssize_t masks = py::ssize_t(task.masks.size());
   switch (o.mode) {
     case mb::ObservationMode::State:
-      fields["state"] = field({py::ssize_t(task.observation_dim)}, "float64", -inf, inf);
+      fields["state"] = field({py::ssize_t(task.observation_dim)}, vector, -inf, inf);
       break;
     case mb::ObservationMode::PointCloud: {
       // Without padding the cloud may be smaller: total is its maximum.
@@ -106,7 +118,7 @@ py::dict describeObservation(const mb::Environment& env) {
       fields["xyz"] = field({n, 3}, "float32", -inf, inf);
       fields["rgb"] = field({n, 3}, "float32", 0, 1);
       fields["seg"] = field({n, masks}, "bool", 0, 1);
-      fields["agent"] = field({py::ssize_t(task.agent_state_dim)}, "float64", -inf, inf);
+      fields["agent"] = field({py::ssize_t(task.agent_state_dim)}, vector, -inf, inf);
       break;
     }
     case mb::ObservationMode::Rgbd: {
@@ -116,7 +128,7 @@ py::dict describeObservation(const mb::Environment& env) {
       fields["rgb"] = field({h, w, 3 * c}, "float32", 0, 1);
       fields["depth"] = field({h, w, c}, "float32", 0, inf);
       fields["seg"] = field({h, w, masks * c}, "bool", 0, 1);
-      fields["agent"] = field({py::ssize_t(task.agent_state_dim)}, "float64", -inf, inf);
+      fields["agent"] = field({py::ssize_t(task.agent_state_dim)}, vector, -inf, inf);
       break;
     }
   }
@@ -124,13 +136,16 @@ py::dict describeObservation(const mb::Environment& env) {
 }
 
 // An environment as the CLI configures it (apps/manibench/cli.cpp
-// makeEnvironment), with numpy in and out.
+// makeEnvironment), with numpy in and out. With `float32_vectors` the state
+// and agent vectors come out as float32 (actions of either dtype go in).
 class PyEnvironment {
  public:
   PyEnvironment(const std::string& environment_id, const std::vector<std::string>& config_files,
-                const std::vector<std::string>& overrides, bool stop_on_success)
+                const std::vector<std::string>& overrides, bool stop_on_success,
+                bool float32_vectors)
       : config_(mb::loadTaskConfig(updRegistry(), environment_id,
-                                   makeSources(config_files, overrides))) {
+                                   makeSources(config_files, overrides))),
+        float32_(float32_vectors) {
     mb::EnvironmentOptions options = mb::calcEnvironmentOptions(config_);
     options.stop_on_success = stop_on_success;
     try {
@@ -182,8 +197,7 @@ class PyEnvironment {
   // visual modes. Each array is a fresh copy of the environment's buffers.
   py::object getObservation() const {
     const mb::Environment& env = get();
-    const Eigen::VectorXd& state = env.getObservation();
-    py::array_t<double> vector = copyArray(state.data(), {py::ssize_t(state.size())});
+    py::array vector = copyVector(env.getObservation(), float32_);
     const mb::VisualObservation& v = env.getVisualObservation();
     if (v.mode == mb::ObservationMode::State) return std::move(vector);
     py::dict out;
@@ -311,7 +325,7 @@ class PyEnvironment {
     d["observation_dim"] = task.observation_dim;
     d["observation_segments"] = toSegments(task.observation_segments);
     d["agent_state_dim"] = task.agent_state_dim;
-    d["observation"] = describeObservation(env);
+    d["observation"] = describeObservation(env, float32_);
     d["controller"] = controller.name;
     d["action_dim"] = controller.action_dim;
     d["action_segments"] = toSegments(controller.action_segments);
@@ -362,10 +376,18 @@ class PyEnvironment {
       put(v.depth.data(), v.depth.size() * sizeof(float));
       put(v.masks.data(), v.masks.size());
     }
-    put(state.data(), std::size_t(state.size()) * sizeof(double));
+    if (!float32_) {
+      put(state.data(), std::size_t(state.size()) * sizeof(double));
+      return;
+    }
+    vector32_.resize(std::size_t(state.size()));
+    for (Eigen::Index i = 0; i < state.size(); ++i) vector32_[std::size_t(i)] = float(state[i]);
+    put(vector32_.data(), vector32_.size() * sizeof(float));
   }
 
   mb::ConfigNode config_;
+  bool float32_;  // state and agent vectors as float32
+  std::vector<float> vector32_;  // writeObservation's float32 vector
   std::unique_ptr<mb::Environment> env_;
   Eigen::VectorXd action_;
   mb::CameraImages frame_;
@@ -555,9 +577,9 @@ PYBIND11_MODULE(_core, m) {
 
   py::class_<PyEnvironment>(m, "Environment")
       .def(py::init<const std::string&, const std::vector<std::string>&,
-                    const std::vector<std::string>&, bool>(),
+                    const std::vector<std::string>&, bool, bool>(),
            py::arg("environment_id"), py::arg("config_files"), py::arg("overrides"),
-           py::arg("stop_on_success"))
+           py::arg("stop_on_success"), py::arg("float32_vectors") = false)
       .def("reset", &PyEnvironment::reset, py::arg("object_id"), py::arg("seed"))
       .def("step", &PyEnvironment::step, py::arg("action"))
       .def("get_observation", &PyEnvironment::getObservation)

@@ -60,7 +60,7 @@ def test_vector_env_matches_sequential_envs_with_auto_reset():
         dim = venv.single_observation_space.shape[0]
         assert venv.observation_space.shape == (2, dim)
         obs, info = venv.reset(seed=20)
-        assert obs.shape == (2, dim) and obs.dtype == np.float64
+        assert obs.shape == (2, dim) and obs.dtype == np.float32
         assert list(info["seed"]) == [20, 21]
         rows = [(obs, np.zeros(2), np.zeros(2, bool), np.zeros(2, bool), info)]
         for t in range(actions.shape[0]):
