@@ -13,6 +13,7 @@ prefix, the build tree). docs/python.md has the whole story.
 
 from __future__ import annotations
 
+import os
 from typing import Any
 
 from . import _core
@@ -108,6 +109,7 @@ def env_ids() -> list[str]:
     return list_env_ids()
 
 
-if _gym.is_available():  # pragma: no cover - depends on the machine
+# make_vec's spawned workers set MANIBENCH_GYMNASIUM_REGISTER=0: they need no ids.
+if _gym.is_available() and os.environ.get("MANIBENCH_GYMNASIUM_REGISTER", "1") != "0":  # pragma: no cover
     from ._registration import register_all as _register_all
     _register_all(_gym.gymnasium.register, _gym.gymnasium.registry)

@@ -254,11 +254,13 @@ class PyEnvironment {
   // parent's Step commands from `slot` of `block` and answers each in the
   // block (the scalars, flags and values, the observation's fields in
   // describeObservation's order), without Python, until the parent posts
-  // ToPipe or a Step arrives for an episode that ended (the auto-reset,
-  // which the package does). An exception of a step leaves the loop as
-  // it would leave step(): the package sends it through the pipe.
+  // ToPipe or a Step arrives for an episode that ended (the next-step
+  // auto-reset, which the package does) or, with `same_step`, a Step ends
+  // the episode (the package resets at once and answers on the pipe). An
+  // exception of a step leaves the loop as it would leave step(): the
+  // package sends it through the pipe.
   ServeExit serveSteps(StepBlock& block, std::size_t slot, double spin_wait,
-                       int64_t max_episode_steps, int parent_pid) {
+                       int64_t max_episode_steps, int parent_pid, bool same_step) {
     mb::Environment& env = upd();
     const StepBlockLayout& layout = block.getLayout();
     if (slot >= layout.slot_count) throw std::out_of_range("no slot " + std::to_string(slot));
@@ -272,7 +274,8 @@ class PyEnvironment {
       if (command != StepCommand::Step) return ServeExit::ToPipe;
       if (header.needs_reset) return ServeExit::AutoReset;
       action_ = Eigen::Map<const Eigen::VectorXd>(block.updAction(slot), Eigen::Index(layout.action_dim));
-      const mb::StepResult r = env.step(action_);
+      last_step_ = env.step(action_);
+      const mb::StepResult& r = last_step_;
       header.reward = r.reward;
       header.success = r.success;
       header.terminated = r.success && env.getOptions().stop_on_success;
@@ -281,9 +284,18 @@ class PyEnvironment {
       header.needs_reset = header.terminated || header.truncated;
       std::memcpy(block.updFlags(slot), r.flags.data(), r.flags.size());
       std::memcpy(block.updValues(slot), r.values.data(), r.values.size() * sizeof(double));
+      if (same_step && header.needs_reset) return ServeExit::EpisodeEnded;
       writeObservation(block, slot);
       block.finish(slot, StepResultPlace::InBlock);
     }
+  }
+
+  // (reward, success, flags, values) of serve_steps' last step.
+  py::tuple getLastStep() const {
+    py::list flags, values;
+    for (uint8_t f : last_step_.flags) flags.append(bool(f));
+    for (double v : last_step_.values) values.append(v);
+    return py::make_tuple(last_step_.reward, last_step_.success, flags, values);
   }
 
   py::bytes saveState() {
@@ -388,6 +400,7 @@ class PyEnvironment {
   mb::ConfigNode config_;
   bool float32_;  // state and agent vectors as float32
   std::vector<float> vector32_;  // writeObservation's float32 vector
+  mb::StepResult last_step_;     // serve_steps' last step
   std::unique_ptr<mb::Environment> env_;
   Eigen::VectorXd action_;
   mb::CameraImages frame_;
@@ -399,6 +412,7 @@ class PyEnvironment {
 void bindStepBlock(py::module_& m) {
   m.attr("SERVE_TO_PIPE") = int(ServeExit::ToPipe);
   m.attr("SERVE_AUTO_RESET") = int(ServeExit::AutoReset);
+  m.attr("SERVE_EPISODE_ENDED") = int(ServeExit::EpisodeEnded);
   auto layout = [](std::size_t slots, std::size_t action_dim, std::size_t conditions,
                    std::vector<std::size_t> field_bytes) {
     StepBlockLayout l;
@@ -598,13 +612,17 @@ PYBIND11_MODULE(_core, m) {
       .def(
           "serve_steps",
           [](PyEnvironment& e, StepBlock& block, std::size_t slot, double spin_wait,
-             int64_t max_episode_steps, int parent_pid) {
-            return int(e.serveSteps(block, slot, spin_wait, max_episode_steps, parent_pid));
+             int64_t max_episode_steps, int parent_pid, bool same_step) {
+            return int(
+                e.serveSteps(block, slot, spin_wait, max_episode_steps, parent_pid, same_step));
           },
           py::arg("block"), py::arg("slot"), py::arg("spin_wait"), py::arg("max_episode_steps"),
-          py::arg("parent_pid"),
+          py::arg("parent_pid"), py::arg("same_step") = false,
           "make_vec's worker loop: answers the block's steps until the parent posts ToPipe "
-          "(returns SERVE_TO_PIPE) or an ended episode gets a step (SERVE_AUTO_RESET).");
+          "(returns SERVE_TO_PIPE), an ended episode gets a step (SERVE_AUTO_RESET) or, with "
+          "same_step, a step ends the episode (SERVE_EPISODE_ENDED).")
+      .def("get_last_step", &PyEnvironment::getLastStep,
+           "(reward, success, flags, values) of serve_steps' last step.");
 
   bindStepBlock(m);
 }
