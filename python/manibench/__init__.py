@@ -68,7 +68,7 @@ def list_plugins():
 
 def _describe(env_id, obs_mode, controller, config, overrides, dtypes):
     core = _core.Environment(env_id, _make_config_files(config),
-                             _make_overrides(overrides, obs_mode, controller), True,
+                             _make_overrides(overrides, obs_mode, controller, dtypes), True,
                              check_dtypes(dtypes) == "compact")
     try:
         d = core.describe()

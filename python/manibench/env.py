@@ -40,9 +40,10 @@ def _to_yaml(value):
     return str(value)
 
 
-def make_overrides(overrides=None, obs_mode=None, controller=None):
+def make_overrides(overrides=None, obs_mode=None, controller=None, dtypes="cpp"):
     """The --set KEY=VALUE list of make()'s arguments, in the CLI's order:
-    the overrides, then the controller, then the observation mode."""
+    the overrides, then the controller, then the observation mode; then,
+    for dtypes="compact", rgbd's rgb as bytes (observation.rgb_dtype)."""
     if overrides is None:
         sets = []
     elif isinstance(overrides, dict):
@@ -60,6 +61,8 @@ def make_overrides(overrides=None, obs_mode=None, controller=None):
         if obs_mode not in OBS_MODES:
             raise ValueError(f"obs_mode must be one of {', '.join(OBS_MODES)}, got {obs_mode!r}")
         sets.append(f"observation.mode={obs_mode}")
+    if check_dtypes(dtypes) == "compact":
+        sets.append("observation.rgb_dtype=uint8")
     return sets
 
 
@@ -72,9 +75,10 @@ def make_config_files(config):
 
 
 # make()'s `dtypes`: "compact" (float32 vectors and actions, as gymnasium's
-# Box default, Stable-Baselines3 and ManiSkill3 use) or "cpp" (the C++
-# program's float64 vectors and actions: the arrays are byte for byte those
-# of `manibench run` and demonstration files).
+# Box default, Stable-Baselines3 and ManiSkill3 use, and rgbd's rgb as uint8
+# images) or "cpp" (the C++ program's float64 vectors and actions and the
+# configuration's rgb, float32 by default: the arrays are byte for byte
+# those of `manibench run` and demonstration files).
 DTYPES = ("compact", "cpp")
 
 # What make() and make_vec() accept besides the environment id (a spec's kwargs).
@@ -129,7 +133,7 @@ class ManibenchEnv(_gym.Env):
             raise ValueError(f"render_mode must be 'rgb_array' or None, got {render_mode!r}")
         self.dtypes = check_dtypes(dtypes)
         self._env = _core.Environment(env_id, make_config_files(config),
-                                      make_overrides(overrides, obs_mode, controller),
+                                      make_overrides(overrides, obs_mode, controller, dtypes),
                                       bool(stop_on_success), dtypes == "compact")
         self.description = self._env.describe()
         self.env_id = env_id

@@ -5,8 +5,9 @@
 //   file: path/to/solution.py   # defines the policy class
 //   class: UserPolicy           # optional: the class to use (default:
 //                               # UserPolicy, else the only class with act)
-//   dtypes: compact             # optional: compact (float32 vectors, as
-//                               # manibench.make's default) or cpp (float64)
+//   dtypes: compact             # optional: compact (float32 vectors and
+//                               # uint8 rgbd rgb, as manibench.make's
+//                               # default) or cpp (float64, float rgb)
 //
 // The class follows ManiSkill's evaluation kit (supplement B.5): act(obs)
 // returns the action; reset() (or reset(seed)) is optional; __init__ takes
@@ -26,6 +27,7 @@
 
 #include <dlfcn.h>
 
+#include <cmath>
 #include <cstring>
 #include <string>
 
@@ -204,7 +206,15 @@ class PythonPolicy : public sdk::Policy {
     if (mode_ == "rgbd") {
       const py::ssize_t h = o.image_height, w = o.image_width, c = o.camera_count, k = o.mask_count;
       py::dict out;
-      out["rgb"] = copyRows(o.image_rgb.data(), {h, w, 3 * c});
+      if (float32_) {  // the bytes back: the floats are byte / 255.0f exactly
+        py::array_t<std::uint8_t> rgb({h, w, 3 * c});
+        std::uint8_t* dst = rgb.mutable_data();
+        for (py::ssize_t i = 0; i < rgb.size(); ++i)
+          dst[i] = std::uint8_t(std::lround(o.image_rgb.data()[i] * 255.0f));
+        out["rgb"] = rgb;
+      } else {
+        out["rgb"] = copyRows(o.image_rgb.data(), {h, w, 3 * c});
+      }
       out["depth"] = copyRows(o.image_depth.data(), {h, w, c});
       out["seg"] = copyMasks(o.image_masks.data(), {h, w, k * c});
       out["agent"] = state;

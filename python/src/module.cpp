@@ -125,7 +125,10 @@ py::dict describeObservation(const mb::Environment& env, bool float32) {
       const py::ssize_t c = py::ssize_t(o.cameras.size());
       const py::ssize_t h = c ? o.cameras.front().spec.height : 0;
       const py::ssize_t w = c ? o.cameras.front().spec.width : 0;
-      fields["rgb"] = field({h, w, 3 * c}, "float32", 0, 1);
+      if (o.rgb_dtype == mb::RgbDtype::Uint8)
+        fields["rgb"] = field({h, w, 3 * c}, "uint8", 0, 255);
+      else
+        fields["rgb"] = field({h, w, 3 * c}, "float32", 0, 1);
       fields["depth"] = field({h, w, c}, "float32", 0, inf);
       fields["seg"] = field({h, w, masks * c}, "bool", 0, 1);
       fields["agent"] = field({py::ssize_t(task.agent_state_dim)}, vector, -inf, inf);
@@ -209,7 +212,10 @@ class PyEnvironment {
       out["seg"] = copyMasks(v.points.masks, {n, k});
     } else {
       const py::ssize_t h = v.height, w = v.width, c = v.camera_count;
-      out["rgb"] = copyArray(v.rgb.data(), {h, w, 3 * c});
+      if (v.rgb_bytes.empty())
+        out["rgb"] = copyArray(v.rgb.data(), {h, w, 3 * c});
+      else
+        out["rgb"] = copyArray(v.rgb_bytes.data(), {h, w, 3 * c});
       out["depth"] = copyArray(v.depth.data(), {h, w, c});
       out["seg"] = copyMasks(v.masks, {h, w, k * c});
     }
@@ -384,7 +390,10 @@ class PyEnvironment {
       put(v.points.rgb.data(), v.points.rgb.size() * sizeof(float));
       put(v.points.masks.data(), v.points.masks.size());
     } else if (v.mode == mb::ObservationMode::Rgbd) {
-      put(v.rgb.data(), v.rgb.size() * sizeof(float));
+      if (v.rgb_bytes.empty())
+        put(v.rgb.data(), v.rgb.size() * sizeof(float));
+      else
+        put(v.rgb_bytes.data(), v.rgb_bytes.size());
       put(v.depth.data(), v.depth.size() * sizeof(float));
       put(v.masks.data(), v.masks.size());
     }

@@ -102,6 +102,24 @@ def test_dtypes_compact_rounds_the_cpp_vectors_to_float32(actions):
         manibench.make("Reach-v0", dtypes="float16")
 
 
+def test_compact_rgbd_rgb_is_the_cpp_rgb_as_bytes():
+    with manibench.make("Reach-v0", obs_mode="rgbd") as compact, \
+            manibench.make("Reach-v0", obs_mode="rgbd", dtypes="cpp") as cpp:
+        space = compact.observation_space["rgb"]
+        assert space.dtype == np.uint8 and space.low.max() == 0 and space.high.min() == 255
+        assert cpp.observation_space["rgb"].dtype == np.float32
+        a, _ = compact.reset(seed=4)
+        b, _ = cpp.reset(seed=4)
+        assert a["rgb"].dtype == np.uint8 and b["rgb"].dtype == np.float32
+        assert np.array_equal(a["rgb"].astype(np.float32) / np.float32(255), b["rgb"])
+        assert a["depth"].tobytes() == b["depth"].tobytes()
+        assert a["seg"].tobytes() == b["seg"].tobytes()
+    # cpp keeps the configuration's: observation.rgb_dtype chooses there.
+    with manibench.make("Reach-v0", obs_mode="rgbd", dtypes="cpp",
+                        overrides={"observation.rgb_dtype": "uint8"}) as env:
+        assert env.reset(seed=4)[0]["rgb"].tobytes() == a["rgb"].tobytes()
+
+
 def test_reset_options_and_fixed_object_ids():
     with manibench.make("Reach-v0") as env:
         _, info = env.reset(seed=0, options={"object_id": "2"})
@@ -137,7 +155,10 @@ def test_visual_observations_match_their_space(mode):
             # Something was seen (Reach's "robot" mask is declared, never filled).
             seen = obs["xyz"].any(axis=1) if mode == "pointcloud" else obs["depth"] > 0
             assert seen.sum() > 100
-            assert 0 <= obs["rgb"].min() and obs["rgb"].max() <= 1
+            if mode == "pointcloud":  # per-point features: floats in [0, 1]
+                assert obs["rgb"].dtype == np.float32 and obs["rgb"].max() <= 1
+            else:  # an image: bytes (dtypes="compact")
+                assert obs["rgb"].dtype == np.uint8 and obs["rgb"].max() > 1
             obs = env.step(env.action_space.sample())[0]
 
 

@@ -28,6 +28,9 @@ class UserPolicy:
         if "{mode}" == "pointcloud":
             assert obs["xyz"].shape == (1200, 3) and obs["seg"].dtype == bool
             assert obs["agent"].dtype == np.float32  # as manibench.make gives them
+        elif "{mode}" == "rgbd":
+            assert obs["rgb"].dtype == np.uint8 and obs["rgb"].shape == (240, 320, 3)
+            assert obs["rgb"].max() > 1 and obs["agent"].dtype == np.float32
         else:
             assert obs.shape == (15,) and obs.dtype == np.float32
         return self.rng.uniform(-1, 1, self.dim)
@@ -69,7 +72,7 @@ def evaluate(tmp_path, source, *extra):
     return summary, episodes
 
 
-@pytest.mark.parametrize("mode", ["state", "pointcloud"])
+@pytest.mark.parametrize("mode", ["state", "pointcloud", "rgbd"])
 def test_a_python_random_policy_is_evaluated(tmp_path, mode):
     summary, episodes = evaluate(tmp_path, RANDOM_POLICY.format(mode=mode), "--obs", mode)
     assert summary["episodes_run"] == 8 and summary["complete"]
