@@ -101,6 +101,15 @@ def objects(env_id, split="train", config=None, overrides=None):
         core.close()
 
 
+def __getattr__(name: str) -> Any:
+    # manibench.demos on first use: it imports h5py (and torch, where it is
+    # installed), which a user of the environments alone should not wait for.
+    if name == "demos":
+        import importlib
+        return importlib.import_module(".demos", __name__)
+    raise AttributeError(f"module 'manibench' has no attribute {name!r}")
+
+
 def env_ids() -> list[str]:
     """Every task and every fixed-object id (`manibench objects` names them):
     the ids registered with gymnasium on import where it is importable

@@ -69,6 +69,10 @@ def test_a_trajectory_replays_through_make_bit_for_bit(state_file):
             assert env.get_state() == trajectory.state(t + 1)
 
 
+def test_manibench_demos_is_there_on_first_use():
+    assert manibench.demos is demos
+
+
 def test_other_files_are_refused_naming_them(tmp_path):
     import h5py
     other = tmp_path / "other.h5"
