@@ -142,3 +142,26 @@ def test_the_spec_names_the_arguments():
             # (gymnasium's spec.make() wraps it: its attributes are the unwrapped env's)
             assert again.unwrapped.max_episode_steps == 7
             assert again.unwrapped.obs_mode == "pointcloud"
+
+
+def test_the_ids_registered_with_gymnasium_are_those_manibench_objects_names():
+    ids = manibench.env_ids()
+    assert set(TASKS) <= set(ids) and len(ids) == len(set(ids))
+    for task in TASKS:
+        objects = manibench.objects(task, "train") + manibench.objects(task, "test")
+        base, version = task.rsplit("-v", 1)
+        for object_id in objects:
+            assert f"{base}_{object_id}-v{version}" in ids
+            if "_link_" in object_id:  # the articulated object: all its target links
+                assert f"{base}_{object_id.rsplit('_link_', 1)[0]}-v{version}" in ids
+    for env_id in ["Reach_3-v0", next(i for i in ids if i.startswith("OpenCabinetDrawer_"))]:
+        with manibench.make(env_id) as env:  # each is an environment
+            assert env.spec.id == env_id and env.list_objects("test")
+    # What gymnasium.register is called with (here a list stands in for it).
+    from manibench._registration import register_all
+    calls = []
+    done = register_all(lambda **kwargs: calls.append(kwargs), registered=["Reach-v0"])
+    assert "Reach-v0" not in done and len(done) == len(ids) - 1 == len(calls)
+    assert calls[0] == {"id": done[0], "entry_point": "manibench.env:ManibenchEnv",
+                        "vector_entry_point": "manibench.vector:make_vec",
+                        "kwargs": {"env_id": done[0]}}
