@@ -241,6 +241,22 @@ TEST(DemoCommands, GenerateInfoReplayConvertAndVideo) {
   expectMentions(cloud_replayed.out, {"2 trajectories: 2 bit-identical"});
   EXPECT_FALSE(std::filesystem::exists(cloud + ".part0"));  // the workers' parts are gone
 
+  // Images with observation.rgb_dtype uint8: stored as bytes, replayed exactly.
+  const std::string images = (dir / "reach_rgbd.h5").string();
+  const auto to_rgbd = runCli({"demos", "convert", file, "--obs", "rgbd", "--set",
+                               "observation.rgb_dtype=uint8", "--out", images, "--workers", "1"});
+  ASSERT_EQ(to_rgbd.exit_code, 0) << to_rgbd.out << to_rgbd.err;
+  const auto images_replayed = runCli({"demos", "replay", images, "--check", "--trajectories", "traj_2"});
+  EXPECT_EQ(images_replayed.exit_code, 0) << images_replayed.out;
+  expectMentions(images_replayed.out, {"1 trajectories: 1 bit-identical"});
+  {
+    DemoReader reader(images);
+    const Trajectory t = reader.read("traj_2");
+    EXPECT_TRUE(t.image_rgb.empty());
+    EXPECT_EQ(t.image_rgb_bytes.size(),
+              std::size_t(t.getObservationCount()) * t.height * t.width * 3 * t.camera_count);
+  }
+
   const std::string videos = (dir / "videos").string();
   const auto video = runCli({"demos", "replay", file, "--trajectories", "traj_1", "--video", videos,
                              "--video-size", "96x64"});

@@ -48,7 +48,8 @@ struct Trajectory {
   // modes: the agent's part). Point clouds: point_counts[t] points each (the
   // same for every t unless the sampling does not pad), concatenated, rgb
   // in [0, 1]. Images: cameras stacked along the channels as
-  // VisualObservation.
+  // VisualObservation, rgb as floats (image_rgb) or bytes (image_rgb_bytes,
+  // observation.rgb_dtype uint8).
   ObservationMode mode = ObservationMode::State;
   uint32_t state_dim = 0;
   std::vector<double> state;
@@ -58,7 +59,7 @@ struct Trajectory {
   std::vector<uint8_t> point_masks;
   uint32_t camera_count = 0, height = 0, width = 0;
   std::vector<float> image_rgb, depth;
-  std::vector<uint8_t> image_masks;
+  std::vector<uint8_t> image_rgb_bytes, image_masks;
 
   // Environment::saveState() of the reset and of every step: T + 1 blobs,
   // blob t is env_states[env_state_offsets[t], env_state_offsets[t + 1]).

@@ -85,7 +85,11 @@ void writeObservations(const Handle& group, const Trajectory& t) {
       writeDataset(obs, "point_count", {n}, t.point_counts);
     }
   } else {
-    writeDataset(obs, "rgb", {n, t.height, t.width, 3 * hsize_t(t.camera_count)}, t.image_rgb);
+    const std::vector<hsize_t> rgb_dims{n, t.height, t.width, 3 * hsize_t(t.camera_count)};
+    if (t.image_rgb_bytes.empty())
+      writeDataset(obs, "rgb", rgb_dims, t.image_rgb);
+    else  // observation.rgb_dtype uint8
+      writeDataset(obs, "rgb", rgb_dims, t.image_rgb_bytes);
     writeDataset(obs, "depth", {n, t.height, t.width, t.camera_count}, t.depth);
     writeDataset(obs, "seg", {n, t.height, t.width, hsize_t(t.mask_count) * t.camera_count},
                  t.image_masks);
@@ -215,7 +219,10 @@ void readObservations(const Handle& group, const DemoFileInfo& info, Trajectory&
     t.width = uint32_t(dims[2]);
     expectDims(obs, "depth", {n, t.height, t.width, t.camera_count});
     expectDims(obs, "seg", {n, t.height, t.width, hsize_t(t.mask_count) * t.camera_count});
-    t.image_rgb = readDataset<float>(obs, "rgb");
+    if (readElementType(obs, "rgb").is_float)
+      t.image_rgb = readDataset<float>(obs, "rgb");
+    else
+      t.image_rgb_bytes = readDataset<uint8_t>(obs, "rgb");
     t.depth = readDataset<float>(obs, "depth");
     t.image_masks = readDataset<uint8_t>(obs, "seg");
   }

@@ -63,6 +63,7 @@ std::string compareVisual(const VisualObservation& replayed, const VisualObserva
                         compareArrays("point cloud rgb", replayed.points.rgb, recorded.points.rgb),
                         compareArrays("point cloud masks", replayed.points.masks, recorded.points.masks),
                         compareArrays("image rgb", replayed.rgb, recorded.rgb),
+                        compareArrays("image rgb bytes", replayed.rgb_bytes, recorded.rgb_bytes),
                         compareArrays("image depth", replayed.depth, recorded.depth),
                         compareArrays("image masks", replayed.masks, recorded.masks)})
     if (!d.empty()) return d;
@@ -112,7 +113,8 @@ VisualObservation Trajectory::getVisualObservation(uint32_t t) const {
       const std::size_t size = pixels * channels;
       out.assign(all.begin() + std::ptrdiff_t(t * size), all.begin() + std::ptrdiff_t((t + 1) * size));
     };
-    slice(image_rgb, 3 * std::size_t(camera_count), v.rgb);
+    if (!image_rgb.empty()) slice(image_rgb, 3 * std::size_t(camera_count), v.rgb);
+    if (!image_rgb_bytes.empty()) slice(image_rgb_bytes, 3 * std::size_t(camera_count), v.rgb_bytes);
     slice(depth, std::size_t(camera_count), v.depth);
     slice(image_masks, std::size_t(mask_count) * camera_count, v.masks);
   }
@@ -139,6 +141,7 @@ void Trajectory::addObservation(const Eigen::VectorXd& observation, const Visual
     append(point_masks, visual.points.masks);
   } else if (mode == ObservationMode::Rgbd) {
     append(image_rgb, visual.rgb);
+    append(image_rgb_bytes, visual.rgb_bytes);
     append(depth, visual.depth);
     append(image_masks, visual.masks);
   }
@@ -176,6 +179,7 @@ void Trajectory::clearObservations() {
   point_rgb.clear();
   point_masks.clear();
   image_rgb.clear();
+  image_rgb_bytes.clear();
   depth.clear();
   image_masks.clear();
 }
