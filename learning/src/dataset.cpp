@@ -59,18 +59,18 @@ void checkShape(const Shape& expected, const Shape& got, const std::string& wher
 ObservationBatch DataChunk::gatherObservations(const torch::Tensor& rows, const NetOptions& inputs) const {
   ObservationBatch b;
   b.state = state.index_select(0, rows);
-  if (inputs.history > 1 || inputs.previous_action) {
-    // [s_t, s_t-1, ..., a_t-1], as InputHistory builds it while acting.
+  if (inputs.history > 1 || inputs.action_history > 0 || inputs.step_input) {
+    // As InputHistory builds them while acting.
     const torch::Tensor first = obs_first.index_select(0, rows);
     std::vector<torch::Tensor> parts{b.state};
     for (int64_t k = 1; k < inputs.history; ++k)
       parts.push_back(state.index_select(0, torch::max(rows - k, first)));
-    if (inputs.previous_action) {
-      const torch::Tensor has_previous = rows > first;
-      const torch::Tensor previous = obs_transition.index_select(0, torch::where(has_previous, rows - 1, rows));
-      const torch::Tensor action = actions.index_select(0, previous.clamp_min(0));
-      parts.push_back(action * has_previous.unsqueeze(1).to(torch::kFloat32));
+    for (int64_t k = 1; k <= inputs.action_history; ++k) {
+      const torch::Tensor exists = rows - k >= first;
+      const torch::Tensor transition = obs_transition.index_select(0, torch::max(rows - k, first));
+      parts.push_back(actions.index_select(0, transition.clamp_min(0)) * exists.unsqueeze(1).to(torch::kFloat32));
     }
+    if (inputs.step_input) parts.push_back(calcStepFeature((rows - first).to(torch::kFloat32)).unsqueeze(1));
     b.state = torch::cat(parts, 1);
   }
   if (xyz.defined()) {

@@ -33,6 +33,7 @@ class CheckpointPolicy : public InferencePolicy {
   void reset(uint64_t seed) override {
     generator_.set_current_seed(seed);
     history_->reset();
+    step_ = 0;
   }
   torch::Tensor act(const ObservationBatch& obs) override {
     checkPoints(loaded_.info.spec, obs, "the " + name_);
@@ -40,7 +41,8 @@ class CheckpointPolicy : public InferencePolicy {
       throw LearningError("the " + name_ + " takes a state of " + std::to_string(loaded_.info.spec.state_dim) +
                           " values; the observation has " + std::to_string(obs.state.size(1)));
     ObservationBatch input = obs;
-    input.state = history_->makeInput(obs.state);
+    input.state = history_->makeInput(obs.state, step_);
+    ++step_;
     const torch::Tensor action = loaded_.algorithm->act(input.to(device_), generator_).to(torch::kCPU).squeeze(0);
     history_->setAction(action);
     return action;
@@ -51,6 +53,7 @@ class CheckpointPolicy : public InferencePolicy {
   torch::Device device_;
   LoadedCheckpoint loaded_;
   std::unique_ptr<InputHistory> history_;
+  int64_t step_ = 0;  // of the episode (reset() starts one; act() is called once per step)
   at::Generator generator_;
   std::string name_;
 };

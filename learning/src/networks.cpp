@@ -74,7 +74,8 @@ const char* toString(NetKind kind) {
 void NetOptions::writeYaml(YAML::Node& node) const {
   node["kind"] = toString(kind);
   node["history"] = history;
-  node["previous_action"] = previous_action;
+  node["action_history"] = action_history;
+  node["step_input"] = step_input;
   node["mlp_hidden"] = mlp_hidden;
   node["point_layers"] = point_layers;
   node["pointnet_head"] = pointnet_head;
@@ -91,7 +92,8 @@ NetOptions NetOptions::readYaml(const YAML::Node& node) {
   NetOptions o;
   o.kind = parseNetKind(node["kind"].as<std::string>());
   o.history = node["history"].as<int64_t>(1);
-  o.previous_action = node["previous_action"].as<bool>(false);
+  o.action_history = node["action_history"].as<int64_t>(0);
+  o.step_input = node["step_input"].as<bool>(false);
   o.mlp_hidden = node["mlp_hidden"].as<std::vector<int64_t>>();
   o.point_layers = node["point_layers"].as<std::vector<int64_t>>();
   o.pointnet_head = node["pointnet_head"].as<std::vector<int64_t>>();
@@ -453,38 +455,43 @@ class PnTransformerNetwork : public Network {
 }  // namespace
 
 int64_t calcInputStateDim(const NetOptions& options, const ObservationSpec& spec) {
-  return options.history * int64_t(spec.state_dim) + (options.previous_action ? int64_t(spec.action_dim) : 0);
+  return options.history * int64_t(spec.state_dim) + options.action_history * int64_t(spec.action_dim) +
+         (options.step_input ? 1 : 0);
 }
 
-InputHistory::InputHistory(const NetOptions& options, const ObservationSpec& spec)
-    : history_(options.history), previous_action_(options.previous_action) {
-  action_ = torch::zeros({1, int64_t(spec.action_dim)});
+InputHistory::InputHistory(const NetOptions& options, const ObservationSpec& spec) : options_(options) {
+  actions_.assign(std::size_t(options.action_history), torch::zeros({1, int64_t(spec.action_dim)}));
 }
 
 void InputHistory::reset() {
   states_.clear();
-  action_.zero_();
+  for (torch::Tensor& a : actions_) a.zero_();
 }
 
-torch::Tensor InputHistory::makeInput(const torch::Tensor& state) {
-  if (history_ == 1 && !previous_action_) return state;
-  if (states_.empty()) states_.assign(std::size_t(history_), state);
-  else {
+torch::Tensor InputHistory::makeInput(const torch::Tensor& state, int64_t step) {
+  if (options_.history == 1 && options_.action_history == 0 && !options_.step_input) return state;
+  if (states_.empty()) {
+    states_.assign(std::size_t(options_.history), state);
+  } else {
     states_.pop_back();
     states_.insert(states_.begin(), state);
   }
   std::vector<torch::Tensor> parts = states_;
-  if (previous_action_) parts.push_back(action_);
+  parts.insert(parts.end(), actions_.begin(), actions_.end());
+  if (options_.step_input) parts.push_back(calcStepFeature(torch::full({1, 1}, float(step))));
   return torch::cat(parts, 1);
 }
 
 void InputHistory::setAction(const torch::Tensor& action) {
-  action_.copy_(action.reshape({1, -1}).clamp(-1, 1));
+  if (actions_.empty()) return;
+  actions_.pop_back();
+  actions_.insert(actions_.begin(), action.reshape({1, -1}).clamp(-1, 1));
 }
 
 std::shared_ptr<Network> makeNetwork(const NetOptions& options, const ObservationSpec& spec,
                                      int64_t extra_dim, int64_t output_dim) {
-  if (options.history < 1) throw LearningError("the history must be at least 1 observation");
+  if (options.history < 1 || options.action_history < 0)
+    throw LearningError("the history must be at least 1 observation and 0 actions");
   if (options.kind != NetKind::Mlp && !spec.isPointCloud())
     throw LearningError(std::string("the ") + toString(options.kind) +
                         " network needs pointcloud observations, but the data are " + spec.mode +

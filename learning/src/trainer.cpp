@@ -153,13 +153,10 @@ class Trainer {
     if (options_.normalize_state) {
       auto [mean, std] = dataset_->calcStateStatistics();
       torch::Tensor scale = torch::where(std > 1e-6, 1.0 / std, torch::ones_like(std));
-      // Every stacked observation alike; the previous action as it is.
-      mean = mean.repeat({options_.network.history});
-      scale = scale.repeat({options_.network.history});
-      if (options_.network.previous_action) {
-        mean = torch::cat({mean, torch::zeros({int64_t(spec_.action_dim)})});
-        scale = torch::cat({scale, torch::ones({int64_t(spec_.action_dim)})});
-      }
+      // Every stacked observation alike; actions and the step as they are.
+      const int64_t rest = calcInputStateDim(options_.network, spec_) - options_.network.history * spec_.state_dim;
+      mean = torch::cat({mean.repeat({options_.network.history}), torch::zeros({rest})});
+      scale = torch::cat({scale.repeat({options_.network.history}), torch::ones({rest})});
       algorithm_->setStateNormalization(mean.to(device_), scale.to(device_));
     }
     sampler_ = std::make_unique<BatchSampler>(*dataset_, options_.algorithm.batch_size, options_.seed,

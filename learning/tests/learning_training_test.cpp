@@ -194,7 +194,10 @@ TEST_F(LearningTraining, ThePolicyPluginActsAsTheNetwork) {
     o.data.paths = {file(data == "history" ? "reach.h5" : data)};
     o.network.kind = data == "reach_pc.h5" ? NetKind::PnTransformer : NetKind::Mlp;
     o.network.layers = 1;
-    if (data == "history") o.network.history = 3;
+    if (data == "history") {
+      o.network.history = 3;
+      o.network.step_input = true;
+    }
     const TrainResult r = train(getBuildTreeRegistry(), o, {});
     const LoadedCheckpoint loaded = loadCheckpoint(r.checkpoint, torch::kCPU, false);
     const auto env = makeEnvironmentOf(o.data.paths[0]);
@@ -226,15 +229,16 @@ TEST_F(LearningTraining, InputsWithHistoryAreBuiltAlikeWhileActingAndTraining) {
   const ObservationSpec spec = calcDemoSpec(getBuildTreeRegistry(), dataset);
   NetOptions inputs;
   inputs.history = 3;
-  inputs.previous_action = true;
-  EXPECT_EQ(calcInputStateDim(inputs, spec), 3 * 15 + 2);
+  inputs.action_history = 2;
+  inputs.step_input = true;
+  EXPECT_EQ(calcInputStateDim(inputs, spec), 3 * 15 + 2 * 2 + 1);
   InputHistory history(inputs, spec);
   const int64_t first = dataset.getTrajectories()[1].steps + 1;  // trajectory 0's first row
   for (int episode = 0; episode < 2; ++episode) {  // reset() starts over
     history.reset();
     for (int64_t t = 0; t < 6; ++t) {
       const torch::Tensor row = torch::tensor({first + t});
-      const torch::Tensor acting = history.makeInput(chunk.state.index_select(0, row));
+      const torch::Tensor acting = history.makeInput(chunk.state.index_select(0, row), t);
       const torch::Tensor training = chunk.gatherObservations(row, inputs).state;
       ASSERT_TRUE(torch::equal(acting, training)) << "step " << t << "\n" << acting << training;
       history.setAction(chunk.actions[chunk.obs_transition[first + t].item<int64_t>()]);

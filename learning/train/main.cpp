@@ -58,7 +58,8 @@ Network:
                           default mlp for state, pn_transformer for pointcloud
   --history N             the state input stacks the last N observations' state
                           (or agent) vectors (default 1: the current one)
-  --previous-action       the state input includes the previous action
+  --action-history N      the state input includes the last N actions (default 0)
+  --step-input            the state input includes the episode's step (t / 100)
   --hidden N,N,...        mlp hidden layers (default 256,256,256)
   --point-layers N,N      pointnet per-point layers (default 256,512)
   --width N               pn_transformer width (default 256)
@@ -201,13 +202,13 @@ void drawProgress(const ml::TrainProgress& p) {
 
 int run(int argc, char** argv) {
   const std::vector<std::string> valued = {
-      "demos", "objects", "per-object", "cache-gb", "net", "history", "hidden", "point-layers", "width", "layers", "heads",
+      "demos", "objects", "per-object", "cache-gb", "net", "history", "action-history", "hidden", "point-layers", "width", "layers", "heads",
       "dropout", "iterations", "batch-size", "lr", "weight-decay", "seed", "threads", "device", "gamma", "tau",
       "alpha", "action-noise", "noise-clip", "policy-delay", "phi", "lambda", "train-samples", "eval-samples",
       "out", "checkpoint-every", "log-every", "eval-every", "eval-task", "eval-split", "eval-objects",
       "eval-episodes", "eval-workers", "resume"};
   const mb::cli::Arguments args =
-      mb::cli::parseArguments(argc, argv, 2, valued, {"normalize-state", "previous-action", "no-progress"}, kUsage, {"demos"});
+      mb::cli::parseArguments(argc, argv, 2, valued, {"normalize-state", "step-input", "no-progress"}, kUsage, {"demos"});
   if (args.help) {
     std::cout << kUsage;
     return 0;
@@ -257,7 +258,8 @@ int run(int argc, char** argv) {
     o.normalize_state = has("normalize-state");
     if (has("net")) o.network.kind = ml::parseNetKind(value("net"));
     if (has("history")) o.network.history = parseInteger(value("history"), "--history", 1);
-    o.network.previous_action = has("previous-action");
+    if (has("action-history")) o.network.action_history = parseInteger(value("action-history"), "--action-history", 0);
+    o.network.step_input = has("step-input");
     if (has("hidden")) o.network.mlp_hidden = parseLayers(value("hidden"), "--hidden");
     if (has("point-layers")) o.network.point_layers = parseLayers(value("point-layers"), "--point-layers");
     if (has("width")) o.network.width = parseInteger(value("width"), "--width", 1);

@@ -58,7 +58,7 @@ struct DataChunk {
   torch::Tensor obs_transition; // [O] int64: the transition starting at each observation (-1: the last)
   int64_t getTransitionCount() const { return actions.size(0); }
   // The transitions `index` ([B] int64), with next observations if asked;
-  // the state inputs as `inputs` asks (NetOptions::history, previous_action).
+  // the state inputs as `inputs` asks (NetOptions::history, action_history, step_input).
   TransitionBatch gather(const torch::Tensor& index, bool with_next, const NetOptions& inputs) const;
   ObservationBatch gatherObservations(const torch::Tensor& obs_rows, const NetOptions& inputs) const;
 };

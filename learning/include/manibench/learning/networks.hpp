@@ -51,12 +51,14 @@ const char* toString(NetKind kind);
 struct NetOptions {
   NetKind kind = NetKind::Mlp;
   // Inputs beyond the current observation, for experts whose phase the
-  // state does not show: the state vectors of the last `history`
-  // observations (1: the current one only; an episode's first observation
-  // stands in for those before it), and the previous action (zeros at the
-  // first step).
+  // state does not show (they switch on step counts): the state vectors of
+  // the last `history` observations (1: the current one only; an episode's
+  // first observation stands in for those before it), the last
+  // `action_history` actions (zeros before the first step), and the step
+  // of the episode (step / 100).
   int64_t history = 1;
-  bool previous_action = false;
+  int64_t action_history = 0;
+  bool step_input = false;
   // mlp: hidden layers (Table 6's 3 x 256).
   std::vector<int64_t> mlp_hidden{256, 256, 256};
   // pointnet: per-point layers [256, 512], head [512, 256, out] (D.2).
@@ -97,26 +99,26 @@ class Network : public torch::nn::Module {
 };
 
 // The width of the state input: history x the spec's state (or agent)
-// vector, plus the action with previous_action.
+// vector, action_history x the action, and 1 for the step.
 int64_t calcInputStateDim(const NetOptions& options, const ObservationSpec& spec);
 
 // The state input of one step at a time (what a policy acting in an
-// episode feeds its network): [s_t, s_t-1, ..., s_t-history+1, a_t-1].
-// The training batches are built the same way (DataChunk).
+// episode feeds its network): [s_t, s_t-1, ..., s_t-history+1, a_t-1, ...,
+// a_t-action_history, t / 100]. The training batches are built the same
+// way (DataChunk, tested equal).
 class InputHistory {
  public:
   InputHistory(const NetOptions& options, const ObservationSpec& spec);
   void reset();  // a new episode
-  // `state` [1, S] -> [1, calcInputStateDim()].
-  torch::Tensor makeInput(const torch::Tensor& state);
+  // `state` [1, S] at episode step `step` -> [1, calcInputStateDim()].
+  torch::Tensor makeInput(const torch::Tensor& state, int64_t step);
   // The action taken ([A] or [1, A]), clipped to [-1, 1] as the environment does.
   void setAction(const torch::Tensor& action);
 
  private:
-  int64_t history_;
-  bool previous_action_;
-  std::vector<torch::Tensor> states_;  // newest first
-  torch::Tensor action_;
+  NetOptions options_;
+  std::vector<torch::Tensor> states_;   // newest first
+  std::vector<torch::Tensor> actions_;  // newest first
 };
 
 std::shared_ptr<Network> makeNetwork(const NetOptions& options, const ObservationSpec& spec,
@@ -127,6 +129,9 @@ std::shared_ptr<Network> makeNetwork(const NetOptions& options, const Observatio
 // PointNet (points in no mask, masks 1..K, the whole cloud). For the tests;
 // throws for other networks.
 torch::Tensor calcTransformerTokens(Network& network, const ObservationBatch& obs, const torch::Tensor& extra);
+
+// The step feature of NetOptions::step_input (steps as float32, one or many).
+inline torch::Tensor calcStepFeature(const torch::Tensor& steps) { return steps / 100.0; }
 
 // Trainable parameters of a module (for docs and logs).
 int64_t countParameters(torch::nn::Module& module);
