@@ -5,7 +5,7 @@
 
 #include "velocity_stage.hpp"
 
-#include <manibench/sdk/policy_math.hpp>
+#include <manibench/kit/policy_math.hpp>
 
 #include <algorithm>
 #include <array>
@@ -68,9 +68,9 @@ struct MobilePandaSettings {
   double gripper_stiffness, gripper_damping, gripper_closed, gripper_open;
 
   MobilePandaSettings(const sdk::Config& config, const std::string& controller)
-      : base_max(requirePositive(config, "base_max_velocity", sdk::MobilePandaSpeeds::kBase)),
-        yaw_max(requirePositive(config, "yaw_max_velocity", sdk::MobilePandaSpeeds::kYaw)),
-        lift_max(requirePositive(config, "lift_max_velocity", sdk::MobilePandaSpeeds::kLift)),
+      : base_max(requirePositive(config, "base_max_velocity", kit::MobilePandaSpeeds::kBase)),
+        yaw_max(requirePositive(config, "yaw_max_velocity", kit::MobilePandaSpeeds::kYaw)),
+        lift_max(requirePositive(config, "lift_max_velocity", kit::MobilePandaSpeeds::kLift)),
         arm_max(requirePositive(config, "arm_max_velocity", 3.14)),
         base_damping(requirePositive(config, "base_damping", 1000.0)),
         arm_damping(readArmDamping(config, controller)),

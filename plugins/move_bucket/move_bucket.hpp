@@ -6,7 +6,7 @@
 #pragma once
 
 #include <manibench/sdk.hpp>
-#include <manibench/sdk/mobile_panda.hpp>
+#include <manibench/kit/mobile_panda.hpp>
 #include <manibench/sdk/random.hpp>
 
 #include <array>
@@ -234,7 +234,7 @@ class MoveBucketTask : public manibench::sdk::Task {
   double partnet_scale_;
   uint32_t hold_steps_;
   // the robot's facts (assets/robots/mobile_panda_dual.yaml) and state
-  std::unique_ptr<manibench::sdk::mobile_panda::AgentState> robot_state_;
+  std::unique_ptr<manibench::kit::mobile_panda::AgentState> robot_state_;
   mutable std::map<std::string, std::shared_ptr<BucketModel>> buckets_;
   // the scene
   std::shared_ptr<BucketModel> bucket_;

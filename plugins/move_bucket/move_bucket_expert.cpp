@@ -12,20 +12,20 @@
 // bucket rests on the platform, release, retreat upwards.
 #include "move_bucket.hpp"
 
-#include <manibench/sdk/policy_math.hpp>
+#include <manibench/kit/policy_math.hpp>
 
 #include <algorithm>
 #include <cmath>
 
 namespace move_bucket {
 
-using manibench::sdk::clipNorm;
-using manibench::sdk::MobilePandaSpeeds;
-using manibench::sdk::setBaseAction;
-using manibench::sdk::setEeAction;
-using manibench::sdk::getQuaternion;
-using manibench::sdk::getVector3;
-using manibench::sdk::wrapAngle;
+using manibench::kit::clipNorm;
+using manibench::kit::MobilePandaSpeeds;
+using manibench::kit::setBaseAction;
+using manibench::kit::setEeAction;
+using manibench::kit::getQuaternion;
+using manibench::kit::getVector3;
+using manibench::kit::wrapAngle;
 using manibench::sdk::Error;
 using manibench::sdk::kPi;
 using manibench::sdk::Observation;

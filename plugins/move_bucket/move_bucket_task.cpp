@@ -74,8 +74,8 @@ MoveBucketTask::MoveBucketTask(const Config& config)
   if (!(partnet_scale_ > 0) || !std::isfinite(partnet_scale_))
     throw Error("MoveBucket: task.partnet_scale must be positive", MB_INVALID_ARGUMENT);
   if (cache_dir_.empty()) cache_dir_ = getDefaultCacheRoot();
-  robot_state_ = std::make_unique<manibench::sdk::mobile_panda::AgentState>(
-      manibench::sdk::mobile_panda::loadFacts(robot_dir_, "mobile_panda_dual", kTaskName));
+  robot_state_ = std::make_unique<manibench::kit::mobile_panda::AgentState>(
+      manibench::kit::mobile_panda::loadFacts(robot_dir_, "mobile_panda_dual", kTaskName));
   // The observation layout (ObservationLayout) and the expert assume the
   // dual-arm robot's 22 joints and 88-value agent vector.
   if (robot_state_->getFacts().joints.size() != kRobotDof || robot_state_->getDim() != ObservationLayout::kAgentDim)

@@ -1,5 +1,5 @@
 // PartNet-Mobility buckets (ManiSkill v1's 29 + 10) over the SDK's PartNet
-// reader (manibench/sdk/partnet.hpp: folders, splits, mobility.urdf, OBJ
+// reader (manibench/kit/partnet.hpp: folders, splits, mobility.urdf, OBJ
 // vertices). What this family adds is what a bucket is:
 //   - the body: every link rigidly attached to the root (through fixed
 //     joints); the bail: the revolute or continuous joint whose child
@@ -17,7 +17,7 @@
 // density (1000, the facts'), so the model's mass is left at 0.
 #include "move_bucket.hpp"
 
-#include <manibench/sdk/partnet.hpp>
+#include <manibench/kit/partnet.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -32,7 +32,7 @@
 namespace move_bucket {
 
 using manibench::sdk::Error;
-namespace partnet = manibench::sdk::partnet;
+namespace partnet = manibench::kit::partnet;
 
 namespace {
 

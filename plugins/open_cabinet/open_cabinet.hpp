@@ -8,7 +8,7 @@
 #pragma once
 
 #include <manibench/sdk.hpp>
-#include <manibench/sdk/mobile_panda.hpp>
+#include <manibench/kit/mobile_panda.hpp>
 #include <manibench/sdk/random.hpp>
 
 #include <algorithm>
@@ -97,7 +97,7 @@ std::string toString(HandleType type);
 // ---- PartNet-Mobility (partnet_loader.cpp) ------------------------------------
 
 // Loads <folder>/<id>/mobility.urdf and semantics.txt through the SDK's
-// PartNet reader (manibench/sdk/partnet.hpp). Handles are the
+// PartNet reader (manibench/kit/partnet.hpp). Handles are the
 // visuals whose name contains "handle"; targets are links with a handle
 // and a revolute/continuous (door) or prismatic (drawer) joint.
 CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id);
@@ -199,7 +199,7 @@ class OpenCabinetTask : public manibench::sdk::Task {
   double static_speed_, static_angular_speed_;
   uint32_t hold_steps_;
   // the robot's facts (assets/robots/mobile_panda_single.yaml) and state
-  std::unique_ptr<manibench::sdk::mobile_panda::AgentState> robot_;
+  std::unique_ptr<manibench::kit::mobile_panda::AgentState> robot_;
   mutable std::map<std::string, std::shared_ptr<CabinetModel>> cabinets_;
   // PartNet cabinets listObjects skipped (and warned about once).
   mutable std::set<std::string> skipped_;

@@ -12,19 +12,19 @@
 // hold. A handle that slips out while pulling is let go and grasped again.
 #include "open_cabinet.hpp"
 
-#include <manibench/sdk/policy_math.hpp>
+#include <manibench/kit/policy_math.hpp>
 
 #include <algorithm>
 #include <cmath>
 
 namespace open_cabinet {
 
-using manibench::sdk::clipNorm;
-using manibench::sdk::MobilePandaSpeeds;
-using manibench::sdk::setBaseAction;
-using manibench::sdk::setEeAction;
-using manibench::sdk::getQuaternion;
-using manibench::sdk::getVector3;
+using manibench::kit::clipNorm;
+using manibench::kit::MobilePandaSpeeds;
+using manibench::kit::setBaseAction;
+using manibench::kit::setEeAction;
+using manibench::kit::getQuaternion;
+using manibench::kit::getVector3;
 using manibench::sdk::Error;
 using manibench::sdk::Observation;
 using manibench::sdk::PolicyContext;

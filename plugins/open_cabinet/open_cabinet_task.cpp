@@ -2,7 +2,7 @@
 // staged reward and success.
 #include "open_cabinet.hpp"
 
-#include <manibench/sdk/mobile_panda.hpp>
+#include <manibench/kit/mobile_panda.hpp>
 
 
 #include <algorithm>
@@ -24,7 +24,7 @@ using manibench::sdk::Pose;
 using manibench::sdk::SceneView;
 using manibench::sdk::TaskSpec;
 using manibench::sdk::kPi;
-namespace mobile_panda = manibench::sdk::mobile_panda;
+namespace mobile_panda = manibench::kit::mobile_panda;
 
 namespace {
 

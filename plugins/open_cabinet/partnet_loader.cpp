@@ -1,5 +1,5 @@
 // PartNet-Mobility cabinets (asset-facts.md) over the SDK's PartNet reader
-// (manibench/sdk/partnet.hpp: folders, mobility.urdf, OBJ vertices). What
+// (manibench/kit/partnet.hpp: folders, mobility.urdf, OBJ vertices). What
 // this family adds is what a handle and a target are: handles are the
 // visuals whose name contains "handle"; a target is a link carrying one
 // whose parent joint is revolute/continuous (door) or prismatic (drawer).
@@ -8,14 +8,14 @@
 // turns Y-up into Z-up), z along the box's longer side across that.
 #include "open_cabinet.hpp"
 
-#include <manibench/sdk/partnet.hpp>
+#include <manibench/kit/partnet.hpp>
 
 #include <sstream>
 
 namespace open_cabinet {
 
 using manibench::sdk::Error;
-namespace partnet = manibench::sdk::partnet;
+namespace partnet = manibench::kit::partnet;
 
 std::vector<std::string> listPartNetCabinets(const std::string& folder) { return partnet::listObjectIds(folder); }
 std::vector<std::string> listPartNetCabinets(const std::string& folder, const std::string& split) {

@@ -1,5 +1,5 @@
 // PartNet-Mobility chairs over the SDK's PartNet reader
-// (manibench/sdk/partnet.hpp: folders, mobility.urdf, semantics, OBJ
+// (manibench/kit/partnet.hpp: folders, mobility.urdf, semantics, OBJ
 // vertices, scaling). What this family adds is what a chair's parts are,
 // from semantics.txt labels: the wheels ('wheel'; renamed wheel_0..wheel_4
 // in the URDF, so that the task's contact materials find them: ManiSkill's
@@ -8,7 +8,7 @@
 // stands with its lowest point on the ground.
 #include "push_chair.hpp"
 
-#include <manibench/sdk/partnet.hpp>
+#include <manibench/kit/partnet.hpp>
 
 #include <limits>
 #include <regex>
@@ -17,7 +17,7 @@
 namespace push_chair {
 
 using manibench::sdk::Error;
-namespace partnet = manibench::sdk::partnet;
+namespace partnet = manibench::kit::partnet;
 
 namespace {
 

@@ -2,11 +2,11 @@
 // to a target point on the ground (ManiSkill v1, supplement B.2-B.4,
 // C.1.2). Chairs come from a procedural generator (chair_generator.cpp)
 // or, when the task config names a folder, from PartNet-Mobility objects
-// (partnet_chair_loader.cpp, over the SDK's manibench/sdk/partnet.hpp).
+// (partnet_chair_loader.cpp, over the SDK's manibench/kit/partnet.hpp).
 #pragma once
 
 #include <manibench/sdk.hpp>
-#include <manibench/sdk/mobile_panda.hpp>
+#include <manibench/kit/mobile_panda.hpp>
 #include <manibench/sdk/random.hpp>
 
 #include <algorithm>
@@ -194,7 +194,7 @@ class PushChairTask : public manibench::sdk::Task {
   double static_speed_, static_angular_speed_;
   uint32_t hold_steps_;
   // the robot's facts (assets/robots/mobile_panda_dual.yaml) and state
-  std::unique_ptr<manibench::sdk::mobile_panda::AgentState> robot_;
+  std::unique_ptr<manibench::kit::mobile_panda::AgentState> robot_;
   mutable std::map<std::string, std::shared_ptr<ChairModel>> chairs_;
   // the scene
   std::shared_ptr<ChairModel> chair_;

@@ -1,7 +1,7 @@
 // PushChair-v0: scene, reset, observation, staged reward and success.
 #include "push_chair.hpp"
 
-#include <manibench/sdk/partnet.hpp>
+#include <manibench/kit/partnet.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -22,7 +22,7 @@ using manibench::sdk::Pose;
 using manibench::sdk::SceneView;
 using manibench::sdk::TaskSpec;
 using manibench::sdk::kPi;
-namespace mobile_panda = manibench::sdk::mobile_panda;
+namespace mobile_panda = manibench::kit::mobile_panda;
 
 namespace {
 
@@ -119,7 +119,7 @@ const ChairModel& PushChairTask::getChair(const std::string& chair_id) const {
 }
 
 std::vector<std::string> PushChairTask::listObjects(const std::string& split) const {
-  return partnet_dir_.empty() ? listGeneratedChairs(split) : manibench::sdk::partnet::listObjectIds(partnet_dir_, split);
+  return partnet_dir_.empty() ? listGeneratedChairs(split) : manibench::kit::partnet::listObjectIds(partnet_dir_, split);
 }
 
 void PushChairTask::buildScene(SceneView& scene, const std::string& object_id) {

@@ -13,7 +13,7 @@
 #include <sstream>
 #include <string>
 
-#include "test_support.hpp"
+#include "test_registry.hpp"
 
 namespace manibench {
 namespace {

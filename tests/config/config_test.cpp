@@ -15,7 +15,7 @@
 #include <sstream>
 #include <tuple>
 
-#include "test_support.hpp"
+#include "test_registry.hpp"
 
 namespace manibench {
 namespace {

@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <string>
 
-#include "test_support.hpp"
+#include "test_registry.hpp"
 
 namespace manibench::testing {
 

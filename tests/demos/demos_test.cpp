@@ -9,7 +9,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "demos/hdf5.hpp"
+#include "hdf5.hpp"
 #include "demos_support.hpp"
 
 namespace manibench {

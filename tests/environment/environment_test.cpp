@@ -9,7 +9,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "test_support.hpp"
+#include "test_registry.hpp"
 
 namespace manibench {
 namespace {

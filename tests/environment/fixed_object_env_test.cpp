@@ -13,7 +13,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "test_support.hpp"
+#include "test_registry.hpp"
 
 namespace manibench {
 namespace {

@@ -10,7 +10,7 @@
 #include <cstring>
 #include <random>
 
-#include "test_support.hpp"
+#include "test_registry.hpp"
 
 namespace manibench {
 namespace {

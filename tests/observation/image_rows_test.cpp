@@ -1,8 +1,8 @@
-// The rgbd row kernels (core/src/observation/image_rows.hpp): every
+// The rgbd row kernels (core/observation/image_rows.hpp): every
 // instruction-set variant this processor runs gives exactly the scalar
 // definitions' floats and bytes, writes nothing it should not, and handles
 // the widths that leave a tail after the vector loop.
-#include "observation/image_rows.hpp"
+#include "image_rows.hpp"
 
 #include <manibench/renderer.hpp>
 

@@ -10,7 +10,7 @@
 #include <manibench/visual_observer.hpp>
 #include <manibench/sdk/policy.hpp>
 
-#include "test_support.hpp"
+#include "test_registry.hpp"
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>

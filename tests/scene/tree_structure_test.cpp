@@ -1,4 +1,4 @@
-// The implicit step's view of the multibody system (core/src/scene/
+// The implicit step's view of the multibody system (core/scene/
 // tree_structure.hpp) against Simbody's own operators: mass matrix blocks by
 // the composite-rigid-body algorithm against calcM, point Jacobians against
 // calcStationJacobian, on trees of pins, sliders, a massless link and free
@@ -9,7 +9,7 @@
 #include <random>
 
 #include "Simbody.h"
-#include "scene/tree_structure.hpp"
+#include "tree_structure.hpp"
 
 namespace manibench {
 namespace {

@@ -11,25 +11,6 @@
 
 namespace manibench::testing {
 
-PluginRegistry& getBuildTreeRegistry() {
-  static PluginRegistry* registry = [] {
-    auto* r = new PluginRegistry();
-    r->loadDirectories({MANIBENCH_TEST_BUILD_PLUGIN_DIR});
-    return r;
-  }();
-  return *registry;
-}
-
-const PluginRegistry& getRobotTestbedRegistry() {
-  static PluginRegistry* registry = [] {
-    auto* r = new PluginRegistry();
-    r->loadDirectories({MANIBENCH_TEST_BUILD_PLUGIN_DIR});
-    r->loadLibrary(std::string(MANIBENCH_TEST_FIXTURE_DIR) + "/libfixture_robot_testbed.so");
-    return r;
-  }();
-  return *registry;
-}
-
 long readRssKb() {
   std::ifstream status("/proc/self/status");
   std::string line;

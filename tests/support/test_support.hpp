@@ -1,7 +1,6 @@
-// Shared helpers for the test programs.
+// Shared helpers for the test programs (no manibench library: a test of any
+// layer links them). The build tree's plugin registries: test_registry.hpp.
 #pragma once
-
-#include <manibench/plugin_registry.hpp>
 
 #include <gtest/gtest.h>
 
@@ -9,12 +8,6 @@
 #include <vector>
 
 namespace manibench::testing {
-
-// A registry holding the plugins of this build tree (and nothing else).
-PluginRegistry& getBuildTreeRegistry();
-// The build tree's plugins plus the fixture task RobotTestbed-v0 (which
-// lives outside the default search path).
-const PluginRegistry& getRobotTestbedRegistry();
 
 // Whether `text` contains `part`.
 inline bool contains(const std::string& text, const std::string& part) {

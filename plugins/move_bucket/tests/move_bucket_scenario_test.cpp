@@ -15,7 +15,7 @@
 #include <iostream>
 
 #include "move_bucket.hpp"
-#include "test_support.hpp"
+#include "test_registry.hpp"
 
 namespace {
 

@@ -14,7 +14,7 @@
 #include <set>
 
 #include "move_bucket.hpp"
-#include "test_support.hpp"
+#include "test_registry.hpp"
 
 namespace {
 

@@ -12,7 +12,7 @@
 #include <manibench/environment.hpp>
 #include <manibench/episode.hpp>
 
-#include "test_support.hpp"
+#include "test_registry.hpp"
 
 namespace {
 

@@ -16,7 +16,7 @@
 #include <sstream>
 
 #include "open_cabinet.hpp"
-#include "test_support.hpp"
+#include "test_registry.hpp"
 
 namespace {
 

@@ -12,7 +12,7 @@
 #include <iostream>
 
 #include "push_chair.hpp"
-#include "test_support.hpp"
+#include "test_registry.hpp"
 
 namespace {
 

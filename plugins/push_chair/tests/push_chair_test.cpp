@@ -15,7 +15,7 @@
 #include <sstream>
 
 #include "push_chair.hpp"
-#include "test_support.hpp"
+#include "test_registry.hpp"
 
 namespace {
 

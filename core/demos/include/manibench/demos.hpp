@@ -1,0 +1,205 @@
+// Demonstrations (supplement C.2): episodes recorded with every step's
+// environment state, stored in HDF5 (libhdf5), replayed bit for bit and
+// converted to other observation modes. The file layout is in
+// docs/demonstrations.md; `manibench demos` is the command line.
+#pragma once
+
+#include <manibench/config.hpp>
+#include <manibench/environment.hpp>
+#include <manibench/evaluation.hpp>
+#include <manibench/trajectory.hpp>
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace manibench {
+
+// What a file holds about the whole set (root attributes).
+struct DemoFileInfo {
+  uint64_t format_version = 1;
+  std::string manibench_version;
+  std::string task;            // the registered task
+  std::string environment_id;  // as made (a fixed-object id, or the task)
+  std::string controller;
+  ObservationMode observation_mode = ObservationMode::State;
+  std::vector<std::string> condition_names;
+  std::string config;   // the merged YAML configuration, `--config`-able
+  std::string plugins;  // JSON: [{"kind", "name", "library", "version"}]
+  std::string policy;   // "name (library, version)"
+  std::string created;  // ISO 8601, UTC
+  std::string command;  // the command line that made it
+};
+
+// Writes a demonstration file: root attributes, then one group per
+// trajectory, each flushed as it is appended (a run killed keeps every
+// trajectory appended before). close() also writes the JSON sidecar
+// (<file without .h5>.json).
+class DemoWriter {
+ public:
+  DemoWriter(const std::string& path, const DemoFileInfo& info);
+  ~DemoWriter();
+  DemoWriter(const DemoWriter&) = delete;
+  DemoWriter& operator=(const DemoWriter&) = delete;
+  // Appends as traj_<count>; returns the name.
+  std::string append(const Trajectory& trajectory);
+  void close();
+  std::size_t getCount() const;
+  const std::string& getPath() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Reads one. A file cut short opens: the trajectories written before the
+// cut read, those after fail with a DemoError naming them.
+class DemoReader {
+ public:
+  explicit DemoReader(const std::string& path);
+  ~DemoReader();
+  DemoReader(const DemoReader&) = delete;
+  DemoReader& operator=(const DemoReader&) = delete;
+  const std::string& getPath() const;
+  const DemoFileInfo& getInfo() const;
+  // traj_0, traj_1, ... in order.
+  const std::vector<std::string>& getTrajectoryNames() const;
+  // Without `with_env_states`, the environment states (most of a state-mode
+  // file) are not read: what learning needs is the rest.
+  Trajectory read(const std::string& name, bool with_env_states = true) const;
+  // The attributes only (object, level, seed, steps, success, reward).
+  Trajectory readSummary(const std::string& name) const;
+  // Bytes the trajectory's datasets take in the file.
+  uint64_t calcStorageBytes(const std::string& name) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// The JSON sidecar of `info` and the trajectories' summaries, as
+// DemoWriter::close() writes it.
+std::string formatDemoJson(const DemoFileInfo& info, const std::vector<std::string>& names,
+                           const std::vector<Trajectory>& summaries);
+// <path without .h5/.hdf5>.json
+std::string getDemoJsonPath(const std::string& h5_path);
+
+// Replays `trajectory` in `env` (built as the file says): restores its
+// first state, then steps its actions. With `check`, compares every step's
+// state blob, observation, reward and flags with the recorded ones, bit for
+// bit, and stops at the first difference. `on_step` (may be empty) sees
+// the first state (0) and each step after it is taken (1, 2, ...).
+struct ReplayResult {
+  uint32_t steps = 0;
+  bool matches = true;
+  std::string divergence;  // "step 17: observation[3] (segment 'tcp'): 0.1 vs 0.2"
+};
+ReplayResult replayTrajectory(Environment& env, const Trajectory& trajectory, bool check,
+                              const std::function<void(uint32_t step)>& on_step = {});
+
+// The observations of `env`'s observation mode at every recorded state
+// (reached by stepping the recorded actions from the first state, any
+// state that differs restored from the recording; D.1 sampling by the same
+// (seed, step) as a live episode): `trajectory` with its observations
+// replaced.
+Trajectory convertTrajectory(Environment& env, const Trajectory& trajectory);
+
+// The configuration a demonstration file was made with (its merged YAML
+// over the task's layers), `overrides` (KEY=VALUE, as --set) on top.
+ConfigNode calcDemoConfig(const PluginRegistry& registry, const DemoFileInfo& info,
+                          const std::vector<std::string>& overrides = {});
+// An environment as that configuration makes it, stopping on success as the
+// generation's did.
+std::unique_ptr<Environment> makeDemoEnvironment(const PluginRegistry& registry,
+                                                 const DemoFileInfo& info,
+                                                 const std::vector<std::string>& overrides = {});
+
+// Converts the trajectories `names` (empty: all) of the file at `in_path`
+// into a new file at `out_path` whose observations are those of `env`'s
+// configuration with `overrides` (observation.mode=pointcloud, say), in
+// `workers` forked processes (each with its own environment and EGL
+// context). The output is described by `out_info_base` with the
+// configuration and observation mode the overrides make. A trajectory that
+// cannot be read or converted is reported in `failed` and skipped; a stop
+// keeps what was converted.
+struct ConversionResult {
+  std::size_t converted = 0;
+  std::vector<std::string> failed;  // "traj_3: why"
+  bool interrupted = false;
+  double seconds = 0;
+};
+struct ConversionHooks {
+  std::function<void(std::size_t done, std::size_t total, double elapsed)> on_progress;
+  std::function<bool()> should_stop;
+};
+ConversionResult convertDemonstrations(const PluginRegistry& registry, const std::string& in_path,
+                                       const std::string& out_path,
+                                       const std::vector<std::string>& overrides,
+                                       const std::vector<std::string>& names, unsigned workers,
+                                       const DemoFileInfo& out_info_base,
+                                       const ConversionHooks& hooks = {});
+
+// --- generating (supplement C.2) -------------------------------------------------------
+
+// The evaluation kit's episodes, kept when successful, until `per_object`
+// trajectories of every object (`manibench demos generate`).
+struct GenerationOptions {
+  // Task, policy, split, objects, base seed, workers, timeouts; its levels
+  // and record_successes are set by the generation.
+  EvaluationOptions evaluation;
+  uint32_t per_object = 1;
+  // Episodes tried per object at most (0: 10 x per_object); an object
+  // whose policy fails that often ends with fewer trajectories.
+  uint32_t max_attempts = 0;
+};
+
+struct GenerationObjectResult {
+  std::string object_id;
+  uint32_t kept = 0;      // trajectories written
+  uint32_t attempts = 0;  // episodes that ran (levels 0..attempts-1)
+  uint32_t failures = 0;  // episodes that did not run to their end
+};
+
+struct GenerationResult {
+  std::string path;
+  std::vector<GenerationObjectResult> objects;  // in split order
+  std::size_t trajectories = 0;
+  std::size_t episodes = 0;
+  uint32_t rounds = 0;
+  bool interrupted = false;
+  std::string stop_reason;
+  uint32_t worker_restarts = 0;
+  double seconds = 0;
+  bool isComplete(uint32_t per_object) const;
+};
+
+struct GenerationProgress {
+  std::size_t kept = 0, wanted = 0;  // trajectories
+  std::size_t episodes = 0, failures = 0;
+  double elapsed = 0;  // s
+};
+
+struct GenerationHooks {
+  std::function<void(const GenerationProgress&)> on_progress;  // may be empty
+  std::function<bool()> should_stop;                            // may be empty
+};
+
+// Runs rounds of evaluation episodes (levels 0, 1, ... of every object that
+// still needs trajectories; seeds as `manibench eval` derives them) and
+// appends the successful ones to a new file at `path`, in (object, level)
+// order, so that the file does not depend on the number of workers. `info`
+// describes the set (the controller, observation mode and condition names
+// come from the workers' environment). A stop (should_stop) keeps every
+// trajectory that finished. Throws EvaluationError when the run cannot
+// start and DemoError when the file cannot be written.
+GenerationResult generateDemonstrations(const PluginRegistry& registry,
+                                        const GenerationOptions& options,
+                                        const EnvironmentFactory& make_environment,
+                                        const std::string& path, const DemoFileInfo& info,
+                                        const GenerationHooks& hooks = {});
+
+}  // namespace manibench

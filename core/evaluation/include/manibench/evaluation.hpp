@@ -1,0 +1,191 @@
+// The evaluation kit (supplement B.5): a policy on a task's test (or train)
+// objects, episodes as (object, level) pairs with seeds derived from one base
+// seed, run in forked worker processes so that a policy that crashes, hangs
+// or returns garbage fails only its episode. Results are aggregated per
+// object (success rate, each success condition's satisfactory rate) and
+// written as a terminal table, CSV and JSON (docs/evaluation.md).
+#pragma once
+
+#include <manibench/observation_mode.hpp>
+#include <manibench/plugin_registry.hpp>
+
+#include <cstdint>
+#include <functional>
+#include <iosfwd>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace manibench {
+
+class Environment;  // environment.hpp
+struct Trajectory;  // trajectory.hpp
+
+// The evaluation could not start or could not go on (bad options, a worker
+// that cannot build its environment or policy); names the cause.
+class EvaluationError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// This build's version, as written into result files.
+const char* getManibenchVersion();
+
+// One episode to run: episode `level` of `object_id`.
+struct EpisodeSpec {
+  std::size_t index = 0;  // position in the episode list
+  std::string object_id;
+  uint64_t level = 0;  // episode index within the object
+  uint64_t seed = 0;   // derived from the base seed, object and level
+};
+
+// Episode `level` of `object_id` under base seed `seed`: a 32-bit seed (easy
+// to pass to `manibench run --seed`) that depends on all three.
+uint64_t calcEpisodeSeed(uint64_t seed, const std::string& object_id, uint64_t level);
+// Every object, in the given order, times every level: object-major.
+std::vector<EpisodeSpec> makeEpisodeList(const std::vector<std::string>& objects,
+                                         const std::vector<uint64_t>& levels, uint64_t seed);
+// "0-4" (inclusive), "1,3,7" or mixtures ("0-2,9"); sorted, duplicates
+// dropped. Throws std::invalid_argument naming the bad part.
+std::vector<uint64_t> parseLevels(const std::string& text);
+// "3,7" -> {"3", "7"}: ids separated by commas, duplicates dropped, order kept.
+std::vector<std::string> parseIdList(const std::string& text);
+
+// Why an episode did not run to its end (empty: it did).
+namespace failure {
+inline constexpr const char* kCrash = "crash";                   // the worker died (signal, exit)
+inline constexpr const char* kTimeout = "timeout";               // a policy call hung
+inline constexpr const char* kPolicyError = "policy_error";      // the policy reported an error
+inline constexpr const char* kInvalidAction = "invalid_action";  // NaN, infinity, wrong size
+inline constexpr const char* kEnvironmentError = "environment_error";  // task/physics failed
+inline constexpr const char* kEnvironmentTimeout = "environment_timeout";
+}  // namespace failure
+
+struct EpisodeRecord {
+  EpisodeSpec spec;
+  uint32_t steps = 0;  // environment steps completed
+  double total_reward = 0;
+  bool success = false;
+  // The final step's flag per success condition; all 0 for a failed episode
+  // (its conditions were never evaluated at a terminal step).
+  std::vector<uint8_t> flags;
+  std::string failure;        // empty, or one of failure::k*
+  int64_t failure_step = -1;  // the step being taken when it failed
+  std::string message;        // what went wrong, for people
+  double seconds = 0;         // wall time of the episode (timing)
+  // The recorded episode, when EvaluationOptions::record_successes asked
+  // for it and the episode succeeded; else empty.
+  std::shared_ptr<const Trajectory> trajectory;
+  bool failed() const { return !failure.empty(); }
+};
+
+// Aggregate of a group of episodes (one object, or all).
+struct EvaluationSummary {
+  std::string object_id;  // "all" for the overall line
+  uint32_t episodes = 0;
+  uint32_t successes = 0;
+  uint32_t failures = 0;  // episodes that did not run to their end
+  double success_rate = 0;
+  std::vector<double> condition_rates;  // per success condition
+  double mean_return = 0;
+  double mean_steps = 0;
+};
+
+struct EvaluationOptions {
+  std::string task;
+  std::string policy;         // a registered policy name (resolved already)
+  std::string policy_config;  // YAML handed to the policy's create
+  std::string split = "test";
+  std::vector<std::string> objects;  // empty: every object of the split
+  std::vector<uint64_t> levels;      // episode indices run on every object
+  uint64_t seed = 0;
+  unsigned workers = 1;
+  double step_timeout = 10;          // s, for each policy call (reset, act)
+  double environment_timeout = 300;  // s, for each reset/step and a worker's setup
+  // Written into the JSON as they are (the configuration sources, say).
+  std::vector<std::string> config_notes;
+  // Workers record every episode (observations, actions, a state per step)
+  // and send back the successful ones in their EpisodeRecord (demos).
+  bool record_successes = false;
+};
+
+// What a worker reports after setting up: the task as configured.
+struct EvaluationTaskInfo {
+  ObservationMode observation_mode = ObservationMode::State;  // the environment's, as configured
+  std::string controller;
+  std::vector<std::string> condition_names;
+  std::vector<std::string> split_objects;
+  uint32_t max_episode_steps = 0;
+  uint32_t action_dim = 0;
+  uint32_t observation_dim = 0;
+};
+
+struct EvaluationResult {
+  EvaluationOptions options;
+  std::string policy_library;
+  std::string policy_library_version;
+  EvaluationTaskInfo task;
+  std::vector<EpisodeSpec> planned;        // the whole episode list
+  std::vector<EpisodeRecord> episodes;     // those that finished, by index
+  std::vector<EvaluationSummary> objects;  // per object, in episode-list order
+  EvaluationSummary overall;
+  bool interrupted = false;  // stopped before every planned episode ran
+  std::string stop_reason;   // why, when interrupted ("interrupted by the user", ...)
+  uint32_t worker_restarts = 0;
+  double seconds = 0;  // wall time of the whole evaluation (timing)
+};
+
+struct EvaluationProgress {
+  std::size_t done = 0;
+  std::size_t total = 0;
+  std::size_t successes = 0;
+  std::size_t failures = 0;
+  double elapsed = 0;  // s
+};
+
+// Builds the environment inside a worker (after the fork, so that anything
+// it creates, EGL contexts included, belongs to that process).
+using EnvironmentFactory = std::function<std::unique_ptr<Environment>()>;
+
+struct EvaluationHooks {
+  // Called from the coordinating process after each episode and a few times
+  // a second; may be empty.
+  std::function<void(const EvaluationProgress&)> on_progress;
+  // Polled between events; true stops the run, kills the workers and
+  // returns the episodes finished so far with `interrupted` set.
+  std::function<bool()> should_stop;
+  // Called from the coordinating process once the first worker has set up:
+  // the task as configured. May be empty.
+  std::function<void(const EvaluationTaskInfo&)> on_ready;
+  // Called from the coordinating process with each episode's record as it
+  // arrives (in the order episodes finish); it may take the record's
+  // trajectory (the result keeps the rest). May be empty.
+  std::function<void(EpisodeRecord&)> on_episode;
+};
+
+// Runs the evaluation. `registry` must hold the policy (and the task); its
+// libraries are inherited by the workers. Throws EvaluationError when the
+// run cannot start (a worker cannot build the environment or the policy,
+// unknown objects, empty selection) and PluginError for unknown names.
+EvaluationResult evaluatePolicy(const PluginRegistry& registry, const EvaluationOptions& options,
+                                const EnvironmentFactory& make_environment,
+                                const EvaluationHooks& hooks = {});
+
+// Per-object and overall summaries of `result.episodes` (failed episodes
+// count as unsuccessful, with every condition unsatisfied).
+void summarizeEvaluation(EvaluationResult& result);
+
+// Output. The CSV files and the JSON hold the same numbers; timings appear
+// only in the JSON's "timing" object, so that two runs of the same
+// evaluation give byte-identical CSV files.
+void printEvaluationTable(std::ostream& out, const EvaluationResult& result);
+void writeSummaryCsv(std::ostream& out, const EvaluationResult& result);
+void writeEpisodesCsv(std::ostream& out, const EvaluationResult& result);
+void writeEvaluationJson(std::ostream& out, const EvaluationResult& result);
+// summary.csv, episodes.csv and summary.json in `directory` (created if
+// needed); returns the paths written.
+std::vector<std::string> writeEvaluationFiles(const std::string& directory,
+                                              const EvaluationResult& result);
+
+}  // namespace manibench

@@ -1,0 +1,209 @@
+#include "worker.hpp"
+
+#include <time.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <manibench/trajectory.hpp>
+#include <manibench/episode.hpp>
+#include <memory>
+#include <optional>
+
+#include "wire_format.hpp"
+
+namespace manibench::evaluation_detail {
+
+const char* getPhaseName(uint32_t phase) {
+  switch (phase) {
+    case kSetup:
+      return "setup (building the environment and policy)";
+    case kEnvReset:
+      return "environment reset";
+    case kPolicyReset:
+      return "policy reset";
+    case kPolicyAct:
+      return "policy act";
+    case kEnvStep:
+      return "environment step";
+    default:
+      return "idle";
+  }
+}
+
+int64_t getMonotonicNs() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return int64_t(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
+}
+
+void enterPhase(Slot& slot, Phase phase) {
+  slot.since_ns.store(getMonotonicNs());
+  slot.phase.store(phase);
+}
+
+namespace {
+
+// What a worker does after an episode.
+enum class After { kGoOn, kNewPolicy, kLeave };
+
+Phase toWorkerPhase(EpisodePhase phase) {
+  switch (phase) {
+    case EpisodePhase::EnvReset:
+      return kEnvReset;
+    case EpisodePhase::PolicyReset:
+      return kPolicyReset;
+    case EpisodePhase::PolicyAct:
+      return kPolicyAct;
+    case EpisodePhase::EnvStep:
+      return kEnvStep;
+  }
+  return kIdle;
+}
+
+// Runs one episode; failures of the policy or the environment are recorded,
+// never thrown. The slot follows the episode's phases (the coordinator's
+// view of a worker that hangs or dies). With `record_trajectory` the
+// episode is recorded, and kept in the record when it succeeds.
+After runWorkerEpisode(Environment& env, PolicyInstance& policy, Slot& slot,
+                       bool record_trajectory, EpisodeRecord& record) {
+  const auto start = getMonotonicNs();
+  const std::size_t conditions = env.getTaskDescription().success_conditions.size();
+  record.flags.assign(conditions, 0);
+  After after = After::kGoOn;
+  EpisodeHooks hooks;
+  hooks.on_phase = [&slot](EpisodePhase phase, uint32_t step) {
+    slot.step.store(step);
+    enterPhase(slot, toWorkerPhase(phase));
+  };
+  hooks.on_step = [&slot, &record](const StepResult&, const EpisodeResult& so_far) {
+    record.total_reward = so_far.total_reward;
+    slot.total_reward.store(record.total_reward);
+    return true;
+  };
+  std::optional<TrajectoryRecorder> recorder;
+  if (record_trajectory) {
+    recorder.emplace(env);
+    hooks.on_reset = [&] { recorder->onReset(record.spec.object_id, record.spec.level, record.spec.seed); };
+    hooks.on_transition = [&](const Eigen::VectorXd& action, const StepResult& step) {
+      recorder->onStep(action, step);
+    };
+  }
+  try {
+    slot.step.store(0);
+    slot.total_reward.store(0);
+    const EpisodeResult result =
+        runEpisode(env, policy, record.spec.object_id, record.spec.seed, hooks);
+    record.success = result.success;
+    record.flags = result.final_flags;
+    record.flags.resize(conditions, 0);
+    if (recorder && record.success) record.trajectory = std::make_shared<Trajectory>(recorder->take());
+  } catch (const std::exception& e) {
+    const uint32_t phase = slot.phase.load();
+    record.failure_step = slot.step.load();
+    record.success = false;
+    record.flags.assign(conditions, 0);
+    // The policy object may be in any state after failing: a new one.
+    after = After::kNewPolicy;
+    if (dynamic_cast<const InvalidAction*>(&e)) {
+      record.failure = failure::kInvalidAction;
+    } else if (const auto* call = dynamic_cast<const PluginCallError*>(&e);
+               call && isPolicyPhase(phase)) {
+      // The SDK reports a wrong-size action as an invalid argument of act.
+      record.failure = (phase == kPolicyAct && call->status() == MB_INVALID_ARGUMENT)
+                           ? failure::kInvalidAction
+                           : failure::kPolicyError;
+    } else if (isPolicyPhase(phase)) {
+      record.failure = failure::kPolicyError;
+    } else {
+      record.failure = failure::kEnvironmentError;
+      after = After::kLeave;  // a fresh process rather than a scene in an unknown state
+    }
+    record.message = std::string(getPhaseName(phase)) + " at step " +
+                     std::to_string(record.failure_step) + ": " + e.what();
+  }
+  record.steps = env.getElapsedSteps();
+  record.seconds = double(getMonotonicNs() - start) * 1e-9;
+  enterPhase(slot, kIdle);
+  return after;
+}
+
+std::unique_ptr<PolicyInstance> makePolicy(const WorkerContext& context, const Environment& env) {
+  return std::make_unique<PolicyInstance>(*context.registry, context.options->policy,
+                                          context.options->policy_config,
+                                          env.calcPolicyLayout(env.getObservationMode()));
+}
+
+// The task as this worker's environment configures it.
+EvaluationTaskInfo describeTask(const Environment& env, const std::string& split) {
+  const TaskDescription& task = env.getTaskDescription();
+  EvaluationTaskInfo info;
+  info.observation_mode = env.getObservationMode();
+  info.controller = env.getControllerDescription().name;
+  info.condition_names = task.success_conditions;
+  info.split_objects = env.listObjects(split);
+  info.max_episode_steps = task.max_episode_steps;
+  info.action_dim = env.getControllerDescription().action_dim;
+  info.observation_dim = task.observation_dim;
+  return info;
+}
+
+}  // namespace
+
+void runWorker(int fd, Slot& slot, const WorkerContext& context) {
+  enterPhase(slot, kSetup);
+  std::unique_ptr<Environment> env;
+  std::unique_ptr<PolicyInstance> policy;
+  {
+    Writer w;
+    try {
+      env = (*context.make_environment)();
+      policy = makePolicy(context, *env);
+      const EvaluationTaskInfo info = describeTask(*env, context.options->split);
+      transferReady(w.u8(kReady), info);
+    } catch (const std::exception& e) {
+      w = Writer();
+      w.u8(kSetupError).str(e.what());
+    }
+    enterPhase(slot, kIdle);
+    sendMessage(fd, w);
+    if (!policy) {
+      std::fflush(nullptr);
+      _exit(0);
+    }
+  }
+  std::string payload;
+  while (receiveMessage(fd, payload)) {
+    try {
+      Reader in(payload);
+      if (in.u8() != kRun) break;
+      EpisodeRecord record;
+      transferRun(in, record.spec);
+      const After after =
+          runWorkerEpisode(*env, *policy, slot, context.options->record_successes, record);
+      Writer w;
+      transferResult(w.u8(kResult), record);
+      w.u8(record.trajectory ? 1 : 0);
+      if (record.trajectory) transferTrajectory(w, *record.trajectory);
+      // Whether this worker leaves after the episode (the coordinator then
+      // hands the next episode to a fresh one, not to this one).
+      w.u8(after == After::kLeave ? 1 : 0);
+      if (!sendMessage(fd, w) || after == After::kLeave) break;
+      if (after == After::kNewPolicy) {
+        enterPhase(slot, kSetup);
+        policy.reset();
+        policy = makePolicy(context, *env);
+        enterPhase(slot, kIdle);
+      }
+    } catch (const std::exception& e) {
+      // Even a new policy could not be made: tell, and leave.
+      Writer w;
+      w.u8(kSetupError).str(e.what());
+      sendMessage(fd, w);
+      break;
+    }
+  }
+  std::fflush(nullptr);
+  _exit(0);
+}
+
+}  // namespace manibench::evaluation_detail

@@ -1,0 +1,161 @@
+// Host-side owners of plugin objects. Each wraps one handle created through
+// the C ABI, destroys it exactly once, and turns every failed call into a
+// PluginCallError naming the plugin, the call and the plugin's message.
+#pragma once
+
+#include <manibench/abi.h>
+#include <manibench/geometry.hpp>
+#include <manibench/observation_mode.hpp>
+#include <manibench/plugin_registry.hpp>
+#include <manibench/scene_bridge.hpp>
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace manibench {
+
+class PluginCallError : public std::runtime_error {
+ public:
+  PluginCallError(const std::string& message, mb_status status)
+      : std::runtime_error(message), status_(status) {}
+  mb_status status() const { return status_; }
+
+ private:
+  mb_status status_;
+};
+
+struct SegmentDescription {
+  std::string name;
+  uint32_t offset = 0;
+  uint32_t size = 0;
+  std::string description;
+};
+
+struct TaskDescription {
+  std::string name;
+  uint32_t observation_dim = 0;
+  std::vector<SegmentDescription> observation_segments;
+  std::vector<std::string> success_conditions;  // "success" is last
+  std::vector<std::string> masks;
+  std::string robot_articulation;
+  std::vector<std::string> actuated_joints;
+  std::string default_controller;
+  std::string controller_config;
+  double control_frequency = 100;
+  uint32_t frame_skip = 5;
+  uint32_t max_episode_steps = 200;
+  std::string default_config;  // the task's YAML configuration layer
+  // Leading values of the state that are the robot's own (what the visual
+  // modes keep); equals observation_dim when the task does not say.
+  uint32_t agent_state_dim = 0;
+};
+
+struct ControllerDescription {
+  std::string name;
+  uint32_t action_dim = 0;
+  std::vector<SegmentDescription> action_segments;
+  uint32_t flags = 0;
+};
+
+class TaskInstance {
+ public:
+  TaskInstance(const PluginRegistry& registry, const std::string& name,
+               const std::string& config_yaml);
+  ~TaskInstance();
+  TaskInstance(const TaskInstance&) = delete;
+  TaskInstance& operator=(const TaskInstance&) = delete;
+
+  const TaskDescription& getDescription() const { return description_; }
+  const std::string& getLibraryPath() const { return library_path_; }
+  std::vector<std::string> listObjects(const std::string& split) const;
+  void buildScene(SceneBridge& scene, const std::string& object_id);
+  void reset(SceneBridge& scene, uint64_t seed);
+  void observe(SceneBridge& scene, Eigen::VectorXd& out);
+  double computeReward(SceneBridge& scene, const Eigen::VectorXd& action);
+  void evaluateSuccess(SceneBridge& scene, std::vector<uint8_t>& flags,
+                       std::vector<double>& values);
+  // ABI 1.2 (abi.h, "state"): the task's episode state as bytes, and back.
+  // A plugin built against an older ABI throws a PluginCallError that says
+  // so (MB_UNSUPPORTED).
+  std::vector<uint8_t> saveState();
+  void restoreState(const std::vector<uint8_t>& bytes);
+
+ private:
+  const mb_task_descriptor* descriptor_;
+  mb_task* handle_ = nullptr;
+  std::string library_path_;
+  TaskDescription description_;
+};
+
+class ControllerInstance {
+ public:
+  ControllerInstance(const PluginRegistry& registry, const std::string& name,
+                     const std::string& config_yaml,
+                     const mb_controller_context& context);
+  ~ControllerInstance();
+  ControllerInstance(const ControllerInstance&) = delete;
+  ControllerInstance& operator=(const ControllerInstance&) = delete;
+
+  const ControllerDescription& getDescription() const { return description_; }
+  void reset(SceneBridge& scene);
+  void compute(SceneBridge& scene, const Eigen::VectorXd& action,
+               std::vector<DriveCommand>& drives);
+  // As TaskInstance's.
+  std::vector<uint8_t> saveState();
+  void restoreState(const std::vector<uint8_t>& bytes);
+
+ private:
+  const mb_controller_descriptor* descriptor_;
+  mb_controller* handle_ = nullptr;
+  std::string library_path_;
+  ControllerDescription description_;
+};
+
+// The C view handed to a policy's act(): pointers into `state` and
+// `visual` (which must outlive it); the visual fields of visual.mode only.
+mb_observation makeObservationView(const Eigen::VectorXd& state, uint32_t step,
+                                   const VisualObservation& visual);
+// As above, and rgb bytes (observation.rgb_dtype uint8) converted into
+// `rgb_floats` (byte / 255.0f: the float32 layout's values) for
+// mb_observation.image_rgb, which is float.
+mb_observation makeObservationView(const Eigen::VectorXd& state, uint32_t step,
+                                   const VisualObservation& visual, std::vector<float>& rgb_floats);
+
+struct PolicyLayout {
+  std::string task_name;
+  ObservationMode observation_mode = ObservationMode::State;
+  uint32_t observation_dim = 0;
+  std::vector<SegmentDescription> observation_segments;
+  uint32_t action_dim = 0;
+  std::vector<SegmentDescription> action_segments;
+};
+
+class PolicyInstance {
+ public:
+  PolicyInstance(const PluginRegistry& registry, const std::string& name,
+                 const std::string& config_yaml, const PolicyLayout& layout);
+  ~PolicyInstance();
+  PolicyInstance(const PolicyInstance&) = delete;
+  PolicyInstance& operator=(const PolicyInstance&) = delete;
+
+  const std::string& getName() const { return name_; }
+  const std::string& getLibraryPath() const { return library_path_; }
+  void reset(uint64_t seed);
+  // Writes the raw action; validation is the environment's job. `visual`
+  // fills the ABI 1.1 fields of its mode (none in State); rgb as bytes
+  // reaches the policy as the float32 layout's floats (makeObservationView).
+  void act(const Eigen::VectorXd& observation, uint32_t step, Eigen::VectorXd& action,
+           const VisualObservation& visual = VisualObservation());
+
+ private:
+  const mb_policy_descriptor* descriptor_;
+  mb_policy* handle_ = nullptr;
+  std::string name_;
+  std::string library_path_;
+  uint32_t action_dim_ = 0;
+  std::vector<float> rgb_floats_;  // act(): rgb bytes as floats for the ABI
+};
+
+}  // namespace manibench

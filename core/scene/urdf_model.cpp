@@ -1,0 +1,791 @@
+#include "urdf_model.hpp"
+
+#include <manibench/sdk/numbers.hpp>
+
+#include <console_bridge/console.h>
+#include <tinyxml.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <thread>
+
+namespace manibench {
+namespace scene_detail {
+namespace {
+
+using SimTK::Inertia;
+using SimTK::Mat33;
+using SimTK::Rotation;
+using SimTK::SymMat33;
+using SimTK::Transform;
+using SimTK::Vec3;
+
+using sdk::kPi;
+
+// urdfdom reports why it rejected a model only through console_bridge. This
+// routes its error messages into a string for the SceneError while parsing;
+// warnings still reach the previous handler. console_bridge's handler is
+// process-wide, hence the lock (other threads' messages are forwarded).
+class UrdfErrorCapture : public console_bridge::OutputHandler {
+ public:
+  UrdfErrorCapture()
+      : lock_(mutex()), previous_(console_bridge::getOutputHandler()) {
+    console_bridge::useOutputHandler(this);
+  }
+  ~UrdfErrorCapture() override { console_bridge::useOutputHandler(previous_); }
+  UrdfErrorCapture(const UrdfErrorCapture&) = delete;
+  UrdfErrorCapture& operator=(const UrdfErrorCapture&) = delete;
+
+  void log(const std::string& text, console_bridge::LogLevel level,
+           const char* filename, int line) override {
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR &&
+        std::this_thread::get_id() == thread_) {
+      if (!errors_.empty()) errors_ += "; ";
+      errors_ += text;
+    } else if (previous_ != nullptr) {
+      previous_->log(text, level, filename, line);
+    }
+  }
+  const std::string& getErrors() const { return errors_; }
+
+ private:
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  std::lock_guard<std::mutex> lock_;
+  console_bridge::OutputHandler* previous_;
+  std::thread::id thread_ = std::this_thread::get_id();
+  std::string errors_;
+};
+
+[[noreturn]] void fail(const std::string& source, const std::string& what) {
+  throw SceneError("URDF " + source + ": " + what);
+}
+
+Transform toTransform(const urdf::Pose& pose) {
+  double x, y, z, w;
+  pose.rotation.getQuaternion(x, y, z, w);
+  return Transform(Rotation(SimTK::Quaternion(w, x, y, z)),
+                   Vec3(pose.position.x, pose.position.y, pose.position.z));
+}
+
+SymMat33 toSymmetric(const Mat33& m) {
+  return SymMat33().setFromLower(0.5 * (m + ~m));
+}
+
+// Mass, centre of mass and central inertia (shape frame) of a solid shape.
+void calcShapeMass(const ShapeGeometry& g, double density, double& m, Vec3& com, Mat33& Ic) {
+  com = Vec3(0);
+  Vec3 moments(0);
+  const double r = g.radius, l = 2 * g.half_length;
+  switch (g.kind) {
+    case ShapeKind::Sphere:
+      m = density * 4.0 / 3.0 * kPi * r * r * r;
+      moments = Vec3(0.4 * m * r * r);
+      break;
+    case ShapeKind::Box: {
+      const Vec3 d = 2 * g.half;
+      m = density * d[0] * d[1] * d[2];
+      moments = m / 12 * Vec3(d[1] * d[1] + d[2] * d[2], d[0] * d[0] + d[2] * d[2],
+                              d[0] * d[0] + d[1] * d[1]);
+      break;
+    }
+    case ShapeKind::Cylinder: {
+      m = density * kPi * r * r * l;
+      const double side = m * (3 * r * r + l * l) / 12;
+      moments = Vec3(side, side, 0.5 * m * r * r);
+      break;
+    }
+    case ShapeKind::Capsule: {
+      // A cylinder plus two hemispheres (each with its centroid 3r/8 from
+      // its flat face and central inertia 83/320 m r^2 about a transverse axis).
+      const double m_cylinder = density * kPi * r * r * l;
+      const double m_half = density * 2.0 / 3.0 * kPi * r * r * r;
+      const double offset = g.half_length + 3 * r / 8;
+      const double side = m_cylinder * (3 * r * r + l * l) / 12 +
+                          2 * m_half * (83.0 / 320.0 * r * r + offset * offset);
+      m = m_cylinder + 2 * m_half;
+      moments = Vec3(side, side, 0.5 * m_cylinder * r * r + 0.4 * 2 * m_half * r * r);
+      break;
+    }
+    case ShapeKind::Convex:
+      m = density * g.hull->volume;
+      com = g.hull->centroid;
+      Ic = density * g.hull->unit_inertia;
+      return;
+    case ShapeKind::HalfSpace:
+      m = 0;
+      break;
+  }
+  Ic = Mat33(moments[0], 0, 0, 0, moments[1], 0, 0, 0, moments[2]);
+}
+
+bool isFile(const std::string& path) {
+  struct stat info {};
+  return ::stat(path.c_str(), &info) == 0 && S_ISREG(info.st_mode);
+}
+
+// Adds a rigid part of mass m, centre of mass com_B and central inertia
+// Ic_B (both in the body frame) to the body's mass properties.
+void addMass(BodyModel& body, double m, const Vec3& com_B, const Mat33& Ic_B) {
+  if (m <= 0) return;
+  body.mass += m;
+  body.first_moment += m * com_B;
+  body.inertia += Inertia(toSymmetric(Ic_B)).shiftFromMassCenter(com_B, m);
+}
+
+struct Builder {
+  const urdf::ModelInterface& urdf;
+  const std::string& source;
+  const std::string& base_dir;
+  double density;
+  double default_damping;  // of joints without <dynamics>
+  std::map<std::string, int> joint_file_order;
+  // (link name, collision ordinal) of each <capsule>, which urdfdom saw as
+  // a cylinder of the same radius and length.
+  std::set<std::pair<std::string, int>> capsules;
+  std::set<std::pair<std::string, int>> visual_capsules;  // same, for <visual>
+  ArticulationModel model;
+  std::vector<std::pair<int, std::string>> mimics;  // (follower, leader name)
+
+  int getFileOrder(const std::string& joint_name) const {
+    const auto found = joint_file_order.find(joint_name);
+    return found == joint_file_order.end() ? std::numeric_limits<int>::max()
+                                           : found->second;
+  }
+
+  // The link's own mass properties, from <inertial> or else from the
+  // volume of its collision shapes (overlaps counted twice).
+  void addLinkMass(const urdf::Link& link, const Transform& X_BL,
+                   const std::vector<CollisionShape>& shapes, BodyModel& body) {
+    if (link.inertial) {
+      const urdf::Inertial& in = *link.inertial;
+      if (!std::isfinite(in.mass) || in.mass < 0)
+        fail(source, "link '" + link.name + "' has invalid mass " +
+                         std::to_string(in.mass));
+      if (in.mass == 0) return;
+      const Mat33 Ic_I(in.ixx, in.ixy, in.ixz,  //
+                       in.ixy, in.iyy, in.iyz,  //
+                       in.ixz, in.iyz, in.izz);
+      if (!Inertia::isValidInertiaMatrix(SymMat33().setFromLower(Ic_I))) {
+        std::ostringstream s;
+        s << "link '" << link.name << "' has an invalid inertia (ixx " << in.ixx
+          << " iyy " << in.iyy << " izz " << in.izz << " ixy " << in.ixy
+          << " ixz " << in.ixz << " iyz " << in.iyz
+          << "): moments must be non-negative and obey the triangle inequality";
+        fail(source, s.str());
+      }
+      const Transform X_BI = X_BL * toTransform(in.origin);
+      const Mat33 R = X_BI.R().asMat33();
+      addMass(body, in.mass, X_BI.p(), R * Ic_I * ~R);
+      return;
+    }
+    for (const CollisionShape& shape : shapes) {
+      double m = 0;
+      Vec3 com_S(0);
+      Mat33 Ic_S(0, 0, 0, 0, 0, 0, 0, 0, 0);
+      calcShapeMass(shape.geometry, density, m, com_S, Ic_S);
+      const Mat33 R = shape.X_BS.R().asMat33();
+      addMass(body, m, shape.X_BS * com_S, R * Ic_S * ~R);
+    }
+  }
+
+  // The convex hull of a <mesh>, or null (with a note in `unsimulated`)
+  // if the mesh is flat.
+  std::shared_ptr<const ConvexHull> loadMeshHull(const urdf::Link& link, const urdf::Mesh& mesh,
+                                                 const std::string& what) {
+    const Vec3 scale(mesh.scale.x, mesh.scale.y, mesh.scale.z);
+    if (!scale.isFinite() || scale[0] == 0 || scale[1] == 0 || scale[2] == 0)
+      fail(source, "link '" + link.name + "': mesh '" + mesh.filename + "' has scale " +
+                       std::to_string(scale[0]) + " " + std::to_string(scale[1]) + " " +
+                       std::to_string(scale[2]) + "; every factor must be finite and non-zero");
+    const std::string path = findMeshFile(mesh.filename, base_dir);
+    if (path.empty())
+      fail(source, "link '" + link.name + "': collision mesh " + describeMissingMesh(mesh.filename, base_dir));
+    try {
+      return loadConvexHull(path, scale);
+    } catch (const FlatHullError& e) {
+      model.unsimulated.push_back(what + " ('" + path + "': " + e.what() + ")");
+      return nullptr;
+    } catch (const std::exception& e) {
+      fail(source, "link '" + link.name + "': collision mesh '" + path + "': " + e.what());
+    }
+  }
+
+  std::vector<CollisionShape> makeLinkShapes(const urdf::Link& link, int link_index,
+                                             const Transform& X_BL) {
+    std::vector<CollisionShape> shapes;
+    int ordinal = -1;
+    for (const urdf::CollisionSharedPtr& collision : link.collision_array) {
+      ++ordinal;
+      if (!collision || !collision->geometry) continue;
+      const urdf::Geometry& g = *collision->geometry;
+      const std::string what =
+          "link '" + link.name + "': collision '" +
+          (collision->name.empty() ? "#" + std::to_string(ordinal + 1) : collision->name) + "'";
+      CollisionShape shape;
+      shape.link = link_index;
+      shape.X_BS = X_BL * toTransform(collision->origin);
+      if (g.type == urdf::Geometry::SPHERE) {
+        const double r = static_cast<const urdf::Sphere&>(g).radius;
+        if (!(r > 0) || !std::isfinite(r))
+          fail(source, what + " is a sphere of radius " + std::to_string(r));
+        shape.geometry = ShapeGeometry::makeSphere(r);
+      } else if (g.type == urdf::Geometry::BOX) {
+        const urdf::Vector3& d = static_cast<const urdf::Box&>(g).dim;
+        if (!(d.x > 0 && d.y > 0 && d.z > 0) || !std::isfinite(d.x + d.y + d.z))
+          fail(source, what + " is a box of size " + std::to_string(d.x) + " " +
+                           std::to_string(d.y) + " " + std::to_string(d.z));
+        shape.geometry = ShapeGeometry::makeBox(Vec3(d.x / 2, d.y / 2, d.z / 2));
+      } else if (g.type == urdf::Geometry::CYLINDER) {
+        const auto& c = static_cast<const urdf::Cylinder&>(g);
+        const bool capsule = capsules.count({link.name, ordinal}) > 0;
+        if (!(c.radius > 0) || !std::isfinite(c.radius) || !std::isfinite(c.length) ||
+            (capsule ? !(c.length >= 0) : !(c.length > 0)))
+          fail(source, what + " is a " + (capsule ? "capsule" : "cylinder") + " of radius " +
+                           std::to_string(c.radius) + " and length " + std::to_string(c.length));
+        shape.geometry = capsule ? ShapeGeometry::makeCapsule(c.radius, c.length / 2)
+                                 : ShapeGeometry::makeCylinder(c.radius, c.length / 2);
+      } else if (g.type == urdf::Geometry::MESH) {
+        std::shared_ptr<const ConvexHull> hull =
+            loadMeshHull(link, static_cast<const urdf::Mesh&>(g), what);
+        if (!hull) continue;
+        shape.geometry = ShapeGeometry::makeConvex(std::move(hull));
+      } else {
+        model.unsimulated.push_back(what + " (unknown geometry type)");
+        continue;
+      }
+      shapes.push_back(std::move(shape));
+    }
+    return shapes;
+  }
+
+  std::shared_ptr<const std::vector<VisualMesh>> loadVisualMesh(const urdf::Mesh& mesh,
+                                                                const std::string& what,
+                                                                std::string& path) {
+    const Vec3 scale(mesh.scale.x, mesh.scale.y, mesh.scale.z);
+    if (!scale.isFinite() || scale[0] == 0 || scale[1] == 0 || scale[2] == 0)
+      fail(source, what + ": mesh '" + mesh.filename + "' has scale " +
+                       std::to_string(scale[0]) + " " + std::to_string(scale[1]) + " " +
+                       std::to_string(scale[2]) + "; every factor must be finite and non-zero");
+    path = findMeshFile(mesh.filename, base_dir);
+    if (path.empty())
+      fail(source, what + ": visual mesh " + describeMissingMesh(mesh.filename, base_dir));
+    try {
+      return loadVisualMeshes(path, scale);
+    } catch (const std::exception& e) {
+      fail(source, what + ": visual mesh '" + path + "': " + e.what());
+    }
+  }
+
+  // The visual's URDF material: its own, or a robot-level one it names.
+  // urdfdom leaves a name-only reference with a default (black) color, so
+  // the robot-level definition wins whenever one exists.
+  void setVisualMaterial(const urdf::Visual& visual, VisualShape& shape) {
+    urdf::MaterialSharedPtr material = visual.material;
+    const std::string name = !visual.material_name.empty() ? visual.material_name
+                             : material                   ? material->name
+                                                          : std::string();
+    if (!name.empty())
+      if (urdf::MaterialSharedPtr named = urdf.getMaterial(name)) material = named;
+    if (!material) return;
+    shape.has_material = true;
+    shape.material_name = material->name;
+    shape.texture = material->texture_filename;
+    const urdf::Color& c = material->color;
+    shape.color = Eigen::Vector4f(c.r, c.g, c.b, c.a);
+    // A texture-only material has urdfdom's default color (0, 0, 0, 1): the
+    // texture is meant to show unmodulated.
+    if (!shape.texture.empty() && c.r == 0 && c.g == 0 && c.b == 0)
+      shape.color = Eigen::Vector4f::Ones();
+  }
+
+  void addLinkVisuals(const urdf::Link& link, int link_index) {
+    int ordinal = -1;
+    for (const urdf::VisualSharedPtr& visual : link.visual_array) {
+      ++ordinal;
+      if (!visual || !visual->geometry) continue;
+      const urdf::Geometry& g = *visual->geometry;
+      const std::string what =
+          "link '" + link.name + "': visual '" +
+          (visual->name.empty() ? "#" + std::to_string(ordinal + 1) : visual->name) + "'";
+      VisualShape shape;
+      shape.link = link_index;
+      shape.name = visual->name;
+      const urdf::Pose& origin = visual->origin;
+      double qx, qy, qz, qw;
+      origin.rotation.getQuaternion(qx, qy, qz, qw);
+      shape.pose_in_link.position = Eigen::Vector3d(origin.position.x, origin.position.y,
+                                                    origin.position.z);
+      shape.pose_in_link.orientation = Eigen::Quaterniond(qw, qx, qy, qz).normalized();
+      if (g.type == urdf::Geometry::SPHERE) {
+        const double r = static_cast<const urdf::Sphere&>(g).radius;
+        if (!(r > 0) || !std::isfinite(r))
+          fail(source, what + " is a sphere of radius " + std::to_string(r));
+        shape.kind = VisualShape::Kind::Sphere;
+        shape.size = Eigen::Vector3d(r, 0, 0);
+      } else if (g.type == urdf::Geometry::BOX) {
+        const urdf::Vector3& d = static_cast<const urdf::Box&>(g).dim;
+        if (!(d.x > 0 && d.y > 0 && d.z > 0) || !std::isfinite(d.x + d.y + d.z))
+          fail(source, what + " is a box of size " + std::to_string(d.x) + " " +
+                           std::to_string(d.y) + " " + std::to_string(d.z));
+        shape.kind = VisualShape::Kind::Box;
+        shape.size = Eigen::Vector3d(d.x, d.y, d.z);
+      } else if (g.type == urdf::Geometry::CYLINDER) {
+        const auto& c = static_cast<const urdf::Cylinder&>(g);
+        const bool capsule = visual_capsules.count({link.name, ordinal}) > 0;
+        if (!(c.radius > 0) || !std::isfinite(c.radius) || !std::isfinite(c.length) ||
+            (capsule ? !(c.length >= 0) : !(c.length > 0)))
+          fail(source, what + " is a " + (capsule ? "capsule" : "cylinder") + " of radius " +
+                           std::to_string(c.radius) + " and length " + std::to_string(c.length));
+        shape.kind = capsule ? VisualShape::Kind::Capsule : VisualShape::Kind::Cylinder;
+        shape.size = Eigen::Vector3d(c.radius, c.length, 0);
+      } else if (g.type == urdf::Geometry::MESH) {
+        const auto& mesh = static_cast<const urdf::Mesh&>(g);
+        shape.kind = VisualShape::Kind::Mesh;
+        shape.mesh_scale = Eigen::Vector3d(mesh.scale.x, mesh.scale.y, mesh.scale.z);
+        shape.meshes = loadVisualMesh(mesh, what, shape.mesh_file);
+      } else {
+        continue;  // nothing a renderer could draw
+      }
+      setVisualMaterial(*visual, shape);
+      model.visuals.push_back(std::move(shape));
+    }
+  }
+
+  // Adds `link` (reached with the link frame at X_BL in body `body_index`)
+  // and, depth first, everything below it.
+  void addLink(const urdf::Link& link, int body_index, const Transform& X_BL) {
+    const int link_index = static_cast<int>(model.links.size());
+    model.links.push_back({link.name, body_index, X_BL});
+    std::vector<CollisionShape> shapes = makeLinkShapes(link, link_index, X_BL);
+    addLinkVisuals(link, link_index);
+    BodyModel& body = model.bodies[body_index];
+    addLinkMass(link, X_BL, shapes, body);
+    for (CollisionShape& shape : shapes) body.shapes.push_back(std::move(shape));
+
+    // Children in the order their joints appear in the file (urdfdom keeps
+    // them sorted by name), so joint indices follow the author's order.
+    std::vector<urdf::JointSharedPtr> children = link.child_joints;
+    std::stable_sort(children.begin(), children.end(),
+                     [this](const urdf::JointSharedPtr& a,
+                            const urdf::JointSharedPtr& b) {
+                       return getFileOrder(a->name) < getFileOrder(b->name);
+                     });
+    for (const urdf::JointSharedPtr& joint : children) addJoint(*joint, body_index, X_BL);
+  }
+
+  // A planar joint as three one-dof joints on a chain of massless bodies:
+  // <name>_x and <name>_y slide along in-plane directions u and v (u x v =
+  // axis; x and y for a z axis), <name>_yaw turns about the axis. At zero
+  // the child frame is the joint frame. Position limits are not applied
+  // (URDF gives one pair for three coordinates); effort and velocity
+  // limits, damping and friction apply to each.
+  void addPlanarJoint(const urdf::Joint& joint, const urdf::Link& child,
+                      const JointDescription& planar, int parent_body, const Transform& X_PJ,
+                      const Vec3& axis) {
+    const SimTK::UnitVec3 n(axis);
+    Vec3 u = Vec3(1, 0, 0) - n[0] * Vec3(n);
+    if (u.norm() < 1e-6) u = Vec3(0, 1, 0) - n[1] * Vec3(n);
+    const SimTK::UnitVec3 u_hat(u);
+    const SimTK::UnitVec3 v_hat(SimTK::cross(Vec3(n), Vec3(u_hat)));
+    const struct {
+      const char* suffix;
+      JointType type;
+      SimTK::UnitVec3 axis;
+    } parts[] = {{"_x", JointType::Prismatic, u_hat},
+                 {"_y", JointType::Prismatic, v_hat},
+                 {"_yaw", JointType::Continuous, n}};
+    int parent = parent_body;
+    Transform X = X_PJ;
+    for (const auto& part : parts) {
+      JointDescription description = planar;
+      description.name = joint.name + part.suffix;
+      description.type = part.type;
+      description.index = static_cast<int>(model.joints.size());
+      description.lower = -std::numeric_limits<double>::infinity();
+      description.upper = std::numeric_limits<double>::infinity();
+      BodyModel body;
+      body.parent = parent;
+      body.joint = description.index;
+      body.link = static_cast<int>(model.links.size());  // the child, added below
+      body.X_PJ = X;
+      body.axis = part.axis;
+      body.massless = part.type != JointType::Continuous;
+      model.joints.push_back(description);
+      model.bodies.push_back(body);
+      parent = static_cast<int>(model.bodies.size()) - 1;
+      X = Transform();
+    }
+    addLink(child, parent, Transform());
+  }
+
+  // Points each mimic joint at its leader (which may come later in the
+  // file) once every joint exists.
+  void resolveMimics() {
+    for (const auto& [follower, leader_name] : mimics) {
+      JointDescription& joint = model.joints[follower];
+      int leader = -1;
+      for (const JointDescription& other : model.joints)
+        if (other.name == leader_name) leader = other.index;
+      if (leader < 0) {
+        const urdf::JointConstSharedPtr urdf_leader = urdf.getJoint(leader_name);
+        fail(source, "joint '" + joint.name + "' mimics joint '" + leader_name + "', " +
+                         (urdf_leader ? "which is not a movable one-dof joint"
+                                      : "which does not exist"));
+      }
+      if (leader == follower) fail(source, "joint '" + joint.name + "' mimics itself");
+      joint.mimic = leader;
+    }
+  }
+
+  void addJoint(const urdf::Joint& joint, int parent_body,
+                const Transform& X_PL) {
+    const urdf::LinkConstSharedPtr child = urdf.getLink(joint.child_link_name);
+    if (!child)
+      fail(source, "joint '" + joint.name + "' has unknown child link '" +
+                       joint.child_link_name + "'");
+    const Transform X_PJ = X_PL * toTransform(joint.parent_to_joint_origin_transform);
+    if (joint.type == urdf::Joint::FIXED) {
+      addLink(*child, parent_body, X_PJ);
+      return;
+    }
+
+    JointDescription description;
+    description.name = joint.name;
+    description.index = static_cast<int>(model.joints.size());
+    switch (joint.type) {
+      case urdf::Joint::REVOLUTE: description.type = JointType::Revolute; break;
+      case urdf::Joint::CONTINUOUS: description.type = JointType::Continuous; break;
+      case urdf::Joint::PRISMATIC: description.type = JointType::Prismatic; break;
+      case urdf::Joint::FLOATING:
+        fail(source, "joint '" + joint.name +
+                         "' is floating; only the root may float (fixed_base = "
+                         "false), not a link inside the tree");
+      case urdf::Joint::PLANAR: description.type = JointType::Prismatic; break;
+      default:
+        fail(source, "joint '" + joint.name + "' has an unsupported type");
+    }
+    const Vec3 axis(joint.axis.x, joint.axis.y, joint.axis.z);
+    if (!(axis.norm() > 1e-12) || !axis.isFinite())
+      fail(source, "joint '" + joint.name + "' has a zero or invalid axis");
+    if (joint.limits) {
+      const urdf::JointLimits& limits = *joint.limits;
+      if (limits.effort < 0 || limits.velocity < 0)
+        fail(source, "joint '" + joint.name + "' has a negative effort or velocity limit");
+      description.effort_limit = limits.effort;
+      description.velocity_limit = limits.velocity;
+      // lower == upper (both default to 0 in urdfdom) is read as "no
+      // position limit": real files use it for unlimited joints.
+      if (description.type != JointType::Continuous &&
+          limits.lower != limits.upper) {
+        if (!(limits.lower < limits.upper))
+          fail(source, "joint '" + joint.name + "' has lower limit " +
+                           std::to_string(limits.lower) + " above upper limit " +
+                           std::to_string(limits.upper));
+        description.lower = limits.lower;
+        description.upper = limits.upper;
+      }
+    }
+    description.damping = default_damping;
+    if (joint.dynamics) {
+      if (!(joint.dynamics->damping >= 0) || !(joint.dynamics->friction >= 0))
+        fail(source, "joint '" + joint.name + "' has negative damping or friction");
+      description.damping = joint.dynamics->damping;
+      description.friction = joint.dynamics->friction;
+    }
+    if (joint.mimic) {
+      const urdf::JointMimic& mimic = *joint.mimic;
+      if (joint.type == urdf::Joint::PLANAR)
+        fail(source, "joint '" + joint.name + "' is planar and cannot mimic another joint");
+      if (!std::isfinite(mimic.multiplier) || !std::isfinite(mimic.offset))
+        fail(source, "joint '" + joint.name + "' has a non-finite mimic multiplier or offset");
+      description.mimic_multiplier = mimic.multiplier;
+      description.mimic_offset = mimic.offset;
+      mimics.emplace_back(description.index, mimic.joint_name);  // resolved at the end
+    }
+
+    if (joint.type == urdf::Joint::PLANAR) {
+      addPlanarJoint(joint, *child, description, parent_body, X_PJ, axis);
+      return;
+    }
+
+    BodyModel body;
+    body.parent = parent_body;
+    body.joint = description.index;
+    body.link = static_cast<int>(model.links.size());
+    body.X_PJ = X_PJ;
+    body.axis = SimTK::UnitVec3(axis);
+    model.joints.push_back(description);
+    model.bodies.push_back(body);
+    addLink(*child, static_cast<int>(model.bodies.size()) - 1, Transform());
+  }
+};
+
+// urdfdom rejects <capsule> (and then drops every collision of the link):
+// turn each into a <cylinder> with the same attributes and remember which
+// collisions they were. Returns true if anything changed.
+bool rewriteCapsules(TiXmlDocument& doc, std::set<std::pair<std::string, int>>& capsules,
+                     std::set<std::pair<std::string, int>>& visual_capsules) {
+  bool changed = false;
+  TiXmlElement* robot = doc.FirstChildElement("robot");
+  if (robot == nullptr) return false;
+  for (TiXmlElement* link = robot->FirstChildElement("link"); link != nullptr;
+       link = link->NextSiblingElement("link")) {
+    const char* name = link->Attribute("name");
+    for (const char* kind : {"collision", "visual"}) {
+      int ordinal = 0;
+      for (TiXmlElement* element = link->FirstChildElement(kind); element != nullptr;
+           element = element->NextSiblingElement(kind), ++ordinal) {
+        TiXmlElement* geometry = element->FirstChildElement("geometry");
+        TiXmlElement* capsule = geometry ? geometry->FirstChildElement("capsule") : nullptr;
+        if (capsule == nullptr) continue;
+        capsule->SetValue("cylinder");
+        changed = true;
+        if (name != nullptr)
+          (std::string(kind) == "collision" ? capsules : visual_capsules).emplace(name, ordinal);
+      }
+    }
+  }
+  return changed;
+}
+
+// "line 12: " for people, from TinyXML's row.
+std::string formatLine(const TiXmlElement& e) {
+  return e.Row() > 0 ? "line " + std::to_string(e.Row()) + ": " : "";
+}
+
+// Where an element sits, for people: "<origin> of <collision> of link 'l'".
+std::string describeElement(const TiXmlElement& e) {
+  std::string text = "<" + std::string(e.Value()) + ">";
+  for (const TiXmlNode* p = e.Parent(); p && p->ToElement(); p = p->Parent()) {
+    const TiXmlElement& parent = *p->ToElement();
+    const char* name = parent.Attribute("name");
+    if (std::string(parent.Value()) == "robot") break;
+    text += " of <" + std::string(parent.Value()) + ">";
+    if (name) {
+      text += " '" + std::string(name) + "'";
+      break;
+    }
+  }
+  return text;
+}
+
+// Numbers urdfdom would take as they are: NaN and infinities make shapes
+// vanish and inertias blow up only later, as a divergence naming another
+// link. Every numeric attribute of the file must be finite.
+void checkNumbersAreFinite(const TiXmlElement& element, const std::string& source) {
+  static const std::set<std::string> numeric = {
+      "xyz", "rpy", "value", "ixx", "ixy", "ixz", "iyy", "iyz", "izz", "radius", "length", "size",
+      "scale", "lower", "upper", "effort", "velocity", "damping", "friction", "multiplier", "offset",
+      "rgba"};
+  for (const TiXmlAttribute* a = element.FirstAttribute(); a; a = a->Next()) {
+    if (!numeric.count(a->Name())) continue;
+    std::istringstream words(a->Value());
+    std::string word;
+    while (words >> word) {
+      char* end = nullptr;
+      const double v = std::strtod(word.c_str(), &end);
+      if (end != word.c_str() && *end == '\0' && !std::isfinite(v))
+        fail(source, formatLine(element) + describeElement(element) + ": " + a->Name() + " = \"" +
+                         a->Value() + "\" is not a finite number");
+    }
+  }
+  for (const TiXmlElement* child = element.FirstChildElement(); child; child = child->NextSiblingElement())
+    checkNumbersAreFinite(*child, source);
+}
+
+// The joint graph must be a tree: urdfdom accepts a link with two parents
+// and a joint from a link to itself, and a cycle below the root sends the
+// builder into endless recursion.
+void checkJointTree(const TiXmlElement& robot, const std::string& source) {
+  struct Edge {
+    std::string joint, parent;
+    int line = 0;
+  };
+  std::map<std::string, Edge> parent_of;  // child link -> its joint
+  for (const TiXmlElement* j = robot.FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
+    const char* name = j->Attribute("name");
+    const TiXmlElement* parent = j->FirstChildElement("parent");
+    const TiXmlElement* child = j->FirstChildElement("child");
+    const char* parent_link = parent ? parent->Attribute("link") : nullptr;
+    const char* child_link = child ? child->Attribute("link") : nullptr;
+    if (!name || !parent_link || !child_link) continue;  // urdfdom says what is missing
+    if (std::string(parent_link) == child_link)
+      fail(source, formatLine(*j) + "joint '" + name + "' connects link '" + child_link + "' to itself");
+    const auto [it, added] = parent_of.emplace(child_link, Edge{name, parent_link, j->Row()});
+    if (!added)
+      fail(source, formatLine(*j) + "link '" + child_link + "' has two parent joints: '" + it->second.joint +
+                       "' (line " + std::to_string(it->second.line) + ") and '" + name + "'");
+  }
+  for (const auto& [link, edge] : parent_of) {
+    // Up the parents: a walk longer than the number of joints is a cycle.
+    std::string at = link;
+    std::vector<std::string> joints;
+    for (std::size_t steps = 0; steps <= parent_of.size(); ++steps) {
+      const auto up = parent_of.find(at);
+      if (up == parent_of.end()) break;
+      joints.push_back(up->second.joint);
+      at = up->second.parent;
+      if (at == link) {
+        std::string cycle;
+        for (const std::string& j : joints) cycle += (cycle.empty() ? "'" : ", '") + j + "'";
+        fail(source, "the joints " + cycle + " form a cycle through link '" + link + "' (a URDF is a tree)");
+      }
+    }
+  }
+}
+
+// <limit> without effort or velocity (PartNet-Mobility and many published
+// files write lower/upper only; urdfdom refuses them): completed with 0,
+// which manibench reads as "not limited" (docs/urdf.md). Returns true if
+// anything changed.
+bool completeLimits(TiXmlElement& robot) {
+  bool changed = false;
+  for (TiXmlElement* j = robot.FirstChildElement("joint"); j; j = j->NextSiblingElement("joint"))
+    if (TiXmlElement* limit = j->FirstChildElement("limit")) {
+      for (const char* attribute : {"effort", "velocity"})
+        if (!limit->Attribute(attribute)) {
+          limit->SetAttribute(attribute, "0");
+          changed = true;
+        }
+    }
+  return changed;
+}
+
+}  // namespace
+
+std::string findMeshFile(const std::string& filename, const std::string& base_dir,
+                         std::vector<std::string>* tried) {
+  const std::string dir = base_dir.empty() ? "." : base_dir;
+  std::vector<std::string> candidates;
+  const std::string file_scheme = "file://", package_scheme = "package://";
+  if (filename.compare(0, file_scheme.size(), file_scheme) == 0) {
+    candidates.push_back(filename.substr(file_scheme.size()));
+  } else if (filename.compare(0, package_scheme.size(), package_scheme) == 0) {
+    const std::string rest = filename.substr(package_scheme.size());
+    const std::size_t slash = rest.find('/');
+    const std::string package = rest.substr(0, slash);
+    const std::string inside = slash == std::string::npos ? "" : rest.substr(slash + 1);
+    if (const char* paths = std::getenv("ROS_PACKAGE_PATH")) {
+      std::stringstream list(paths);
+      std::string entry;
+      while (std::getline(list, entry, ':'))
+        if (!entry.empty()) candidates.push_back(entry + "/" + package + "/" + inside);
+    }
+    // An ancestor of the URDF's directory named after the package.
+    std::string ancestor = dir;
+    while (!ancestor.empty()) {
+      const std::size_t cut = ancestor.find_last_of('/');
+      const std::string last = cut == std::string::npos ? ancestor : ancestor.substr(cut + 1);
+      if (last == package) candidates.push_back(ancestor + "/" + inside);
+      if (cut == std::string::npos || cut == 0) break;
+      ancestor.resize(cut);
+    }
+    // PyBullet-style folders write package://meshes/x.obj for
+    // <urdf dir>/meshes/x.obj.
+    candidates.push_back(dir + "/" + rest);
+    candidates.push_back(dir + "/" + inside);
+  } else if (!filename.empty() && filename[0] == '/') {
+    candidates.push_back(filename);
+  } else {
+    candidates.push_back(dir + "/" + filename);
+  }
+  if (tried) *tried = candidates;
+  for (const std::string& candidate : candidates)
+    if (isFile(candidate)) return candidate;
+  return "";
+}
+
+std::string describeMissingMesh(const std::string& filename, const std::string& base_dir) {
+  std::vector<std::string> tried;
+  findMeshFile(filename, base_dir, &tried);
+  std::string text = "'" + filename + "' not found; tried";
+  for (std::size_t i = 0; i < tried.size(); ++i) text += (i ? ", '" : " '") + tried[i] + "'";
+  return text;
+}
+
+ArticulationModel buildArticulationModel(const std::string& urdf_xml,
+                                         const std::string& source,
+                                         const std::string& base_dir,
+                                         double default_density,
+                                         double default_joint_damping) {
+  // TinyXML first: it says where malformed XML breaks, and it gives the
+  // joints' file order, which urdfdom does not keep.
+  TiXmlDocument doc;
+  doc.Parse(urdf_xml.c_str());
+  if (doc.Error()) {
+    // TinyXML says "Error document empty" for anything without an element,
+    // random bytes included.
+    if (urdf_xml.find('<') == std::string::npos || urdf_xml.find('\0') != std::string::npos)
+      fail(source, "not an XML file (no XML elements" +
+                       std::string(urdf_xml.find('\0') != std::string::npos ? ", binary data" : "") + ")");
+    std::ostringstream s;
+    s << "malformed XML";
+    if (doc.ErrorRow() > 0) s << " at line " << doc.ErrorRow() << ", column " << doc.ErrorCol();
+    s << ": " << doc.ErrorDesc();
+    fail(source, s.str());
+  }
+  std::map<std::string, int> joint_file_order;
+  bool limits_completed = false;
+  if (TiXmlElement* robot = doc.FirstChildElement("robot")) {
+    checkNumbersAreFinite(*robot, source);
+    checkJointTree(*robot, source);
+    limits_completed = completeLimits(*robot);
+    for (const TiXmlElement* j = robot->FirstChildElement("joint"); j != nullptr;
+         j = j->NextSiblingElement("joint")) {
+      if (const char* name = j->Attribute("name"))
+        joint_file_order.emplace(name, static_cast<int>(joint_file_order.size()));
+    }
+  }
+  std::set<std::pair<std::string, int>> capsules, visual_capsules;
+  std::string urdf_text;
+  if (rewriteCapsules(doc, capsules, visual_capsules) || limits_completed) {
+    TiXmlPrinter printer;
+    doc.Accept(&printer);
+    urdf_text = printer.CStr();
+  }
+
+  urdf::ModelInterfaceSharedPtr urdf;
+  std::string errors;
+  {
+    UrdfErrorCapture capture;
+    urdf = urdf::parseURDF(urdf_text.empty() ? urdf_xml : urdf_text);
+    errors = capture.getErrors();
+  }
+  if (!urdf)
+    fail(source, "invalid URDF: " + (errors.empty() ? std::string("rejected by urdfdom") : errors));
+  const urdf::LinkConstSharedPtr root = urdf->getRoot();
+  if (!root) fail(source, "the model has no root link");
+
+  Builder builder{*urdf,
+                  source,
+                  base_dir,
+                  default_density,
+                  default_joint_damping,
+                  std::move(joint_file_order),
+                  std::move(capsules),
+                  std::move(visual_capsules),
+                  {},
+                  {}};
+  builder.model.source = source;
+  builder.model.bodies.emplace_back();  // the root body
+  builder.model.bodies[0].link = 0;
+  builder.addLink(*root, 0, Transform());
+  builder.resolveMimics();
+  return std::move(builder.model);
+}
+
+}  // namespace scene_detail
+}  // namespace manibench

@@ -1,0 +1,566 @@
+// PartNet-Mobility objects from the user's disk, for task families that
+// load them instead of (or beside) their own generated objects: the folder
+// layout, mobility.urdf as a small kinematic model, semantics.txt, OBJ
+// vertices and bounds. Header-only, over Boost.PropertyTree's XML reader
+// (the SDK depends on Boost already), so a family needs no extra library.
+//
+// A PartNet-Mobility folder holds one sub-folder per object:
+//   <folder>/<id>/mobility.urdf, semantics.txt, textured_objs/*.obj
+//   <folder>/test.txt   (optional) the test split's ids, one a line
+// The URDF's root is 'base'; links are link_N, joints joint_N; the base
+// joint turns the Y-up object frame Z-up; <limit> tags carry lower/upper
+// only (urdfdom, the host's URDF reader, also wants effort and velocity).
+// PartNet data is never shipped: families test on hand-made fixtures in
+// that layout (tests/fixtures/partnet_*).
+//
+// What a handle, a seat or a bucket rim is stays with the families: this
+// header knows folders, URDF structure and geometry, nothing else.
+#pragma once
+
+#include <manibench/kit/common.hpp>
+
+#include <boost/property_tree/ptree.hpp>
+#include <boost/property_tree/xml_parser.hpp>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace manibench::kit::partnet {
+
+// An axis-aligned box grown point by point; empty until the first point.
+struct Bounds {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d hi = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
+  void add(const Eigen::Vector3d& p) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  void add(const Bounds& b) {
+    if (!b.empty()) {
+      add(b.lo);
+      add(b.hi);
+    }
+  }
+  bool empty() const { return !(lo.x() <= hi.x()); }
+  Eigen::Vector3d center() const { return (lo + hi) / 2; }
+  Eigen::Vector3d extent() const { return hi - lo; }
+};
+
+// The geometry of a <visual> or <collision>, sizes already scaled.
+struct Geometry {
+  enum class Kind { kNone, kMesh, kBox, kCylinder, kSphere };
+  Kind kind = Kind::kNone;
+  std::string filename;                              // mesh, relative to the object folder
+  Eigen::Vector3d scale = Eigen::Vector3d::Ones();   // mesh
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();    // box, full side lengths
+  double radius = 0, length = 0;                     // cylinder (along its z), sphere
+};
+
+// A <visual> or <collision> element.
+struct Shape {
+  std::string name;
+  Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();  // in the link frame
+  Geometry geometry;
+};
+
+struct Link {
+  std::string name;
+  std::vector<Shape> visuals, collisions;
+  int parent_joint = -1;  // index into Object::joints; -1 for the root
+};
+
+struct Joint {
+  std::string name;
+  std::string type;  // revolute, continuous, prismatic, fixed, floating, planar
+  std::string parent, child;
+  Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();  // child frame in the parent's at q = 0
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitX();           // URDF's default
+  bool limited = false;  // a <limit> element was there
+  double lower = 0, upper = 0;
+  bool isMovable() const { return type != "fixed"; }
+};
+
+// One line of semantics.txt: 'link_N <hinge|slider|free|heavy|static> <label>'.
+struct Semantic {
+  std::string link;
+  std::string kind;   // hinge, slider, free, heavy, static
+  std::string label;  // e.g. door, drawer, seat, wheel, caster
+};
+
+// The vertices of an OBJ file ('v x y z' lines), multiplied by `scale`.
+inline std::vector<Eigen::Vector3d> readObjVertices(const std::string& path,
+                                                    const Eigen::Vector3d& scale = Eigen::Vector3d::Ones()) {
+  std::ifstream in(path);
+  if (!in) throw Error("PartNet: cannot read mesh " + path, MB_NOT_FOUND);
+  std::vector<Eigen::Vector3d> out;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.size() < 2 || line[0] != 'v' || (line[1] != ' ' && line[1] != '\t')) continue;
+    std::istringstream s(line.substr(2));
+    Eigen::Vector3d v;
+    if (!(s >> v.x() >> v.y() >> v.z()) || !v.allFinite())
+      throw Error("PartNet: " + path + ":" + std::to_string(number) + ": bad vertex line '" + line + "'",
+                  MB_INVALID_ARGUMENT);
+    out.push_back(v.cwiseProduct(scale));
+  }
+  return out;
+}
+
+// semantics.txt; an absent file gives no entries (the URDF is enough to
+// load an object), a malformed line is an error naming it.
+inline std::vector<Semantic> readSemantics(const std::string& path) {
+  std::vector<Semantic> out;
+  std::ifstream in(path);
+  if (!in) return out;
+  static const std::set<std::string> kinds = {"hinge", "slider", "free", "heavy", "static"};
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    std::istringstream s(line);
+    Semantic e;
+    if (!(s >> e.link)) continue;  // blank line
+    if (!(s >> e.kind) || kinds.count(e.kind) == 0 || !(s >> e.label))
+      throw Error("PartNet: " + path + ":" + std::to_string(number) + ": expected 'link_N <hinge|slider|free|heavy|" +
+                      "static> <label>', got '" + line + "'",
+                  MB_INVALID_ARGUMENT);
+    out.push_back(e);
+  }
+  return out;
+}
+
+namespace detail {
+
+using boost::property_tree::ptree;
+
+inline std::string formatNumber(double x) {
+  std::ostringstream s;
+  s.precision(17);
+  s << x;
+  return s.str();
+}
+
+// The leading number of `text`. PartNet has limit strings with junk after
+// the number: the number is kept (and the attribute rewritten clean);
+// text without a leading number is an error naming `what`.
+inline double parseNumber(const std::string& text, const std::string& what) {
+  const char* begin = text.c_str();
+  char* end = nullptr;
+  const double x = std::strtod(begin, &end);
+  if (end == begin || !std::isfinite(x))
+    throw Error("PartNet: " + what + ": '" + text + "' is not a number", MB_INVALID_ARGUMENT);
+  return x;
+}
+
+inline Eigen::Vector3d parseVector(const std::string& text, const std::string& what) {
+  std::istringstream s(text);
+  Eigen::Vector3d v;
+  std::string extra;
+  if (!(s >> v.x() >> v.y() >> v.z()) || (s >> extra) || !v.allFinite())
+    throw Error("PartNet: " + what + ": expected 3 numbers, got '" + text + "'", MB_INVALID_ARGUMENT);
+  return v;
+}
+
+inline std::string formatVector(const Eigen::Vector3d& v) {
+  return formatNumber(v.x()) + " " + formatNumber(v.y()) + " " + formatNumber(v.z());
+}
+
+inline ptree* findAttributes(ptree& element) {
+  const auto it = element.find("<xmlattr>");
+  return it == element.not_found() ? nullptr : &element.to_iterator(it)->second;
+}
+
+inline std::string getAttribute(const ptree& element, const std::string& name, const std::string& fallback = "") {
+  return element.get<std::string>("<xmlattr>." + name, fallback);
+}
+
+// URDF rpy: R = Rz(yaw) Ry(pitch) Rx(roll).
+inline Eigen::Isometry3d parseOrigin(const ptree& parent, const std::string& what) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  const auto origin = parent.get_child_optional("origin");
+  if (!origin) return t;
+  const std::string xyz = getAttribute(*origin, "xyz"), rpy = getAttribute(*origin, "rpy");
+  if (!xyz.empty()) t.translation() = parseVector(xyz, what + " <origin xyz>");
+  if (!rpy.empty()) {
+    const Eigen::Vector3d a = parseVector(rpy, what + " <origin rpy>");
+    t.linear() = (Eigen::AngleAxisd(a.z(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
+                  Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()))
+                     .toRotationMatrix();
+  }
+  return t;
+}
+
+// Multiplies an attribute holding numbers by `factor`.
+inline void scaleAttribute(ptree& element, const std::string& name, double factor, const std::string& what) {
+  ptree* attributes = findAttributes(element);
+  if (attributes == nullptr) return;
+  const auto value = attributes->get_optional<std::string>(name);
+  if (!value) return;
+  std::istringstream s(*value);
+  std::string out, token;
+  while (s >> token) {
+    if (!out.empty()) out += " ";
+    out += formatNumber(factor * parseNumber(token, what + " " + name));
+  }
+  attributes->put(name, out);
+}
+
+// Scales the lengths of one <visual>/<collision>/<inertial>'s origin and geometry.
+inline void scaleGeometry(ptree& element, double factor, const std::string& what) {
+  if (auto origin = element.get_child_optional("origin")) scaleAttribute(*origin, "xyz", factor, what);
+  auto geometry = element.get_child_optional("geometry");
+  if (!geometry) return;
+  for (auto& [kind, g] : *geometry) {
+    if (kind == "mesh") {
+      if (getAttribute(g, "scale").empty())
+        g.put("<xmlattr>.scale", formatVector(Eigen::Vector3d::Constant(factor)));
+      else
+        scaleAttribute(g, "scale", factor, what + " <mesh>");
+    } else if (kind == "box") {
+      scaleAttribute(g, "size", factor, what + " <box>");
+    } else if (kind == "cylinder" || kind == "capsule") {
+      scaleAttribute(g, "radius", factor, what + " <" + kind + ">");
+      scaleAttribute(g, "length", factor, what + " <" + kind + ">");
+    } else if (kind == "sphere") {
+      scaleAttribute(g, "radius", factor, what + " <sphere>");
+    }
+  }
+}
+
+inline Geometry parseGeometry(const ptree& element, const std::string& what) {
+  Geometry out;
+  const auto geometry = element.get_child_optional("geometry");
+  if (!geometry) return out;
+  for (const auto& [kind, g] : *geometry) {
+    if (kind == "mesh") {
+      out.kind = Geometry::Kind::kMesh;
+      out.filename = getAttribute(g, "filename");
+      if (out.filename.empty()) throw Error("PartNet: " + what + ": <mesh> without a filename", MB_INVALID_ARGUMENT);
+      const std::string scale = getAttribute(g, "scale");
+      if (!scale.empty()) out.scale = parseVector(scale, what + " <mesh scale>");
+    } else if (kind == "box") {
+      out.kind = Geometry::Kind::kBox;
+      out.size = parseVector(getAttribute(g, "size"), what + " <box size>");
+    } else if (kind == "cylinder" || kind == "capsule") {
+      out.kind = Geometry::Kind::kCylinder;
+      out.radius = parseNumber(getAttribute(g, "radius"), what + " <" + kind + " radius>");
+      out.length = parseNumber(getAttribute(g, "length"), what + " <" + kind + " length>");
+    } else if (kind == "sphere") {
+      out.kind = Geometry::Kind::kSphere;
+      out.radius = parseNumber(getAttribute(g, "radius"), what + " <sphere radius>");
+    }
+  }
+  return out;
+}
+
+}  // namespace detail
+
+// A PartNet-Mobility object: its URDF text, ready for
+// SceneView::addUrdfString with base_dir = dir, and the same URDF as a
+// kinematic model, with its semantics.
+class Object {
+ public:
+  std::string id;
+  std::string dir;   // the object's folder (relative mesh paths start here)
+  std::string urdf;  // limits completed, lengths scaled
+  double scale = 1;  // applied to every length of the file
+  std::vector<Link> links;    // parents before children: links.front() is the root
+  std::vector<Joint> joints;  // in file order
+  std::vector<Semantic> semantics;
+
+  const Link& getRoot() const { return links.front(); }
+  const Link* findLink(const std::string& name) const {
+    for (const Link& l : links)
+      if (l.name == name) return &l;
+    return nullptr;
+  }
+  const Joint* findJoint(const std::string& name) const {
+    for (const Joint& j : joints)
+      if (j.name == name) return &j;
+    return nullptr;
+  }
+  // The joint whose child is `link` (nullptr for the root).
+  const Joint* findParentJoint(const std::string& link) const {
+    const Link* l = findLink(link);
+    return l == nullptr || l->parent_joint < 0 ? nullptr : &joints[std::size_t(l->parent_joint)];
+  }
+  const Semantic* findSemantic(const std::string& link) const {
+    for (const Semantic& s : semantics)
+      if (s.link == link) return &s;
+    return nullptr;
+  }
+
+  // Every link's pose in the object frame (the root's) with every joint at 0.
+  std::map<std::string, Eigen::Isometry3d> calcLinkPoses() const {
+    std::map<std::string, Eigen::Isometry3d> pose;
+    for (const Link& l : links) {
+      if (l.parent_joint < 0) {
+        pose[l.name] = Eigen::Isometry3d::Identity();
+      } else {
+        const Joint& j = joints[std::size_t(l.parent_joint)];
+        pose[l.name] = pose.at(j.parent) * j.origin;
+      }
+    }
+    return pose;
+  }
+
+  // Points of a shape in its link's frame: mesh vertices (read once and
+  // kept), box corners, points on a cylinder's rims, on a sphere's
+  // meridians. Enough for bounds and distances at a few mm.
+  const std::vector<Eigen::Vector3d>& calcShapePoints(const Shape& shape) const {
+    const std::string key = shapeKey(shape);
+    auto& slot = point_cache_[key];
+    if (slot) return *slot;
+    std::vector<Eigen::Vector3d> local;
+    const Geometry& g = shape.geometry;
+    switch (g.kind) {
+      case Geometry::Kind::kMesh:
+        local = readObjVertices((std::filesystem::path(dir) / g.filename).string(), g.scale);
+        break;
+      case Geometry::Kind::kBox:
+        for (int i = 0; i < 8; ++i)
+          local.emplace_back((i & 1 ? 0.5 : -0.5) * g.size.x(), (i & 2 ? 0.5 : -0.5) * g.size.y(),
+                             (i & 4 ? 0.5 : -0.5) * g.size.z());
+        break;
+      case Geometry::Kind::kCylinder:
+        for (int i = 0; i < 16; ++i) {
+          const double a = 2 * kPi * i / 16;
+          for (const double z : {-0.5 * g.length, 0.5 * g.length})
+            local.emplace_back(g.radius * std::cos(a), g.radius * std::sin(a), z);
+        }
+        break;
+      case Geometry::Kind::kSphere:
+        for (int i = 0; i < 16; ++i)
+          for (int k = 0; k <= 8; ++k) {
+            const double a = 2 * kPi * i / 16, b = kPi * k / 8;
+            local.emplace_back(g.radius * std::sin(b) * std::cos(a), g.radius * std::sin(b) * std::sin(a),
+                               g.radius * std::cos(b));
+          }
+        break;
+      case Geometry::Kind::kNone:
+        break;
+    }
+    for (Eigen::Vector3d& p : local) p = shape.origin * p;
+    slot = std::make_shared<std::vector<Eigen::Vector3d>>(std::move(local));
+    return *slot;
+  }
+
+  // Bounds of the visuals in the object frame, every joint at 0.
+  Bounds calcVisualBounds() const {
+    const auto pose = calcLinkPoses();
+    Bounds all;
+    for (const Link& l : links)
+      for (const Shape& v : l.visuals)
+        for (const Eigen::Vector3d& p : calcShapePoints(v)) all.add(pose.at(l.name) * p);
+    return all;
+  }
+
+ private:
+  static std::string shapeKey(const Shape& s) {
+    std::ostringstream k;
+    k.precision(17);
+    k << int(s.geometry.kind) << '|' << s.geometry.filename << '|' << s.geometry.scale.transpose() << '|'
+      << s.geometry.size.transpose() << '|' << s.geometry.radius << '|' << s.geometry.length << '|'
+      << s.origin.matrix();
+    return k.str();
+  }
+  mutable std::map<std::string, std::shared_ptr<std::vector<Eigen::Vector3d>>> point_cache_;
+};
+
+// Sub-folders of `folder` holding a mobility.urdf, sorted.
+inline std::vector<std::string> listObjectIds(const std::string& folder) {
+  namespace fs = std::filesystem;
+  if (!fs::is_directory(folder))
+    throw Error("PartNet: '" + folder + "' is not a folder", MB_INVALID_ARGUMENT);
+  std::vector<std::string> ids;
+  for (const fs::directory_entry& e : fs::directory_iterator(folder))
+    if (e.is_directory() && fs::exists(e.path() / "mobility.urdf")) ids.push_back(e.path().filename().string());
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
+// The ids of a split: <folder>/test.txt lists the test objects, one id a
+// line; every other object is in train. A listed id without its folder is
+// an error naming the line.
+inline std::vector<std::string> listObjectIds(const std::string& folder, const std::string& split) {
+  if (split != "train" && split != "test")
+    throw Error("unknown split '" + split + "' (use train or test)", MB_INVALID_ARGUMENT);
+  const std::vector<std::string> all = listObjectIds(folder);
+  std::set<std::string> test;
+  const std::string list = folder + "/test.txt";
+  if (std::ifstream in(list); in) {
+    int number = 0;
+    for (std::string line; std::getline(in, line);) {
+      ++number;
+      line.erase(line.find_last_not_of(" \t\r") + 1);
+      line.erase(0, line.find_first_not_of(" \t"));
+      if (line.empty()) continue;
+      if (!std::binary_search(all.begin(), all.end(), line))
+        throw Error("PartNet: " + list + ":" + std::to_string(number) + ": no object folder '" + line +
+                        "' with a mobility.urdf in " + folder,
+                    MB_INVALID_ARGUMENT);
+      test.insert(line);
+    }
+  }
+  std::vector<std::string> ids;
+  for (const std::string& id : all)
+    if ((test.count(id) > 0) == (split == "test")) ids.push_back(id);
+  return ids;
+}
+
+// Loads <folder>/<id>/mobility.urdf and semantics.txt. Every length of the
+// URDF (origins, mesh scales, primitive sizes, prismatic limits, inertial
+// origins; masses by scale^3 and inertias by scale^5) is multiplied by
+// `scale`; <limit> elements without effort or velocity get effort 100 and
+// velocity 1 (PartNet writes lower/upper only), and a limit number with
+// junk after it is rewritten as the number. Errors name the file and the
+// element.
+inline Object loadObject(const std::string& folder, const std::string& id, double scale = 1.0) {
+  using detail::ptree;
+  namespace fs = std::filesystem;
+  if (!(scale > 0) || !std::isfinite(scale))
+    throw Error("PartNet: scale must be positive, got " + detail::formatNumber(scale), MB_INVALID_ARGUMENT);
+  const fs::path dir = fs::path(folder) / id;
+  const std::string path = (dir / "mobility.urdf").string();
+  std::ifstream in(path);
+  if (!in) throw Error("PartNet: no object '" + id + "' (" + path + " is missing)", MB_NOT_FOUND);
+  ptree tree;
+  try {
+    boost::property_tree::read_xml(in, tree, boost::property_tree::xml_parser::no_comments);
+  } catch (const boost::property_tree::xml_parser_error& e) {
+    throw Error("PartNet: " + path + ":" + std::to_string(e.line()) + ": not valid XML (" + e.message() + ")",
+                MB_INVALID_ARGUMENT);
+  }
+  const auto robot = tree.get_child_optional("robot");
+  if (!robot) throw Error("PartNet: " + path + " has no <robot> element", MB_INVALID_ARGUMENT);
+
+  Object object;
+  object.id = id;
+  object.dir = dir.string();
+  object.scale = scale;
+  std::map<std::string, Link> links;
+  std::vector<std::string> link_order;
+  for (auto& [tag, element] : *robot) {
+    if (tag == "link") {
+      Link link;
+      link.name = detail::getAttribute(element, "name");
+      if (link.name.empty()) throw Error("PartNet: " + path + ": a <link> has no name", MB_INVALID_ARGUMENT);
+      if (links.count(link.name) > 0)
+        throw Error("PartNet: " + path + ": link '" + link.name + "' appears twice", MB_INVALID_ARGUMENT);
+      for (auto& [child_tag, child] : element) {
+        const bool visual = child_tag == "visual", collision = child_tag == "collision";
+        const std::string what = path + ": link '" + link.name + "' <" + child_tag + ">";
+        if (child_tag == "inertial" && scale != 1) {
+          if (auto origin = child.get_child_optional("origin")) detail::scaleAttribute(*origin, "xyz", scale, what);
+          if (auto mass = child.get_child_optional("mass"))
+            detail::scaleAttribute(*mass, "value", scale * scale * scale, what + " <mass>");
+          if (auto inertia = child.get_child_optional("inertia"))
+            for (const char* k : {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"})
+              detail::scaleAttribute(*inertia, k, std::pow(scale, 5), what + " <inertia>");
+        }
+        if (!visual && !collision) continue;
+        if (scale != 1) detail::scaleGeometry(child, scale, what);
+        Shape shape;
+        shape.name = detail::getAttribute(child, "name");
+        shape.origin = detail::parseOrigin(child, what);
+        shape.geometry = detail::parseGeometry(child, what);
+        (visual ? link.visuals : link.collisions).push_back(shape);
+      }
+      link_order.push_back(link.name);
+      links[link.name] = std::move(link);
+    } else if (tag == "joint") {
+      Joint joint;
+      joint.name = detail::getAttribute(element, "name");
+      joint.type = detail::getAttribute(element, "type");
+      const std::string what = path + ": joint '" + joint.name + "'";
+      static const std::set<std::string> types = {"revolute", "continuous", "prismatic", "fixed", "floating", "planar"};
+      if (joint.name.empty() || types.count(joint.type) == 0)
+        throw Error("PartNet: " + what + " has type '" + joint.type +
+                        "' (expected revolute, continuous, prismatic, fixed, floating or planar)",
+                    MB_INVALID_ARGUMENT);
+      joint.parent = element.get<std::string>("parent.<xmlattr>.link", "");
+      joint.child = element.get<std::string>("child.<xmlattr>.link", "");
+      if (joint.parent.empty() || joint.child.empty())
+        throw Error("PartNet: " + what + " lacks <parent link> or <child link>", MB_INVALID_ARGUMENT);
+      if (scale != 1)
+        if (auto origin = element.get_child_optional("origin")) detail::scaleAttribute(*origin, "xyz", scale, what);
+      joint.origin = detail::parseOrigin(element, what);
+      if (const auto axis = element.get_child_optional("axis")) {
+        const std::string xyz = detail::getAttribute(*axis, "xyz");
+        if (!xyz.empty()) joint.axis = detail::parseVector(xyz, what + " <axis xyz>");
+        if (!(joint.axis.norm() > 0)) throw Error("PartNet: " + what + " has a zero axis", MB_INVALID_ARGUMENT);
+        joint.axis.normalize();
+      }
+      if (auto limit = element.get_child_optional("limit")) {
+        joint.limited = true;
+        if (limit->find("<xmlattr>") == limit->not_found()) limit->add_child("<xmlattr>", ptree());
+        ptree& a = limit->get_child("<xmlattr>");
+        const double length_scale = joint.type == "prismatic" ? scale : 1.0;
+        for (const char* bound : {"lower", "upper"}) {
+          const auto text = a.get_optional<std::string>(bound);
+          if (!text) continue;
+          const double x = length_scale * detail::parseNumber(*text, what + " <limit " + bound + ">");
+          a.put(bound, detail::formatNumber(x));
+          (std::string(bound) == "lower" ? joint.lower : joint.upper) = x;
+        }
+        if (!a.get_optional<std::string>("effort")) a.put("effort", "100");
+        if (!a.get_optional<std::string>("velocity")) a.put("velocity", "1");
+      }
+      object.joints.push_back(joint);
+    }
+  }
+  if (links.empty()) throw Error("PartNet: " + path + " has no <link>", MB_INVALID_ARGUMENT);
+
+  // Parents before children, from the one link that is nobody's child.
+  std::map<std::string, int> parent_joint;
+  for (std::size_t j = 0; j < object.joints.size(); ++j) {
+    const Joint& joint = object.joints[j];
+    for (const std::string& name : {joint.parent, joint.child})
+      if (links.count(name) == 0)
+        throw Error("PartNet: " + path + ": joint '" + joint.name + "' names link '" + name + "', which is not there",
+                    MB_INVALID_ARGUMENT);
+    if (!parent_joint.emplace(joint.child, int(j)).second)
+      throw Error("PartNet: " + path + ": link '" + joint.child + "' has two parent joints", MB_INVALID_ARGUMENT);
+  }
+  std::vector<std::string> roots;
+  for (const std::string& name : link_order)
+    if (parent_joint.count(name) == 0) roots.push_back(name);
+  if (roots.size() != 1)
+    throw Error("PartNet: " + path + ": expected one root link, found " + std::to_string(roots.size()),
+                MB_INVALID_ARGUMENT);
+  std::vector<std::string> order{roots.front()};
+  for (std::size_t i = 0; i < order.size(); ++i)
+    for (const Joint& j : object.joints)
+      if (j.parent == order[i]) order.push_back(j.child);
+  if (order.size() != links.size())
+    throw Error("PartNet: " + path + ": the joints form a loop", MB_INVALID_ARGUMENT);
+  for (const std::string& name : order) {
+    Link link = links.at(name);
+    const auto p = parent_joint.find(name);
+    link.parent_joint = p == parent_joint.end() ? -1 : p->second;
+    object.links.push_back(std::move(link));
+  }
+
+  std::ostringstream text;
+  boost::property_tree::write_xml(text, tree, boost::property_tree::xml_writer_make_settings<std::string>(' ', 1));
+  object.urdf = text.str();
+  object.semantics = readSemantics((dir / "semantics.txt").string());
+  for (const Semantic& s : object.semantics)
+    if (!object.findLink(s.link))
+      throw Error("PartNet: " + (dir / "semantics.txt").string() + ": link '" + s.link + "' is not in " + path,
+                  MB_INVALID_ARGUMENT);
+  return object;
+}
+
+}  // namespace manibench::kit::partnet
