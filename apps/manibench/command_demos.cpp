@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <ctime>
@@ -44,6 +45,11 @@ const char* kDemosUsage = R"(usage: manibench demos generate|replay|convert|info
         --obs MODE             observations recorded: state (default: the
                                configuration's), pointcloud or rgbd
         --policy-config FILE   YAML handed to the policy's create
+        --action-noise SIGMA   add Gaussian noise of this standard deviation
+                               to every action before it is executed (seeded
+                               by the episode); the file keeps the executed
+                               actions (replay) and the policy's own
+                               (policy_actions: labels for learning)
         --controller NAME, --config FILE, --set KEY=VALUE
         --step-timeout SEC, --env-timeout SEC   as for eval
         --no-progress          no progress bar
@@ -113,7 +119,7 @@ int generate(int argc, char** argv) {
   const Arguments args = parseArguments(
       argc, argv, 3,
       {"policy", "policy-config", "out", "split", "objects", "per-object", "max-attempts", "workers",
-       "seed", "obs", "controller", "config", "set", "step-timeout", "env-timeout"},
+       "seed", "obs", "controller", "config", "set", "step-timeout", "env-timeout", "action-noise"},
       {"no-progress"}, kDemosUsage);
   if (args.positional.size() != 1) throw UsageError("demos generate takes one TASK", kDemosUsage);
   if (!args.options.count("policy")) throw UsageError("demos generate needs --policy", kDemosUsage);
@@ -127,6 +133,12 @@ int generate(int argc, char** argv) {
   evaluation.split = parseSplit(args, "train", kDemosUsage);
   evaluation.seed = parseSeed(valueOr(args, "seed", "0"), kDemosUsage);
   evaluation.workers = unsigned(std::min<uint64_t>(parseCount(args, "workers", 1), 256));
+  if (args.options.count("action-noise")) {
+    char* end = nullptr;
+    evaluation.action_noise = std::strtod(args.options.at("action-noise").c_str(), &end);
+    if (*end || !(evaluation.action_noise >= 0) || !std::isfinite(evaluation.action_noise))
+      throw UsageError("--action-noise needs a non-negative number", kDemosUsage);
+  }
   for (const char* option : {"step-timeout", "env-timeout"})
     if (args.options.count(option)) {
       char* end = nullptr;

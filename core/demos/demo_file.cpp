@@ -111,6 +111,8 @@ void writeTrajectory(const Handle& file, const std::string& name, const DemoFile
   writeAttribute(group, "total_reward", t.total_reward);
   const hsize_t steps = t.steps;
   writeDataset(group, "actions", {steps, t.action_dim}, t.actions);
+  if (!t.policy_actions.empty())
+    writeDataset(group, "policy_actions", {steps, t.action_dim}, t.policy_actions);
   writeDataset(group, "rewards", {steps}, t.rewards);
   writeDataset(group, "terminated", {steps}, t.terminated);
   writeDataset(group, "truncated", {steps}, t.truncated);
@@ -234,6 +236,10 @@ void readTrajectory(const Handle& group, const DemoFileInfo& info, bool with_env
   const std::vector<hsize_t> action_dims = expectDims(group, "actions", {steps, 0});
   t.action_dim = uint32_t(action_dims[1]);
   t.actions = readDataset<double>(group, "actions");
+  if (hasLink(group, "policy_actions")) {
+    expectDims(group, "policy_actions", {steps, t.action_dim});
+    t.policy_actions = readDataset<double>(group, "policy_actions");
+  }
   expectDims(group, "rewards", {steps});
   t.rewards = readDataset<double>(group, "rewards");
   for (const char* name : {"terminated", "truncated", "success"}) expectDims(group, name, {steps});

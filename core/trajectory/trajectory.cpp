@@ -95,12 +95,15 @@ void Trajectory::addEnvState(const std::vector<uint8_t>& blob) {
   env_state_offsets.push_back(env_states.size());
 }
 
-void Trajectory::addStep(const Eigen::VectorXd& action, const StepResult& result) {
+void Trajectory::addStep(const Eigen::VectorXd& action, const StepResult& result,
+                         const Eigen::VectorXd* policy_action) {
   if (steps == 0) {
     action_dim = uint32_t(action.size());
     condition_count = uint32_t(result.flags.size());
   }
   actions.insert(actions.end(), action.data(), action.data() + action.size());
+  if (policy_action) policy_actions.insert(policy_actions.end(), policy_action->data(),
+                                           policy_action->data() + policy_action->size());
   rewards.push_back(result.reward);
   // Gymnasium's split: ended by the task (success, when episodes stop
   // there) or by the time limit.
@@ -138,8 +141,9 @@ void TrajectoryRecorder::onReset(const std::string& object_id, uint64_t level, u
   trajectory_.addEnvState(env_.saveState());
 }
 
-void TrajectoryRecorder::onStep(const Eigen::VectorXd& action, const StepResult& result) {
-  trajectory_.addStep(action, result);
+void TrajectoryRecorder::onStep(const Eigen::VectorXd& action, const StepResult& result,
+                                const Eigen::VectorXd* policy_action) {
+  trajectory_.addStep(action, result, policy_action);
   trajectory_.addObservation(env_.getObservation(), env_.getVisualObservation());
   trajectory_.addEnvState(env_.saveState());
 }

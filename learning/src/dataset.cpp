@@ -237,9 +237,11 @@ DataChunk DemoDataset::load(const std::vector<std::size_t>& indices) const {
       std::memcpy(c.rgb.data_ptr<float>() + o * n * 3, t.point_rgb.data(), t.point_rgb.size() * sizeof(float));
       std::memcpy(c.seg.data_ptr<uint8_t>() + o * n * k, t.point_masks.data(), t.point_masks.size());
     }
+    const std::vector<double>& labels =
+        t.policy_actions.empty() || options_.executed_actions ? t.actions : t.policy_actions;
     for (uint32_t s = 0; s < t.steps; ++s) {
       for (uint32_t a = 0; a < action_dim_; ++a)
-        actions[(m + s) * action_dim_ + a] = float(std::clamp(t.actions[s * action_dim_ + a], -1.0, 1.0));
+        actions[(m + s) * action_dim_ + a] = float(std::clamp(labels[s * action_dim_ + a], -1.0, 1.0));
       rewards[m + s] = float(t.rewards[s]);
       dones[m + s] = t.terminated[s] ? 1.0f : 0.0f;
       obs_index[m + s] = o + s;

@@ -31,6 +31,7 @@ void TrainOptions::writeYaml(YAML::Node& node) const {
   d["objects"] = data.objects;
   d["per_object"] = data.per_object;
   d["cache_bytes"] = data.cache_bytes;
+  d["executed_actions"] = data.executed_actions;
   node["data"] = d;
   node["iterations"] = iterations;
   node["seed"] = seed;
@@ -59,6 +60,7 @@ TrainOptions TrainOptions::readYaml(const YAML::Node& node) {
   o.data.objects = d["objects"].as<std::vector<std::string>>(std::vector<std::string>());
   o.data.per_object = d["per_object"].as<uint32_t>();
   o.data.cache_bytes = d["cache_bytes"].as<uint64_t>();
+  o.data.executed_actions = d["executed_actions"].as<bool>(false);
   o.iterations = node["iterations"].as<int64_t>();
   o.seed = node["seed"].as<uint64_t>();
   o.threads = node["threads"].as<int>();

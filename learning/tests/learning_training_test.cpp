@@ -45,6 +45,8 @@ class LearningTraining : public ::testing::Test {
          "--workers", "2", "--no-progress", "--out", file("reach.h5")});
     run({"demos", "convert", file("reach.h5"), "--obs", "pointcloud", "--trajectories", "traj_0,traj_1,traj_2,traj_3",
          "--workers", "2", "--no-progress", "--out", file("reach_pc.h5")});
+    run({"demos", "generate", "Reach-v0", "--policy", "reach_expert", "--split", "train", "--objects", "0",
+         "--per-object", "1", "--action-noise", "0.2", "--no-progress", "--out", file("reach_noisy.h5")});
     run({"demos", "generate", "OpenCabinetDrawer_2000_link_0-v0", "--policy", "open_cabinet_expert", "--controller",
          "mobile_panda_ee", "--per-object", "1", "--no-progress", "--out", file("drawer.h5")});
   }
@@ -385,6 +387,23 @@ TEST_F(LearningTraining, ACheckpointOfAnotherTaskIsRefusedNamingBoth) {
     FAIL();
   } catch (const std::exception& e) {
     EXPECT_TRUE(contains(e.what(), "no such checkpoint '/nowhere/x.pt'")) << e.what();
+  }
+}
+
+TEST_F(LearningTraining, NoisyDemonstrationsTeachThePolicysOwnActions) {
+  DemoReader reader(file("reach_noisy.h5"));
+  const Trajectory t = reader.read("traj_0", false);
+  ASSERT_FALSE(t.policy_actions.empty());
+  for (const bool executed : {false, true}) {
+    DatasetOptions d;
+    d.paths = {file("reach_noisy.h5")};
+    d.executed_actions = executed;
+    const DataChunk chunk = DemoDataset(d).load({0});
+    const std::vector<double>& expected = executed ? t.actions : t.policy_actions;
+    ASSERT_EQ(chunk.actions.numel(), int64_t(expected.size()));
+    for (std::size_t i = 0; i < expected.size(); ++i)
+      ASSERT_EQ(chunk.actions.view({-1})[int64_t(i)].item<float>(), float(std::clamp(expected[i], -1.0, 1.0)))
+          << (executed ? "executed " : "policy ") << i;
   }
 }
 

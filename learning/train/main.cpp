@@ -51,6 +51,8 @@ Data:
   --per-object N          at most N trajectories per object (the first ones)
   --cache-gb G            tensors kept in memory at most (default 8); a larger
                           set streams in shuffled windows
+  --executed-actions      learn the executed actions of files made with
+                          `demos generate --action-noise`, not the policy's own
   --normalize-state       normalize each state feature by the demonstrations'
                           mean and standard deviation (stored in the network)
 Network:
@@ -208,7 +210,7 @@ int run(int argc, char** argv) {
       "out", "checkpoint-every", "log-every", "eval-every", "eval-task", "eval-split", "eval-objects",
       "eval-episodes", "eval-workers", "resume"};
   const mb::cli::Arguments args =
-      mb::cli::parseArguments(argc, argv, 2, valued, {"normalize-state", "step-input", "no-progress"}, kUsage, {"demos"});
+      mb::cli::parseArguments(argc, argv, 2, valued, {"normalize-state", "step-input", "executed-actions", "no-progress"}, kUsage, {"demos"});
   if (args.help) {
     std::cout << kUsage;
     return 0;
@@ -256,6 +258,7 @@ int run(int argc, char** argv) {
     if (has("cache-gb"))
       o.data.cache_bytes = uint64_t(parseNumber(value("cache-gb"), "--cache-gb") * double(uint64_t(1) << 30));
     o.normalize_state = has("normalize-state");
+    o.data.executed_actions = has("executed-actions");
     if (has("net")) o.network.kind = ml::parseNetKind(value("net"));
     if (has("history")) o.network.history = parseInteger(value("history"), "--history", 1);
     if (has("action-history")) o.network.action_history = parseInteger(value("action-history"), "--action-history", 0);

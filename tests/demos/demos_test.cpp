@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <cstdlib>
 #include <fstream>
@@ -217,6 +219,44 @@ TEST_F(ReachDemos, BadFilesAreClearErrors) {
 
 // The commands as a user runs them: generate, info, replay --check,
 // convert in two workers, the converted set replayed, a video, h5ls.
+// --action-noise: the executed actions carry the noise (replay is exact),
+// the policy's own are kept beside them, and the same seeds give the same
+// noise.
+TEST(DemoCommands, ActionNoiseKeepsThePolicysActionsAndReplaysExactly) {
+  using testing::runCli;
+  const auto dir = testing::makeDemoDir("noise");
+  const std::string a = (dir / "a.h5").string(), b = (dir / "b.h5").string(), plain = (dir / "plain.h5").string();
+  for (const std::string& file : {a, b}) {
+    const auto r = runCli({"demos", "generate", "Reach-v0", "--policy", "reach_expert", "--objects", "0,1",
+                           "--per-object", "2", "--workers", "2", "--action-noise", "0.3", "--out", file});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  const auto r = runCli({"demos", "generate", "Reach-v0", "--policy", "reach_expert", "--objects", "0,1",
+                         "--per-object", "2", "--out", plain});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  DemoReader noisy(a), again(b), clean(plain);
+  for (const std::string& name : noisy.getTrajectoryNames()) {
+    const Trajectory t = noisy.read(name), u = again.read(name);
+    ASSERT_EQ(t.policy_actions.size(), t.actions.size()) << name;
+    EXPECT_FALSE(sameBits(t.policy_actions, t.actions)) << name;
+    double largest = 0;
+    for (std::size_t i = 0; i < t.actions.size(); ++i)
+      largest = std::max(largest, std::abs(t.actions[i] - t.policy_actions[i]));
+    EXPECT_GT(largest, 0.3) << name;  // many draws of N(0, 0.3^2)
+    EXPECT_TRUE(sameBits(t.actions, u.actions)) << name;
+    EXPECT_TRUE(sameBits(t.policy_actions, u.policy_actions)) << name;
+  }
+  EXPECT_TRUE(clean.read("traj_0").policy_actions.empty());
+  const auto replayed = runCli({"demos", "replay", a, "--check"});
+  EXPECT_EQ(replayed.exit_code, 0) << replayed.out << replayed.err;
+  expectMentions(replayed.out, {"4 trajectories: 4 bit-identical, 0 differ"});
+  const auto bad = runCli({"demos", "generate", "Reach-v0", "--policy", "reach_expert", "--action-noise", "-1",
+                           "--out", (dir / "bad.h5").string()});
+  EXPECT_EQ(bad.exit_code, 2);
+  expectMentions(bad.err, {"--action-noise needs a non-negative number"});
+  std::filesystem::remove_all(dir);
+}
+
 TEST(DemoCommands, GenerateInfoReplayConvertAndVideo) {
   using testing::runCli;
   const auto dir = testing::makeDemoDir("cli");

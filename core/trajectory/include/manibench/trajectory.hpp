@@ -36,6 +36,9 @@ struct Trajectory {
 
   uint32_t action_dim = 0, condition_count = 0;
   std::vector<double> actions;  // T x action_dim, as the policy gave them (unclipped)
+  // T x action_dim: the policy's own actions where noise was added to the
+  // executed ones (demos generate --action-noise); empty otherwise.
+  std::vector<double> policy_actions;
   std::vector<double> rewards;  // T
   std::vector<uint8_t> terminated, truncated, success_flags;  // T: success, time limit, `success`
   std::vector<uint8_t> conditions;  // T x condition_count: each success condition's flag
@@ -73,7 +76,10 @@ struct Trajectory {
   // Recording (what TrajectoryRecorder does).
   void addObservation(const Eigen::VectorXd& state, const VisualObservation& visual);
   void addEnvState(const std::vector<uint8_t>& blob);
-  void addStep(const Eigen::VectorXd& action, const StepResult& result);
+  // `policy_action`: what the policy gave when noise changed the executed
+  // `action` (nullptr: the same).
+  void addStep(const Eigen::VectorXd& action, const StepResult& result,
+               const Eigen::VectorXd* policy_action = nullptr);
   // Drops every observation (before convertTrajectory records others).
   void clearObservations();
 };
@@ -84,7 +90,8 @@ class TrajectoryRecorder {
  public:
   explicit TrajectoryRecorder(Environment& env) : env_(env) {}
   void onReset(const std::string& object_id, uint64_t level, uint64_t seed);
-  void onStep(const Eigen::VectorXd& action, const StepResult& result);
+  void onStep(const Eigen::VectorXd& action, const StepResult& result,
+              const Eigen::VectorXd* policy_action = nullptr);
   Trajectory& get() { return trajectory_; }
   Trajectory take() { return std::move(trajectory_); }
 

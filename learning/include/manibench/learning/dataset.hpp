@@ -38,6 +38,10 @@ struct DatasetOptions {
   // order (0: all).
   uint32_t per_object = 0;
   uint64_t cache_bytes = uint64_t(8) << 30;
+  // Files made with `demos generate --action-noise` hold the executed
+  // (noisy) actions and the policy's own: the labels are the policy's
+  // unless this asks for the executed ones.
+  bool executed_actions = false;
 };
 
 struct TrajectoryRef {
