@@ -45,6 +45,7 @@ void TrainOptions::writeYaml(YAML::Node& node) const {
   e["split"] = eval_split;
   e["objects"] = eval_objects;
   e["episodes"] = eval_episodes;
+  e["seed"] = eval_seed;
   e["workers"] = eval_workers;
   node["evaluation"] = e;
   node["command"] = command;
@@ -74,6 +75,7 @@ TrainOptions TrainOptions::readYaml(const YAML::Node& node) {
   o.eval_split = e["split"].as<std::string>();
   o.eval_objects = e["objects"].as<std::vector<std::string>>(std::vector<std::string>());
   o.eval_episodes = e["episodes"].as<uint32_t>();
+  o.eval_seed = e["seed"].as<uint64_t>(1000);
   o.eval_workers = e["workers"].as<unsigned>();
   o.command = node["command"].as<std::string>("");
   return o;
@@ -134,6 +136,10 @@ class Trainer {
     say(describeCompute(calcComputeInfo(), device_));
     dataset_ = std::make_unique<DemoDataset>(options.data);
     spec_ = calcDemoSpec(registry, *dataset_);
+    if (options_.pick_network) {
+      options_.network.kind = spec_.isPointCloud() ? NetKind::PnTransformer : NetKind::Mlp;
+      options_.pick_network = false;
+    }
     say("demonstrations: " + std::to_string(dataset_->getTrajectories().size()) + " trajectories, " +
         std::to_string(dataset_->getTransitionCount()) + " transitions, " +
         std::to_string(dataset_->calcTotalBytes() >> 20) + " MiB as tensors (" +

@@ -11,6 +11,7 @@
 #include <manibench/environment.hpp>
 #include <manibench/plugin_instances.hpp>
 
+#include <test_registry.hpp>
 #include <test_support.hpp>
 
 #include <gtest/gtest.h>
@@ -46,7 +47,7 @@ class LearningTraining : public ::testing::Test {
     run({"demos", "convert", file("reach.h5"), "--obs", "pointcloud", "--trajectories", "traj_0,traj_1,traj_2,traj_3",
          "--workers", "2", "--no-progress", "--out", file("reach_pc.h5")});
     run({"demos", "generate", "Reach-v0", "--policy", "reach_expert", "--split", "train", "--objects", "0",
-         "--per-object", "1", "--action-noise", "0.2", "--no-progress", "--out", file("reach_noisy.h5")});
+         "--per-object", "1", "--action-noise", "0.05", "--no-progress", "--out", file("reach_noisy.h5")});
     run({"demos", "generate", "OpenCabinetDrawer_2000_link_0-v0", "--policy", "open_cabinet_expert", "--controller",
          "mobile_panda_ee", "--per-object", "1", "--no-progress", "--out", file("drawer.h5")});
   }

@@ -93,6 +93,8 @@ Output and evaluation:
   --eval-objects ID,...   only these objects
   --eval-episodes N       episodes per object (default 10)
   --eval-workers N        evaluation workers (default 1)
+  --eval-seed S           the evaluation's base seed (default 1000: not the
+                          demonstrations' own episodes, made with seed 0)
   --no-progress           no progress line (shown only on a terminal)
   --resume DIR            continue the training in DIR from its newest checkpoint
 )";
@@ -150,7 +152,8 @@ ml::EvaluationOutcome runEvaluation(const ml::EvaluationRequest& r) {
                                    "--policy", "torch_policy", "--policy-config", r.policy_config,
                                    "--config", r.environment_config, "--split", o.eval_split,
                                    "--episodes-per-object", std::to_string(o.eval_episodes),
-                                   "--workers", std::to_string(o.eval_workers), "--no-progress",
+                                   "--workers", std::to_string(o.eval_workers), "--seed",
+                                   std::to_string(o.eval_seed), "--no-progress",
                                    "--out", r.out_dir};
   if (!o.eval_objects.empty()) {
     std::string ids;
@@ -202,13 +205,77 @@ void drawProgress(const ml::TrainProgress& p) {
   std::cerr << line.str() << std::flush;
 }
 
+// The options of a new training from the command line (usage errors name
+// the option).
+ml::TrainOptions parseTrainOptions(const mb::cli::Arguments& args, int argc, char** argv) {
+  auto has = [&](const std::string& key) { return args.options.count(key) > 0; };
+  auto value = [&](const std::string& key) { return args.options.at(key); };
+  if (args.positional.size() != 1) throw UsageError("name one algorithm: bc, bcq or td3bc", kUsage);
+  ml::TrainOptions o;
+  o.algorithm = ml::AlgorithmOptions::makeDefaults(args.positional[0]);
+  if (!args.repeated.count("demos")) throw UsageError("no --demos FILE.h5", kUsage);
+  for (const std::string& d : args.repeated.at("demos"))
+    for (const std::string& path : splitList(d)) o.data.paths.push_back(fs::absolute(path).string());
+  if (!has("out")) throw UsageError("no --out DIR", kUsage);
+  o.out_dir = value("out");
+  if (has("objects")) o.data.objects = splitList(value("objects"));
+  if (has("per-object")) o.data.per_object = uint32_t(parseInteger(value("per-object"), "--per-object", 1));
+  if (has("cache-gb"))
+    o.data.cache_bytes = uint64_t(parseNumber(value("cache-gb"), "--cache-gb") * double(uint64_t(1) << 30));
+  o.normalize_state = has("normalize-state");
+  o.data.executed_actions = has("executed-actions");
+  if (has("net")) o.network.kind = ml::parseNetKind(value("net"));
+  o.pick_network = !has("net");
+  if (has("history")) o.network.history = parseInteger(value("history"), "--history", 1);
+  if (has("action-history")) o.network.action_history = parseInteger(value("action-history"), "--action-history", 0);
+  o.network.step_input = has("step-input");
+  if (has("hidden")) o.network.mlp_hidden = parseLayers(value("hidden"), "--hidden");
+  if (has("point-layers")) o.network.point_layers = parseLayers(value("point-layers"), "--point-layers");
+  if (has("width")) o.network.width = parseInteger(value("width"), "--width", 1);
+  if (has("layers")) o.network.layers = parseInteger(value("layers"), "--layers", 0);
+  if (has("heads")) o.network.heads = parseInteger(value("heads"), "--heads", 1);
+  if (has("dropout")) o.network.dropout = parseNumber(value("dropout"), "--dropout");
+  if (has("iterations")) o.iterations = parseInteger(value("iterations"), "--iterations", 1);
+  if (has("batch-size")) o.algorithm.batch_size = parseInteger(value("batch-size"), "--batch-size", 1);
+  if (has("lr")) o.algorithm.lr = parseNumber(value("lr"), "--lr");
+  if (has("weight-decay")) o.algorithm.weight_decay = parseNumber(value("weight-decay"), "--weight-decay");
+  if (has("seed")) o.seed = uint64_t(parseInteger(value("seed"), "--seed", 0));
+  if (has("threads")) o.threads = int(parseInteger(value("threads"), "--threads", 1));
+  if (has("device")) o.device = value("device");
+  if (has("gamma")) o.algorithm.gamma = parseNumber(value("gamma"), "--gamma");
+  if (has("tau")) o.algorithm.tau = parseNumber(value("tau"), "--tau");
+  if (has("alpha")) o.algorithm.alpha = parseNumber(value("alpha"), "--alpha");
+  if (has("action-noise")) o.algorithm.action_noise = parseNumber(value("action-noise"), "--action-noise");
+  if (has("noise-clip")) o.algorithm.noise_clip = parseNumber(value("noise-clip"), "--noise-clip");
+  if (has("policy-delay")) o.algorithm.policy_delay = parseInteger(value("policy-delay"), "--policy-delay", 1);
+  if (has("phi")) o.algorithm.phi = parseNumber(value("phi"), "--phi");
+  if (has("lambda")) o.algorithm.lambda = parseNumber(value("lambda"), "--lambda");
+  if (has("train-samples")) o.algorithm.train_samples = parseInteger(value("train-samples"), "--train-samples", 1);
+  if (has("eval-samples")) o.algorithm.eval_samples = parseInteger(value("eval-samples"), "--eval-samples", 1);
+  if (has("checkpoint-every")) o.checkpoint_every = parseInteger(value("checkpoint-every"), "--checkpoint-every", 1);
+  if (has("log-every")) o.log_every = parseInteger(value("log-every"), "--log-every", 1);
+  if (has("eval-every")) o.eval_every = parseInteger(value("eval-every"), "--eval-every", 0);
+  if (has("eval-task")) o.eval_task = value("eval-task");
+  if (has("eval-split")) o.eval_split = value("eval-split");
+  if (o.eval_split != "train" && o.eval_split != "test")
+    throw UsageError("--eval-split takes train or test", kUsage);
+  if (has("eval-objects")) o.eval_objects = splitList(value("eval-objects"));
+  if (has("eval-episodes")) o.eval_episodes = uint32_t(parseInteger(value("eval-episodes"), "--eval-episodes", 1));
+  if (has("eval-seed")) o.eval_seed = uint64_t(parseInteger(value("eval-seed"), "--eval-seed", 0));
+  if (has("eval-workers")) o.eval_workers = unsigned(parseInteger(value("eval-workers"), "--eval-workers", 1));
+  std::string command = "manibench train";
+  for (int i = 2; i < argc; ++i) command += std::string(" ") + argv[i];
+  o.command = command;
+  return o;
+}
+
 int run(int argc, char** argv) {
   const std::vector<std::string> valued = {
       "demos", "objects", "per-object", "cache-gb", "net", "history", "action-history", "hidden", "point-layers", "width", "layers", "heads",
       "dropout", "iterations", "batch-size", "lr", "weight-decay", "seed", "threads", "device", "gamma", "tau",
       "alpha", "action-noise", "noise-clip", "policy-delay", "phi", "lambda", "train-samples", "eval-samples",
       "out", "checkpoint-every", "log-every", "eval-every", "eval-task", "eval-split", "eval-objects",
-      "eval-episodes", "eval-workers", "resume"};
+      "eval-episodes", "eval-workers", "eval-seed", "resume"};
   const mb::cli::Arguments args =
       mb::cli::parseArguments(argc, argv, 2, valued, {"normalize-state", "step-input", "executed-actions", "no-progress"}, kUsage, {"demos"});
   if (args.help) {
@@ -245,60 +312,7 @@ int run(int argc, char** argv) {
     const int64_t iterations = has("iterations") ? parseInteger(value("iterations"), "--iterations", 1) : 0;
     result = ml::resumeTraining(registry, dir, iterations, hooks);
   } else {
-    if (args.positional.size() != 1) throw UsageError("name one algorithm: bc, bcq or td3bc", kUsage);
-    ml::TrainOptions o;
-    o.algorithm = ml::AlgorithmOptions::makeDefaults(args.positional[0]);
-    if (!args.repeated.count("demos")) throw UsageError("no --demos FILE.h5", kUsage);
-    for (const std::string& d : args.repeated.at("demos"))
-      for (const std::string& path : splitList(d)) o.data.paths.push_back(fs::absolute(path).string());
-    if (!has("out")) throw UsageError("no --out DIR", kUsage);
-    o.out_dir = value("out");
-    if (has("objects")) o.data.objects = splitList(value("objects"));
-    if (has("per-object")) o.data.per_object = uint32_t(parseInteger(value("per-object"), "--per-object", 1));
-    if (has("cache-gb"))
-      o.data.cache_bytes = uint64_t(parseNumber(value("cache-gb"), "--cache-gb") * double(uint64_t(1) << 30));
-    o.normalize_state = has("normalize-state");
-    o.data.executed_actions = has("executed-actions");
-    if (has("net")) o.network.kind = ml::parseNetKind(value("net"));
-    if (has("history")) o.network.history = parseInteger(value("history"), "--history", 1);
-    if (has("action-history")) o.network.action_history = parseInteger(value("action-history"), "--action-history", 0);
-    o.network.step_input = has("step-input");
-    if (has("hidden")) o.network.mlp_hidden = parseLayers(value("hidden"), "--hidden");
-    if (has("point-layers")) o.network.point_layers = parseLayers(value("point-layers"), "--point-layers");
-    if (has("width")) o.network.width = parseInteger(value("width"), "--width", 1);
-    if (has("layers")) o.network.layers = parseInteger(value("layers"), "--layers", 0);
-    if (has("heads")) o.network.heads = parseInteger(value("heads"), "--heads", 1);
-    if (has("dropout")) o.network.dropout = parseNumber(value("dropout"), "--dropout");
-    if (has("iterations")) o.iterations = parseInteger(value("iterations"), "--iterations", 1);
-    if (has("batch-size")) o.algorithm.batch_size = parseInteger(value("batch-size"), "--batch-size", 1);
-    if (has("lr")) o.algorithm.lr = parseNumber(value("lr"), "--lr");
-    if (has("weight-decay")) o.algorithm.weight_decay = parseNumber(value("weight-decay"), "--weight-decay");
-    if (has("seed")) o.seed = uint64_t(parseInteger(value("seed"), "--seed", 0));
-    if (has("threads")) o.threads = int(parseInteger(value("threads"), "--threads", 1));
-    if (has("device")) o.device = value("device");
-    if (has("gamma")) o.algorithm.gamma = parseNumber(value("gamma"), "--gamma");
-    if (has("tau")) o.algorithm.tau = parseNumber(value("tau"), "--tau");
-    if (has("alpha")) o.algorithm.alpha = parseNumber(value("alpha"), "--alpha");
-    if (has("action-noise")) o.algorithm.action_noise = parseNumber(value("action-noise"), "--action-noise");
-    if (has("noise-clip")) o.algorithm.noise_clip = parseNumber(value("noise-clip"), "--noise-clip");
-    if (has("policy-delay")) o.algorithm.policy_delay = parseInteger(value("policy-delay"), "--policy-delay", 1);
-    if (has("phi")) o.algorithm.phi = parseNumber(value("phi"), "--phi");
-    if (has("lambda")) o.algorithm.lambda = parseNumber(value("lambda"), "--lambda");
-    if (has("train-samples")) o.algorithm.train_samples = parseInteger(value("train-samples"), "--train-samples", 1);
-    if (has("eval-samples")) o.algorithm.eval_samples = parseInteger(value("eval-samples"), "--eval-samples", 1);
-    if (has("checkpoint-every")) o.checkpoint_every = parseInteger(value("checkpoint-every"), "--checkpoint-every", 1);
-    if (has("log-every")) o.log_every = parseInteger(value("log-every"), "--log-every", 1);
-    if (has("eval-every")) o.eval_every = parseInteger(value("eval-every"), "--eval-every", 0);
-    if (has("eval-task")) o.eval_task = value("eval-task");
-    if (has("eval-split")) o.eval_split = value("eval-split");
-    if (o.eval_split != "train" && o.eval_split != "test")
-      throw UsageError("--eval-split takes train or test", kUsage);
-    if (has("eval-objects")) o.eval_objects = splitList(value("eval-objects"));
-    if (has("eval-episodes")) o.eval_episodes = uint32_t(parseInteger(value("eval-episodes"), "--eval-episodes", 1));
-    if (has("eval-workers")) o.eval_workers = unsigned(parseInteger(value("eval-workers"), "--eval-workers", 1));
-    std::string command = "manibench train";
-    for (int i = 2; i < argc; ++i) command += std::string(" ") + argv[i];
-    o.command = command;
+    const ml::TrainOptions o = parseTrainOptions(args, argc, argv);
     result = ml::train(registry, o, hooks);
   }
   if (progress) std::cerr << "\n";

@@ -30,6 +30,9 @@ struct TrainOptions {
   std::string out_dir;
   AlgorithmOptions algorithm = AlgorithmOptions::makeDefaults("bc");
   NetOptions network;
+  // network.kind was not chosen: mlp for state demonstrations,
+  // pn_transformer for point clouds.
+  bool pick_network = false;
   DatasetOptions data;
   int64_t iterations = 10000;  // gradient steps in all
   uint64_t seed = 0;
@@ -45,6 +48,9 @@ struct TrainOptions {
   std::string eval_split = "train";
   std::vector<std::string> eval_objects;  // empty: the split's
   uint32_t eval_episodes = 10;            // per object
+  // The evaluation's base seed: not 0, the default of `demos generate`, so
+  // that the episodes are not the demonstrations' own.
+  uint64_t eval_seed = 1000;
   unsigned eval_workers = 1;
   std::string command;  // how it was started, for train.yaml
 
