@@ -73,8 +73,8 @@ void ViewerApp::drawOverlay() {
     case EpisodeStatus::Running:
       if (paused_) ImGui::TextColored(kYellow, "paused (Space runs, . steps)");
       break;
-    case EpisodeStatus::Success: ImGui::TextColored(kGreen, "episode over: success"); break;
-    case EpisodeStatus::TimeLimit: ImGui::TextColored(kYellow, "episode over: time limit"); break;
+    case EpisodeStatus::Success: ImGui::TextColored(kGreen, "episode over: success (Backspace, N)"); break;
+    case EpisodeStatus::TimeLimit: ImGui::TextColored(kYellow, "episode over: time limit (Backspace, N)"); break;
     case EpisodeStatus::Failed:
       ImGui::PushTextWrapPos(560);
       ImGui::TextColored(kRed, "episode failed: %s", s.getFailure().c_str());
@@ -90,8 +90,7 @@ void ViewerApp::drawOverlay() {
     else
       ImGui::Text("physics %.2fx real time", factor);
   }
-  ImGui::Text("%.1f frames/s (scene %.1f ms)", frame_seconds_ > 0 ? 1.0 / frame_seconds_ : 0.0,
-              1e3 * composer_.getRenderSeconds());
+  ImGui::Text("%.1f scene frames/s (last drawn in %.1f ms)", scene_rate_, 1e3 * composer_.getRenderSeconds());
   ImGui::Separator();
 
   const CameraRig& rig = env.getObserver().getCameras();
@@ -147,6 +146,7 @@ void ViewerApp::drawKeymap() {
     keys.push_back({"Backspace  N", "from the start / next trajectory"});
   } else {
     keys.push_back({"Backspace  N", "restart / next object"});
+    if (!session_->getRecordPath().empty()) keys.push_back({"Shift+Backspace", "restart, not recording this one"});
   }
   keys.insert(keys.end(), {{"C", "next camera (free, task cameras)"},
                            {"M  P", "masks / point cloud"},

@@ -211,12 +211,17 @@ void Session::step(const Eigen::VectorXd& teleop_action) {
   if (isOver() && recording_) recording_->keep();
 }
 
-void Session::restart() {
+void Session::restart(bool discard) {
   if (options_.mode == SessionMode::Replay) {
     seek(0);
     return;
   }
-  if (recording_) recording_->keep();
+  if (recording_) {
+    if (discard)
+      recording_->drop();
+    else
+      recording_->keep();
+  }
   startEpisode();
 }
 

@@ -58,9 +58,9 @@ class Session {
   // episode is over. An EpisodeFailure or a policy's error ends the
   // episode as Failed (getFailure says why) instead of escaping.
   void step(const Eigen::VectorXd& teleop_action = Eigen::VectorXd());
-  // Starts the episode again (same object and seed); Replay: back to the
-  // first state.
-  void restart();
+  // Starts the episode again (same object and seed); the one in progress
+  // is recorded unless `discard`. Replay: back to the first state.
+  void restart(bool discard = false);
   // The next object of the split (same seed); Replay: the next trajectory
   // of the file.
   void nextObject();

@@ -21,6 +21,8 @@ class StepClock {
   // The steps due at `now` since the last call (at most the limit; the
   // rest is dropped, and the ratio shows it).
   uint32_t takeDueSteps(double now);
+  // Wall time at which the next step falls due (after takeDueSteps).
+  double getNextStepTime() const { return origin_ + double(owed_base_ + 1) * step_seconds_; }
   // Steps actually taken (a step can end the episode before the debt is
   // paid): for the real-time ratio.
   void countSteps(uint32_t steps) { window_steps_ += steps; }

@@ -39,19 +39,27 @@ const ViewImage& ViewComposer::compose(Environment& env, uint64_t episode,
   const CameraSpec spec = task_camera ? rig.getMount(std::size_t(settings.camera)).spec
                                       : camera.makeSpec(width, height);
   const Pose pose = task_camera ? rig.calcCameraPose(std::size_t(settings.camera)) : camera.calcPose();
+  image_.width = spec.width;
+  image_.height = spec.height;
+  image_.camera = spec.name;
+  if (settings.points) {
+    // Points alone: the camera's image is not needed, only where it is.
+    // (The cloud itself renders the task's cameras, once per step.)
+    const PointCloud& cloud = updPointCloud(env, episode);
+    render_seconds_ = secondsSince(start);
+    const Clock::time_point compose_start = Clock::now();
+    composePoints(cloud, spec, pose, settings.masks);
+    image_.rgba = &composed_;
+    compose_seconds_ = secondsSince(compose_start);
+    return image_;
+  }
   renderer.draw(spec, pose);
   renderer.readBack(spec, raw_);
   render_seconds_ = secondsSince(start);
 
   const Clock::time_point compose_start = Clock::now();
-  image_.width = raw_.width;
-  image_.height = raw_.height;
-  image_.camera = spec.name;
   image_.rgba = &raw_.rgba;
-  if (settings.points) {
-    composePoints(updPointCloud(env, episode), settings.masks);
-    image_.rgba = &composed_;
-  } else if (settings.masks) {
+  if (settings.masks) {
     composeMasks(env);
     image_.rgba = &composed_;
   }
@@ -111,16 +119,17 @@ const PointCloud& ViewComposer::updPointCloud(Environment& env, uint64_t episode
   return cloud_;
 }
 
-void ViewComposer::composePoints(const PointCloud& cloud, bool masks) {
-  const int width = raw_.width, height = raw_.height;
+void ViewComposer::composePoints(const PointCloud& cloud, const CameraSpec& spec, const Pose& pose, bool masks) {
+  const int width = spec.width, height = spec.height;
   const std::size_t pixels = std::size_t(width) * std::size_t(height);
   composed_.assign(4 * pixels, 0);
   for (std::size_t p = 0; p < pixels; ++p) composed_[4 * p + 3] = 255;
   point_depth_.assign(pixels, INFINITY);
-  const Eigen::Matrix3d rotation_t = raw_.camera_to_world.linear().transpose();
-  const Eigen::Vector3d origin = raw_.camera_to_world.translation();
-  const double fx = raw_.intrinsic(0, 0), fy = raw_.intrinsic(1, 1);
-  const double cx = raw_.intrinsic(0, 2), cy = raw_.intrinsic(1, 2);
+  const Eigen::Matrix3d rotation_t = pose.orientation.toRotationMatrix().transpose();
+  const Eigen::Vector3d origin = pose.position;
+  // The renderer's pinhole: square pixels, fovy over the height, centred.
+  const double fy = (height / 2.0) / std::tan(spec.fovy / 2), fx = fy;
+  const double cx = width / 2.0, cy = height / 2.0;
   // Splats of about 1/240 of the image height (3 px at 720).
   const int radius = std::max(1, height / 480);
   const std::size_t masks_per_point = cloud.mask_count;
@@ -131,7 +140,7 @@ void ViewComposer::composePoints(const PointCloud& cloud, bool masks) {
       if (cloud.masks[i * masks_per_point + m]) bits |= 1ull << m;
     if (world.isZero() && bits == 0) continue;  // D.1's padding
     const Eigen::Vector3d p = rotation_t * (world - origin);  // x forward, y left, z up
-    if (p.x() <= raw_.near) continue;
+    if (p.x() <= spec.near) continue;
     const double u = fx * (-p.y() / p.x()) + cx, v = fy * (-p.z() / p.x()) + cy;
     const int col = int(std::floor(u)), row = int(std::floor(v));
     std::uint8_t color[3];

@@ -54,15 +54,16 @@ class ViewComposer {
   static std::array<std::uint8_t, 3> getMaskColor(std::size_t mask);
   // The cloud drawn last (empty until points were shown).
   const PointCloud& getPointCloud() const { return cloud_; }
-  // Seconds of the last compose(): drawing and reading back, then
-  // composing (masks, points).
+  // Seconds of the last compose(): drawing and reading back (points: the
+  // cloud's own rendering when the step is new), then composing (masks,
+  // points).
   double getRenderSeconds() const { return render_seconds_; }
   double getComposeSeconds() const { return compose_seconds_; }
 
  private:
   const PointCloud& updPointCloud(Environment& env, uint64_t episode);
   void composeMasks(const Environment& env);
-  void composePoints(const PointCloud& cloud, bool masks);
+  void composePoints(const PointCloud& cloud, const CameraSpec& spec, const Pose& pose, bool masks);
 
   RawCameraImages raw_;
   std::vector<std::uint8_t> composed_;

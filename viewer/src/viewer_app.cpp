@@ -1,7 +1,9 @@
 #include "viewer_app.hpp"
 
 #include <GLFW/glfw3.h>  // key and button codes only: the window is window.cpp's
+#include <sys/resource.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -14,6 +16,13 @@
 
 namespace manibench::viewer {
 namespace {
+
+double cpuSeconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
 
 double wallSeconds() {
   static const auto origin = std::chrono::steady_clock::now();
@@ -178,9 +187,9 @@ void ViewerApp::onKey(int key, int action, int mods) {
     case GLFW_KEY_END:
       if (replay) session_->seek(session_->getReplayLength());
       break;
-    case GLFW_KEY_BACKSPACE:
+    case GLFW_KEY_BACKSPACE:  // Shift: the episode is not recorded
       queued_steps_.clear();
-      session_->restart();
+      session_->restart(shift);
       replay_reported_ = false;
       clock_->restart(now_);
       break;
@@ -225,6 +234,7 @@ void ViewerApp::finishMeasurement(double now) {
     if (now < kWarmUpSeconds) return;
     totals_ = Totals();
     totals_.start = now;
+    totals_.cpu_start = cpuSeconds();
     return;
   }
   if (now - totals_.start < options_.measure_seconds) return;
@@ -232,13 +242,14 @@ void ViewerApp::finishMeasurement(double now) {
   const double frames = double(std::max<uint64_t>(totals_.frames, 1));
   int width = 0, height = 0;
   window_->getFramebufferSize(width, height);
-  std::cout << std::fixed << std::setprecision(1) << "measured " << totals_.frames << " frames in "
+  std::cout << std::fixed << std::setprecision(1) << "measured " << totals_.frames << " frames (each a new scene image) in "
             << seconds << " s: " << double(totals_.frames) / seconds << " frames/s at " << width << "x"
             << height << " (" << (view_.points ? "point cloud" : view_.masks ? "masks" : "scene")
             << ", " << (view_.camera < 0 ? "free camera" : "task camera") << "); per frame: physics "
             << std::setprecision(2) << 1e3 * totals_.physics / frames << " ms, scene render "
             << 1e3 * totals_.render / frames << " ms, masks/points " << 1e3 * totals_.compose / frames
-            << " ms, overlay and present " << 1e3 * totals_.present / frames << " ms; "
+            << " ms, overlay and present " << 1e3 * totals_.present / frames << " ms, CPU (all threads) "
+            << 1e3 * (cpuSeconds() - totals_.cpu_start) / frames << " ms; "
             << totals_.steps << " env steps (" << std::setprecision(2)
             << double(totals_.steps) * clock_->getStepSeconds() / seconds << "x real time)\n"
             << std::flush;
@@ -266,41 +277,81 @@ int ViewerApp::run(Session& session, const ViewSettings& view) {
   now_ = wallSeconds();
   clock_->restart(now_);
   while (!window_->shouldClose() && !cli::StopSignals::isRequested()) {
-    window_->pollEvents();
+    if (wait_seconds_ > 0)
+      window_->waitEvents(wait_seconds_);
+    else
+      window_->pollEvents();
     now_ = wallSeconds();
     takeSteps(now_);
     followRobot();
-
-    int width = 0, height = 0;
-    window_->getFramebufferSize(width, height);
-    window_->releaseContext();
-    const ViewImage& image = composer_.compose(session.updEnvironment(), session.getEpisodeCount(), view_,
-                                               camera_, std::max(width, 16), std::max(height, 16));
-    const auto present_start = std::chrono::steady_clock::now();
-    window_->beginFrame(*image.rgba, image.width, image.height);
-    if (show_overlay_) drawOverlay();
-    if (show_keymap_) drawKeymap();
-    if (session.getMode() == SessionMode::Replay) drawTimeline();
-    window_->endFrame();
-    if (wants_screenshot_ && !window_->getLastScreenshot().empty()) {
-      std::cout << "wrote " << window_->getLastScreenshot() << "\n" << std::flush;
-      wants_screenshot_ = false;
-    }
-    const double present = std::chrono::duration<double>(std::chrono::steady_clock::now() - present_start).count();
-
+    if (options_.measure_seconds > 0) camera_.orbit(1, 0);
+    drawFrame();
     const double end = wallSeconds();
-    if (last_frame_time_ >= 0) frame_seconds_ = 0.9 * frame_seconds_ + 0.1 * (end - last_frame_time_);
-    last_frame_time_ = end;
-    ++totals_.frames;
-    totals_.physics += physics_seconds_;
-    totals_.render += composer_.getRenderSeconds();
-    totals_.compose += composer_.getComposeSeconds();
-    totals_.present += present;
+    if (rate_window_start_ < 0 || end - rate_window_start_ >= 1.0) {
+      if (rate_window_start_ >= 0) scene_rate_ = double(rate_window_frames_) / (end - rate_window_start_);
+      rate_window_start_ = end;
+      rate_window_frames_ = 0;
+    }
     finishMeasurement(end);
   }
   if (cli::StopSignals::isRequested()) exit_status_ = 130;
   finishSession();
   return exit_status_;
+}
+
+void ViewerApp::drawFrame() {
+  Session& session = *session_;
+  int width = 0, height = 0;
+  window_->getFramebufferSize(width, height);
+  width = std::max(width, 16);
+  height = std::max(height, 16);
+  SceneKey key;
+  key.episode = session.getEpisodeCount();
+  key.step = session.getEnvironment().getElapsedSteps();
+  key.camera = view_.camera;
+  key.masks = view_.masks;
+  key.points = view_.points;
+  key.width = width;
+  key.height = height;
+  if (view_.camera < 0) {
+    const Pose pose = camera_.calcPose();
+    key.position = pose.position;
+    key.orientation = pose.orientation.coeffs();
+  }
+  const bool changed = !(key == scene_key_);
+  const std::vector<std::uint8_t>* rgba = nullptr;
+  int image_width = 0, image_height = 0;
+  if (changed) {
+    window_->releaseContext();  // the renderer's EGL context goes current
+    const ViewImage& image = composer_.compose(session.updEnvironment(), key.episode, view_, camera_, width, height);
+    rgba = image.rgba;
+    image_width = image.width;
+    image_height = image.height;
+    scene_key_ = key;
+    ++rate_window_frames_;
+    ++totals_.frames;
+    totals_.render += composer_.getRenderSeconds();
+    totals_.compose += composer_.getComposeSeconds();
+  }
+  const auto present_start = std::chrono::steady_clock::now();
+  window_->beginFrame(rgba, image_width, image_height);
+  if (show_overlay_) drawOverlay();
+  if (show_keymap_) drawKeymap();
+  if (session.getMode() == SessionMode::Replay) drawTimeline();
+  window_->endFrame();
+  if (wants_screenshot_ && !window_->getLastScreenshot().empty()) {
+    std::cout << "wrote " << window_->getLastScreenshot() << "\n" << std::flush;
+    wants_screenshot_ = false;
+  }
+  if (changed) {
+    totals_.present += std::chrono::duration<double>(std::chrono::steady_clock::now() - present_start).count();
+    totals_.physics += physics_seconds_;
+  }
+  // Nothing new: wait for input, or until the next step is due (at most
+  // 1/30 s, for the overlay's clock), instead of drawing the same again.
+  const bool running = !paused_ && !session.isOver();
+  const double until_step = running ? clock_->getNextStepTime() - wallSeconds() : 1.0;
+  wait_seconds_ = changed || !queued_steps_.empty() ? 0 : std::clamp(until_step, 0.0, 1.0 / 30);
 }
 
 void ViewerApp::finishSession() {

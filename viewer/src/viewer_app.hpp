@@ -25,7 +25,9 @@ struct ViewerOptions {
   bool paused = false;       // --paused
   bool vsync = true;
   std::string screenshot_dir = ".";
-  double measure_seconds = 0;  // --measure: frame rate over this long, then quit
+  // --measure: the frame rate over this long, then quit; the free camera
+  // turns a little every frame, so that every frame renders the scene anew.
+  double measure_seconds = 0;
   std::string title;
 };
 
@@ -56,6 +58,8 @@ class ViewerApp {
   void drawKeymap();    // overlay.cpp
   void reportReplay();
   void finishMeasurement(double now);
+  // One frame: the scene image if anything it shows changed, the overlay.
+  void drawFrame();
   // Closes the session (the recording's last episode and the file) and
   // says what was recorded.
   void finishSession();
@@ -80,13 +84,35 @@ class ViewerApp {
   int screenshot_count_ = 0;
   bool wants_screenshot_ = false;
   double now_ = 0;
+  // What the last scene image showed: the same again is not rendered again
+  // (a paused scene, frames between two steps); the loop then waits for
+  // input or the next step instead of spinning.
+  struct SceneKey {
+    uint64_t episode = ~0ull;
+    uint32_t step = 0;
+    int camera = 0, width = 0, height = 0;
+    bool masks = false, points = false;
+    Eigen::Vector3d position = Eigen::Vector3d::Zero();
+    Eigen::Vector4d orientation = Eigen::Vector4d::Zero();
+    bool operator==(const SceneKey& o) const {
+      return episode == o.episode && step == o.step && camera == o.camera && width == o.width &&
+             height == o.height && masks == o.masks && points == o.points && position == o.position &&
+             orientation == o.orientation;
+    }
+  };
+  SceneKey scene_key_;
+  double wait_seconds_ = 0;
 
   // Frame statistics (overlay; --measure).
-  double frame_seconds_ = 0, last_frame_time_ = -1;
+  // Scene images per second over the last second (frames that show
+  // nothing new are not counted).
+  double scene_rate_ = 0, rate_window_start_ = -1;
+  uint64_t rate_window_frames_ = 0;
   double physics_seconds_ = 0;  // this frame's steps
   struct Totals {
     uint64_t frames = 0, steps = 0;
     double start = -1, physics = 0, render = 0, compose = 0, present = 0;
+    double cpu_start = 0;  // the process's CPU seconds (every thread: llvmpipe's too)
   } totals_;
   int exit_status_ = 0;
 };

@@ -52,16 +52,19 @@ class Window {
   bool shouldClose() const;
   void requestClose();
   void pollEvents();
+  // Waits for input at most `seconds` (nothing to draw until then).
+  void waitEvents(double seconds);
   // The drawable size in pixels.
   void getFramebufferSize(int& width, int& height) const;
 
   // No context of this window current on the thread (before EGL renders).
   void releaseContext();
   // Makes the context current, uploads the scene image (RGBA, rows from
-  // the bottom up) and starts an ImGui frame: build the overlay after it.
-  void beginFrame(const std::vector<std::uint8_t>& rgba, int width, int height);
-  // Draws the scene image fitted into the window (letterboxed, nearest
-  // texels: a task camera's pixels as the policy gets them), then the
+  // the bottom up; nullptr: the last one again) and starts an ImGui frame:
+  // build the overlay after it.
+  void beginFrame(const std::vector<std::uint8_t>* rgba, int width, int height);
+  // Copies the scene image fitted into the window (letterboxed, nearest
+  // texels: a task camera's pixels as the policy gets them), then draws the
   // overlay; writes the screenshot when one was asked for; presents.
   void endFrame();
   // The next endFrame writes what it shows (scene and overlay) to `path`
@@ -80,7 +83,7 @@ class Window {
 
   GLFWwindow* window_ = nullptr;
   WindowInput input_;
-  unsigned int texture_ = 0;
+  unsigned int texture_ = 0, read_framebuffer_ = 0;  // the scene image, and a framebuffer to blit it from
   int texture_width_ = 0, texture_height_ = 0;
   int drag_button_ = -1;
   double cursor_x_ = 0, cursor_y_ = 0;

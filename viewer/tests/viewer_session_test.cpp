@@ -209,6 +209,10 @@ TEST(Session, TeleoperationMovesTheRobotAndRecordsAReplayableFile) {
     // Next object: the episode so far is written, a second one starts.
     session.nextObject();
     EXPECT_EQ(session.getRecordedCount(), 1u);
+    // A restart that discards: not recorded.
+    for (int i = 0; i < 2; ++i) session.step(teleop.calcAction());
+    session.restart(/*discard=*/true);
+    EXPECT_EQ(session.getRecordedCount(), 1u);
     for (int i = 0; i < 3; ++i) session.step(teleop.calcAction());
     session.close();
     EXPECT_EQ(session.getRecordedCount(), 2u);
