@@ -330,6 +330,17 @@ TEST(ViewComposer, MasksAndPointsOfTheFreeCameraShowTheRobot) {
   EXPECT_EQ(composer.getPointCloud().size(), env.getOptions().observation.pointcloud.total);
   EXPECT_GT(countColor(points, robot_color), 50u);
   EXPECT_LT(countColor(points, robot_color), robot_pixels);
+  // The colour alone, as the plain view reads it back, is readBack's.
+  SceneRenderer& renderer = env.updObserver().updRenderer();
+  const CameraSpec spec = camera.makeSpec(320, 180);
+  RawCameraImages all, color;
+  renderer.draw(spec, camera.calcPose());
+  renderer.readBack(spec, all);
+  renderer.readBackColor(spec, color);
+  EXPECT_EQ(color.rgba, all.rgba);
+  EXPECT_TRUE(color.segment.empty());
+  EXPECT_TRUE(color.depth.empty());
+  EXPECT_EQ(color.intrinsic, all.intrinsic);
   // A task camera, at its own size.
   view = ViewSettings();
   view.camera = 0;
