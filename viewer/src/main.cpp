@@ -83,6 +83,83 @@ void chooseTeleopController(const PluginRegistry& registry, const std::string& t
     sources.overrides.insert(sources.overrides.begin(), "control.controller=mobile_panda_ee");
 }
 
+// What runs: a replay, or a task driven by keys or watched (its policy is
+// resolved once the plugins are loaded: choosePolicy).
+SessionOptions parseSessionOptions(const cli::Arguments& args, int argc, char** argv) {
+  SessionOptions session;
+  session.command = cli::joinCommand(argc, argv);
+  if (args.options.count("replay")) {
+    if (!args.positional.empty())
+      throw UsageError("--replay takes no TASK: the file names its task", kViewUsage);
+    for (const char* option : {"policy", "record", "object", "seed", "split", "controller", "obs"})
+      if (args.options.count(option))
+        throw UsageError(std::string("--replay plays the file as recorded: no --") + option, kViewUsage);
+    if (args.repeated.count("config") || args.repeated.count("set"))
+      throw UsageError("--replay plays the file as recorded: no --config or --set", kViewUsage);
+    session.mode = SessionMode::Replay;
+    session.replay_path = args.options.at("replay");
+    session.trajectory = cli::valueOr(args, "trajectory", "");
+    return session;
+  }
+  if (args.positional.size() != 1) throw UsageError("view needs one TASK (or --replay FILE.h5)", kViewUsage);
+  if (args.options.count("trajectory")) throw UsageError("--trajectory goes with --replay", kViewUsage);
+  session.task = args.positional[0];
+  session.split = cli::parseSplit(args, "train", kViewUsage);
+  session.seed = cli::parseSeed(cli::valueOr(args, "seed", "0"), kViewUsage);
+  session.object = cli::valueOr(args, "object", "");
+  session.record_path = cli::valueOr(args, "record", "");
+  session.sources = cli::getConfigSources(args, cli::parseObservationMode(args, kViewUsage));
+  return session;
+}
+
+ViewerOptions parseViewerOptions(const cli::Arguments& args, const SessionOptions& session) {
+  ViewerOptions options;
+  if (args.options.count("size")) parseSize(args.options.at("size"), options);
+  options.paused = args.options.count("paused") != 0;
+  options.vsync = args.options.count("no-vsync") == 0;
+  options.screenshot_dir = cli::valueOr(args, "screenshot-dir", ".");
+  if (args.options.count("measure")) {
+    char* end = nullptr;
+    options.measure_seconds = std::strtod(args.options.at("measure").c_str(), &end);
+    if (*end || !(options.measure_seconds > 0))
+      throw UsageError("--measure needs a positive number of seconds", kViewUsage);
+  }
+  options.title = "manibench view: " + (session.mode == SessionMode::Replay ? session.replay_path : session.task);
+  return options;
+}
+
+// --policy (a name, a library, a Python file) or, without one, the
+// controller teleoperation needs.
+void choosePolicy(PluginRegistry& registry, const cli::Arguments& args, SessionOptions& session) {
+  if (session.mode == SessionMode::Replay) return;
+  if (!args.options.count("policy")) {
+    chooseTeleopController(registry, session.task, session.sources);
+    return;
+  }
+  session.mode = SessionMode::Policy;
+  std::string policy = args.options.at("policy");
+  session.policy_config = cli::readPolicyConfig(args);
+  if (cli::isPythonPolicy(policy)) {
+    if (args.options.count("policy-config"))
+      throw UsageError("--policy FILE.py takes no --policy-config", kViewUsage);
+    session.policy_config = cli::makePythonPolicyConfig(policy);
+    policy = "python";
+  }
+  session.policy = cli::resolvePolicy(registry, policy);
+  registry.getEntry(PluginKind::Policy, session.policy);
+}
+
+// --camera NAME: its index among the task's cameras.
+int findCamera(const Session& session, const std::string& name) {
+  const CameraRig& rig = session.getEnvironment().getObserver().getCameras();
+  std::string names;
+  for (std::size_t i = 0; i < rig.getCount(); ++i) {
+    if (rig.getMount(i).spec.name == name) return int(i);
+    names += (i ? ", " : "") + rig.getMount(i).spec.name;
+  }
+  throw UsageError("--camera: the task has no camera '" + name + "' (it has " + names + ")", kViewUsage);
+}
+
 int view(int argc, char** argv) {
   // `manibench view ...` runs this program with its own arguments.
   const int first = argc > 1 && std::string(argv[1]) == "view" ? 2 : 1;
@@ -95,80 +172,24 @@ int view(int argc, char** argv) {
     std::cout << kViewUsage;
     return 0;
   }
-  SessionOptions session;
-  session.command = cli::joinCommand(argc, argv);
-  const bool replay = args.options.count("replay") != 0;
-  if (replay) {
-    if (!args.positional.empty())
-      throw UsageError("--replay takes no TASK: the file names its task", kViewUsage);
-    for (const char* option : {"policy", "record", "object", "seed", "split", "controller", "obs"})
-      if (args.options.count(option) || args.repeated.count("config") || args.repeated.count("set"))
-        throw UsageError(std::string("--replay plays the file as recorded: no --") +
-                             (args.options.count(option) ? option : "config/--set"),
-                         kViewUsage);
-    session.mode = SessionMode::Replay;
-    session.replay_path = args.options.at("replay");
-    session.trajectory = cli::valueOr(args, "trajectory", "");
-  } else {
-    if (args.positional.size() != 1) throw UsageError("view needs one TASK (or --replay FILE.h5)", kViewUsage);
-    if (args.options.count("trajectory")) throw UsageError("--trajectory goes with --replay", kViewUsage);
-    session.task = args.positional[0];
-    session.split = cli::parseSplit(args, "train", kViewUsage);
-    session.seed = cli::parseSeed(cli::valueOr(args, "seed", "0"), kViewUsage);
-    session.object = cli::valueOr(args, "object", "");
-    session.record_path = cli::valueOr(args, "record", "");
-    session.sources = cli::getConfigSources(args, cli::parseObservationMode(args, kViewUsage));
-  }
-
-  ViewerOptions options;
-  if (args.options.count("size")) parseSize(args.options.at("size"), options);
+  SessionOptions session = parseSessionOptions(args, argc, argv);
+  const ViewerOptions options = parseViewerOptions(args, session);
   ViewSettings first_view;
   first_view.masks = args.options.count("masks") != 0;
   first_view.points = args.options.count("points") != 0;
-  options.paused = args.options.count("paused") != 0;
-  options.vsync = args.options.count("no-vsync") == 0;
-  options.screenshot_dir = cli::valueOr(args, "screenshot-dir", ".");
-  if (args.options.count("measure")) {
-    char* end = nullptr;
-    options.measure_seconds = std::strtod(args.options.at("measure").c_str(), &end);
-    if (*end || !(options.measure_seconds > 0)) throw UsageError("--measure needs a positive number of seconds", kViewUsage);
-  }
-  options.title = "manibench view: " + (replay ? session.replay_path : session.task);
 
   // The window first: without a display, say so before loading anything.
   ViewerApp app(options);
   PluginRegistry registry;
   cli::loadPlugins(registry);
-  if (!replay && args.options.count("policy")) {
-    session.mode = SessionMode::Policy;
-    std::string policy = args.options.at("policy");
-    session.policy_config = cli::readPolicyConfig(args);
-    if (cli::isPythonPolicy(policy)) {
-      if (args.options.count("policy-config"))
-        throw UsageError("--policy FILE.py takes no --policy-config", kViewUsage);
-      session.policy_config = cli::makePythonPolicyConfig(policy);
-      policy = "python";
-    }
-    session.policy = cli::resolvePolicy(registry, policy);
-    registry.getEntry(PluginKind::Policy, session.policy);
-  } else if (!replay) {
-    chooseTeleopController(registry, session.task, session.sources);
-  }
+  choosePolicy(registry, args, session);
   Session running(registry, session);
-  if (args.options.count("camera")) {
-    const CameraRig& rig = running.getEnvironment().getObserver().getCameras();
-    std::string names;
-    for (std::size_t i = 0; i < rig.getCount(); ++i) {
-      if (rig.getMount(i).spec.name == args.options.at("camera")) first_view.camera = int(i);
-      names += (i ? ", " : "") + rig.getMount(i).spec.name;
-    }
-    if (first_view.camera < 0)
-      throw UsageError("--camera: the task has no camera '" + args.options.at("camera") + "' (it has " + names + ")",
-                       kViewUsage);
-  }
+  if (args.options.count("camera")) first_view.camera = findCamera(running, args.options.at("camera"));
   const Environment& env = running.getEnvironment();
   std::cout << "view " << env.getEnvironmentId() << ", object " << env.getObjectId() << ", seed " << env.getSeed()
-            << ", " << (replay ? "replay of " + running.getTrajectoryName() : running.getPolicyName())
+            << ", "
+            << (session.mode == SessionMode::Replay ? "replay of " + running.getTrajectoryName()
+                                                    : running.getPolicyName())
             << ", controller " << env.getControllerDescription().name << "; Esc quits\n"
             << std::flush;
   return app.run(running, first_view);

@@ -10,7 +10,6 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
-#include <sstream>
 
 #include "cli.hpp"
 
@@ -90,16 +89,19 @@ void ViewerApp::stepOnce(const Eigen::VectorXd& teleop_action) {
 
 void ViewerApp::takeSteps(double now) {
   const auto start = std::chrono::steady_clock::now();
-  const Eigen::VectorXd idle = teleop_ ? teleop_->calcAction()
-                                       : Eigen::VectorXd::Zero(session_->getEnvironment().getControllerDescription().action_dim);
+  // The keys held now (zeros without teleoperation; a policy or a replay
+  // ignores it).
+  const Eigen::VectorXd held =
+      teleop_ ? teleop_->calcAction()
+              : Eigen::VectorXd::Zero(session_->getEnvironment().getControllerDescription().action_dim);
   while (!queued_steps_.empty()) {
-    stepOnce(queued_steps_.front().size() ? queued_steps_.front() : idle);
+    stepOnce(queued_steps_.front().size() ? queued_steps_.front() : held);
     queued_steps_.pop_front();
   }
   if (!paused_ && !session_->isOver()) {
     const uint32_t due = clock_->takeDueSteps(now);
     uint32_t taken = 0;
-    for (; taken < due && !session_->isOver(); ++taken) stepOnce(idle);
+    for (; taken < due && !session_->isOver(); ++taken) stepOnce(held);
     clock_->countSteps(taken);
   }
   physics_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
