@@ -234,8 +234,9 @@ TEST(ViewerWindow, HeldKeysDriveTheBaseForwardAndRaiseTheGripper) {
 }
 
 // The recording survives the window: killed (the X connection breaks: the
-// episode so far is saved), or the viewer killed outright (what was
-// written before stays readable; nothing written leaves no file).
+// episode so far is saved), the viewer terminated (the same, and the file
+// closed with its sidecar), or killed outright (what was written before
+// stays readable; nothing written leaves no file).
 TEST(ViewerWindow, AKilledWindowOrViewerLeavesAReadableFileOrNone) {
   VirtualDisplay display;
   TempDir dir;
@@ -269,6 +270,19 @@ TEST(ViewerWindow, AKilledWindowOrViewerLeavesAReadableFileOrNone) {
     EXPECT_EQ(viewer.wait(60), 128 + SIGKILL);
     const DemoReader reader(file);
     EXPECT_EQ(reader.getTrajectoryNames().size(), 1u);
+    expectReplaysBitForBit(file);
+  }
+  {
+    // SIGTERM (or Ctrl-C) mid-episode: recorded, closed, status 130.
+    const std::string file = dir / "terminated.h5";
+    ViewerProcess viewer(display, {"OpenCabinetDrawer-v0", "--record", file});
+    ASSERT_TRUE(viewer.waitForOutput(kReady, kStartSeconds)) << viewer.getErr();
+    viewer.focusWindow(display);
+    hold(display, "w", 0.5);
+    viewer.kill(SIGTERM);
+    EXPECT_EQ(viewer.wait(60), 130) << viewer.getErr();
+    EXPECT_TRUE(contains(viewer.getOut(), "recorded 1 episode(s)")) << viewer.getOut();
+    EXPECT_TRUE(std::filesystem::exists(getDemoJsonPath(file)));
     expectReplaysBitForBit(file);
   }
   {
