@@ -88,6 +88,16 @@ void printSegments(const std::vector<mb::SegmentDescription>& segments);
 std::string readPolicyConfig(const Arguments& args);
 // Resolves --policy: a registered name, or a library path to load first.
 std::string resolvePolicy(mb::PluginRegistry& registry, const std::string& policy);
+// --policy FILE.py: whether `policy` names a Python file, and the `python`
+// policy plugin's configuration that runs it (an unreadable file is an
+// error naming it).
+bool isPythonPolicy(const std::string& policy);
+std::string makePythonPolicyConfig(const std::string& path);
+// For the descriptions files carry (demonstrations): the command line,
+// the time now as ISO 8601 UTC, and the loaded libraries as JSON.
+std::string joinCommand(int argc, char** argv);
+std::string formatUtcNow();
+std::string describePlugins(const mb::PluginRegistry& registry);
 // A deterministic object of `objects` for `seed`.
 std::string chooseObject(const std::vector<std::string>& objects, uint64_t seed,
                          const std::string& split);

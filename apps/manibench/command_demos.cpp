@@ -8,8 +8,6 @@
 #include <manibench/evaluation.hpp>
 #include <manibench/task_name.hpp>
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -68,32 +66,6 @@ const char* kDemosUsage = R"(usage: manibench demos generate|replay|convert|info
       Task, versions, configuration sources, objects, counts, lengths,
       success and bytes per step; --write-json (re)writes the JSON sidecar.
 )";
-
-std::string joinCommand(int argc, char** argv) {
-  std::string text;
-  for (int i = 0; i < argc; ++i) text += (i ? " " : "") + std::string(argv[i]);
-  return text;
-}
-
-std::string formatUtcNow() {
-  const std::time_t now = std::time(nullptr);
-  std::tm utc{};
-  gmtime_r(&now, &utc);
-  char buffer[32];
-  std::strftime(buffer, sizeof(buffer), "%Y-%m-%dT%H:%M:%SZ", &utc);
-  return buffer;
-}
-
-// The loaded libraries as JSON: what made the file.
-std::string describePlugins(const PluginRegistry& registry) {
-  nlohmann::ordered_json list = nlohmann::ordered_json::array();
-  for (const LoadedLibrary& library : registry.getLibraries())
-    list.push_back({{"name", library.name},
-                    {"version", library.version},
-                    {"abi", std::to_string(library.abi_major) + "." + std::to_string(library.abi_minor)},
-                    {"library", library.path}});
-  return list.dump();
-}
 
 std::vector<std::string> parseTrajectoryList(const Arguments& args) {
   if (!args.options.count("trajectories")) return {};
