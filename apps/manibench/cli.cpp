@@ -1,8 +1,13 @@
 #include "cli.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <random>
@@ -10,12 +15,9 @@
 
 namespace manibench::cli {
 
-namespace {
-const std::vector<std::string> kRepeatable = {"config", "set"};
-}  // namespace
-
 Arguments parseArguments(int argc, char** argv, int first, const std::vector<std::string>& valued,
-                         const std::vector<std::string>& flags, const char* usage) {
+                         const std::vector<std::string>& flags, const char* usage,
+                         const std::vector<std::string>& repeatable) {
   Arguments args;
   for (int i = first; i < argc; ++i) {
     const std::string word = argv[i];
@@ -38,7 +40,7 @@ Arguments parseArguments(int argc, char** argv, int first, const std::vector<std
       }
       if (is_flag && eq != std::string::npos)
         throw UsageError("option '--" + key + "' takes no value", usage);
-      if (std::find(kRepeatable.begin(), kRepeatable.end(), key) != kRepeatable.end())
+      if (std::find(repeatable.begin(), repeatable.end(), key) != repeatable.end())
         args.repeated[key].push_back(value);
       else
         args.options[key] = value;
@@ -142,6 +144,53 @@ std::string resolvePolicy(mb::PluginRegistry& registry, const std::string& polic
     throw std::runtime_error("library " + policy + " registers " + std::to_string(policies.size()) +
                              " policies; give one by name with MANIBENCH_PLUGIN_PATH instead");
   return policies.front();
+}
+
+std::string readPolicyConfig(const Arguments& args) {
+  const auto it = args.options.find("policy-config");
+  if (it == args.options.end()) return "";
+  std::ifstream in(it->second);
+  if (!in) throw std::runtime_error("cannot read the policy configuration '" + it->second + "'");
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::string makePythonPolicyConfig(const std::string& path) {
+  if (!std::ifstream(path)) throw std::runtime_error("cannot read the policy file '" + path + "'");
+  std::string quoted;
+  for (char c : std::filesystem::absolute(path).string())
+    quoted += c == '\'' ? std::string("''") : std::string(1, c);  // YAML single quotes
+  return "file: '" + quoted + "'\n";
+}
+
+bool isPythonPolicy(const std::string& policy) {
+  return policy.size() > 3 && policy.compare(policy.size() - 3, 3, ".py") == 0;
+}
+
+std::string joinCommand(int argc, char** argv) {
+  std::string text;
+  for (int i = 0; i < argc; ++i) text += (i ? " " : "") + std::string(argv[i]);
+  return text;
+}
+
+std::string formatUtcNow() {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char buffer[32];
+  std::strftime(buffer, sizeof(buffer), "%Y-%m-%dT%H:%M:%SZ", &utc);
+  return buffer;
+}
+
+std::string describePlugins(const mb::PluginRegistry& registry) {
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (const mb::LoadedLibrary& library : registry.getLibraries())
+    list.push_back({{"name", library.name},
+                    {"version", library.version},
+                    {"abi", std::to_string(library.abi_major) + "." + std::to_string(library.abi_minor)},
+                    {"library", library.path}});
+  return list.dump();
 }
 
 std::string chooseObject(const std::vector<std::string>& objects, uint64_t seed,

@@ -57,9 +57,11 @@ struct Arguments {
 };
 
 // Parses argv[first..]: `valued` options take a value, `flags` do not;
-// --config and --set repeat. Unknown options are a UsageError with `usage`.
+// those named in `repeatable` (--config and --set unless told otherwise)
+// keep every value. Unknown options are a UsageError with `usage`.
 Arguments parseArguments(int argc, char** argv, int first, const std::vector<std::string>& valued,
-                         const std::vector<std::string>& flags, const char* usage);
+                         const std::vector<std::string>& flags, const char* usage,
+                         const std::vector<std::string>& repeatable = {"config", "set"});
 // A non-negative integer, or a UsageError naming `option` with `usage`.
 uint64_t parseSeed(const std::string& text, const char* usage, const std::string& option = "--seed");
 std::string valueOr(const Arguments& args, const std::string& key, const std::string& fallback);
@@ -81,8 +83,21 @@ std::unique_ptr<mb::Environment> makeEnvironment(const mb::PluginRegistry& regis
                                                  const mb::ConfigSources& sources,
                                                  bool stop_on_success);
 void printSegments(const std::vector<mb::SegmentDescription>& segments);
+// The YAML of --policy-config FILE handed to the policy's create ("" when
+// not given); an unreadable file is an error naming it.
+std::string readPolicyConfig(const Arguments& args);
 // Resolves --policy: a registered name, or a library path to load first.
 std::string resolvePolicy(mb::PluginRegistry& registry, const std::string& policy);
+// --policy FILE.py: whether `policy` names a Python file, and the `python`
+// policy plugin's configuration that runs it (an unreadable file is an
+// error naming it).
+bool isPythonPolicy(const std::string& policy);
+std::string makePythonPolicyConfig(const std::string& path);
+// For the descriptions files carry (demonstrations): the command line,
+// the time now as ISO 8601 UTC, and the loaded libraries as JSON.
+std::string joinCommand(int argc, char** argv);
+std::string formatUtcNow();
+std::string describePlugins(const mb::PluginRegistry& registry);
 // A deterministic object of `objects` for `seed`.
 std::string chooseObject(const std::vector<std::string>& objects, uint64_t seed,
                          const std::string& split);

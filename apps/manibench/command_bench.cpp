@@ -32,6 +32,8 @@ does not depend on the load of the machine.
 
 Options:
   --policy NAME|PATH.so   policy acting (default random)
+  --policy-config FILE    YAML handed to the policy's create (a trained
+                          network: --policy torch_policy, docs/learning.md)
   --obs MODE              observation mode: state (default), pointcloud or rgbd
                           (the visual modes render every camera at every step)
   --steps N               environment steps to time (default 2000)
@@ -44,7 +46,7 @@ Options:
 
 int commandBench(int argc, char** argv) {
   const Arguments args = parseArguments(argc, argv, 2,
-                                        {"policy", "obs", "steps", "split", "controller", "config", "set"}, {},
+                                        {"policy", "policy-config", "obs", "steps", "split", "controller", "config", "set"}, {},
                                         kBenchUsage);
   if (args.help) {
     std::cout << kBenchUsage;
@@ -64,7 +66,7 @@ int commandBench(int argc, char** argv) {
       makeEnvironment(registry, args.positional[0], sources, true);
   const std::vector<std::string> objects = env->listObjects(split);
   if (objects.empty()) throw std::runtime_error("the " + split + " split has no objects");
-  mb::PolicyInstance policy(registry, policy_name, "", env->calcPolicyLayout());
+  mb::PolicyInstance policy(registry, policy_name, readPolicyConfig(args), env->calcPolicyLayout());
 
   using Clock = std::chrono::steady_clock;
   std::chrono::duration<double> step_time{0}, reset_time{0}, first_reset_time{0};

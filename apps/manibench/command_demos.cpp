@@ -8,9 +8,8 @@
 #include <manibench/evaluation.hpp>
 #include <manibench/task_name.hpp>
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <ctime>
@@ -44,6 +43,11 @@ const char* kDemosUsage = R"(usage: manibench demos generate|replay|convert|info
         --obs MODE             observations recorded: state (default: the
                                configuration's), pointcloud or rgbd
         --policy-config FILE   YAML handed to the policy's create
+        --action-noise SIGMA   add Gaussian noise of this standard deviation
+                               to every action before it is executed (seeded
+                               by the episode); the file keeps the executed
+                               actions (replay) and the policy's own
+                               (policy_actions: labels for learning)
         --controller NAME, --config FILE, --set KEY=VALUE
         --step-timeout SEC, --env-timeout SEC   as for eval
         --no-progress          no progress bar
@@ -62,32 +66,6 @@ const char* kDemosUsage = R"(usage: manibench demos generate|replay|convert|info
       Task, versions, configuration sources, objects, counts, lengths,
       success and bytes per step; --write-json (re)writes the JSON sidecar.
 )";
-
-std::string joinCommand(int argc, char** argv) {
-  std::string text;
-  for (int i = 0; i < argc; ++i) text += (i ? " " : "") + std::string(argv[i]);
-  return text;
-}
-
-std::string formatUtcNow() {
-  const std::time_t now = std::time(nullptr);
-  std::tm utc{};
-  gmtime_r(&now, &utc);
-  char buffer[32];
-  std::strftime(buffer, sizeof(buffer), "%Y-%m-%dT%H:%M:%SZ", &utc);
-  return buffer;
-}
-
-// The loaded libraries as JSON: what made the file.
-std::string describePlugins(const PluginRegistry& registry) {
-  nlohmann::ordered_json list = nlohmann::ordered_json::array();
-  for (const LoadedLibrary& library : registry.getLibraries())
-    list.push_back({{"name", library.name},
-                    {"version", library.version},
-                    {"abi", std::to_string(library.abi_major) + "." + std::to_string(library.abi_minor)},
-                    {"library", library.path}});
-  return list.dump();
-}
 
 std::vector<std::string> parseTrajectoryList(const Arguments& args) {
   if (!args.options.count("trajectories")) return {};
@@ -113,7 +91,7 @@ int generate(int argc, char** argv) {
   const Arguments args = parseArguments(
       argc, argv, 3,
       {"policy", "policy-config", "out", "split", "objects", "per-object", "max-attempts", "workers",
-       "seed", "obs", "controller", "config", "set", "step-timeout", "env-timeout"},
+       "seed", "obs", "controller", "config", "set", "step-timeout", "env-timeout", "action-noise"},
       {"no-progress"}, kDemosUsage);
   if (args.positional.size() != 1) throw UsageError("demos generate takes one TASK", kDemosUsage);
   if (!args.options.count("policy")) throw UsageError("demos generate needs --policy", kDemosUsage);
@@ -127,6 +105,12 @@ int generate(int argc, char** argv) {
   evaluation.split = parseSplit(args, "train", kDemosUsage);
   evaluation.seed = parseSeed(valueOr(args, "seed", "0"), kDemosUsage);
   evaluation.workers = unsigned(std::min<uint64_t>(parseCount(args, "workers", 1), 256));
+  if (args.options.count("action-noise")) {
+    char* end = nullptr;
+    evaluation.action_noise = std::strtod(args.options.at("action-noise").c_str(), &end);
+    if (*end || !(evaluation.action_noise >= 0) || !std::isfinite(evaluation.action_noise))
+      throw UsageError("--action-noise needs a non-negative number", kDemosUsage);
+  }
   for (const char* option : {"step-timeout", "env-timeout"})
     if (args.options.count(option)) {
       char* end = nullptr;

@@ -154,14 +154,11 @@ int commandEval(int argc, char** argv) {
   // A Python file is the `python` policy plugin's configuration (its
   // embedded interpreter starts in each worker, after the fork).
   std::string policy_arg = args.options.at("policy");
-  if (policy_arg.size() > 3 && policy_arg.compare(policy_arg.size() - 3, 3, ".py") == 0) {
+  if (isPythonPolicy(policy_arg)) {
     if (args.options.count("policy-config"))
       throw UsageError("--policy FILE.py takes no --policy-config (name the file in a "
                        "configuration for --policy python instead)", kEvalUsage);
-    if (!std::ifstream(policy_arg)) throw std::runtime_error("cannot read the policy file '" + policy_arg + "'");
-    std::string path = std::filesystem::absolute(policy_arg).string(), quoted;
-    for (char c : path) quoted += c == '\'' ? std::string("''") : std::string(1, c);  // YAML single quotes
-    options.policy_config = "file: '" + quoted + "'\n";
+    options.policy_config = makePythonPolicyConfig(policy_arg);
     options.config_notes.push_back("--policy " + policy_arg);
     policy_arg = "python";
   }

@@ -83,7 +83,7 @@ class TraceWriter {
 };
 
 int runOne(mb::PluginRegistry& registry, const std::string& task_name, const std::string& policy_arg,
-           uint64_t seed, const std::string& object_arg, const std::string& split,
+           const std::string& policy_config, uint64_t seed, const std::string& object_arg, const std::string& split,
            const mb::ConfigSources& sources, bool stop_on_success, const std::string& trace_path) {
   const std::string policy_name = resolvePolicy(registry, policy_arg);
   registry.getEntry(mb::PluginKind::Policy, policy_name);  // fail before building anything
@@ -93,7 +93,7 @@ int runOne(mb::PluginRegistry& registry, const std::string& task_name, const std
   const std::string object =
       object_arg.empty() ? chooseObject(env.listObjects(split), seed, split) : object_arg;
   env.reset(object, seed);
-  mb::PolicyInstance policy(registry, policy_name, "", env.calcPolicyLayout());
+  mb::PolicyInstance policy(registry, policy_name, policy_config, env.calcPolicyLayout());
   std::cout << "task " << task_name << ", policy " << policy_name << ", controller "
             << env.getControllerDescription().name << "\n";
   // A policy's failure is named by where it happened, as the environment's
@@ -133,7 +133,8 @@ int runOne(mb::PluginRegistry& registry, const std::string& task_name, const std
 int commandRun(int argc, char** argv) {
   const Arguments args =
       parseArguments(argc, argv, 2,
-                     {"policy", "seed", "object", "split", "controller", "obs", "config", "set", "trace"},
+                     {"policy", "policy-config", "seed", "object", "split", "controller", "obs", "config", "set",
+                      "trace"},
                      {"no-early-stop"}, kRunUsage);
   if (args.help) {
     std::cout << kRunUsage;
@@ -146,7 +147,7 @@ int commandRun(int argc, char** argv) {
   const uint64_t seed = parseSeed(valueOr(args, "seed", "0"), kRunUsage);
   mb::PluginRegistry registry;
   loadPlugins(registry);
-  return runOne(registry, args.positional[0], args.options.at("policy"), seed,
+  return runOne(registry, args.positional[0], args.options.at("policy"), readPolicyConfig(args), seed,
                 valueOr(args, "object", ""), split, sources,
                 !args.options.count("no-early-stop"), valueOr(args, "trace", ""));
 }

@@ -1,9 +1,19 @@
 // manibench: the host program. Loads plugins by name and runs them.
-//   manibench list | info | run | bench | config | render | objects | eval | demos | demo
+//   manibench list | info | run | bench | config | render | objects | eval | demos | demo | train | view
+// `train` and `view` are other programs, manibench-train and manibench-view,
+// found beside this one (as git runs git-<command>): the learning module's
+// libtorch and the viewer's GLFW never load here.
 // Exit codes: 0 success, 1 failure (reported on stderr), 2 usage error.
 // Each command lives in its own command_*.cpp; cli.hpp declares them.
+#include <unistd.h>
+
+#include <cerrno>
+#include <climits>
+#include <cstring>
+#include <filesystem>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "cli.hpp"
 
@@ -30,6 +40,12 @@ Commands:
   config [TASK]             print the merged YAML configuration
   demo                      list the plugins, then evaluate the cabinet expert
                             on the OpenCabinetDrawer-v0 test split
+  train bc|bcq|td3bc        learn a policy from demonstrations (docs/learning.md;
+                            built where libtorch is installed)
+  view TASK                 a window on a task: free and task cameras, masks,
+                            point cloud, overlay; drive the robot by keyboard
+                            (--record FILE.h5), watch --policy NAME or
+                            --replay FILE.h5 (docs/viewer.md; needs a display)
 
 TASK is a task name (a random object of the split each episode) or a
 fixed-object id <Task>_<object>-v<N>, e.g. OpenCabinetDrawer_1000-v0.
@@ -39,6 +55,21 @@ render, eval, objects and config take --config FILE and --set KEY=VALUE
 Plugins are searched in $MANIBENCH_PLUGIN_PATH, ~/.local/lib/manibench/plugins,
 the install prefix and the build tree, in that order.
 )";
+
+// Replaces this process with manibench-<command> from this program's folder;
+// `missing` says where that program comes from when it is not there.
+int runExternalCommand(const std::string& command, int argc, char** argv, const std::string& missing) {
+  char self[PATH_MAX];
+  const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
+  const std::string dir = n > 0 ? std::filesystem::path(std::string(self, std::size_t(n))).parent_path().string() : ".";
+  const std::string program = dir + "/manibench-" + command;
+  if (access(program.c_str(), X_OK) != 0)
+    throw std::runtime_error("'" + command + "' needs " + program + ", which is not there: " + missing);
+  std::vector<char*> args(argv, argv + argc);
+  args.push_back(nullptr);
+  execv(program.c_str(), args.data());
+  throw std::runtime_error("cannot run " + program + ": " + std::strerror(errno));
+}
 
 }  // namespace
 
@@ -59,6 +90,15 @@ int main(int argc, char** argv) {
     if (command == "eval") return commandEval(argc, argv);
     if (command == "objects") return commandObjects(argc, argv);
     if (command == "demos") return commandDemos(argc, argv);
+    if (command == "train")
+      return runExternalCommand(command, argc, argv,
+                                "the learning module, built where libtorch is installed (Debian's "
+                                "libtorch-dev; scripts/install-deps installs it), docs/learning.md");
+    if (command == "view")
+      return runExternalCommand(command, argc, argv,
+                                "the viewer, built where GLFW and Dear ImGui are installed (Debian's "
+                                "libglfw3-dev and libimgui-dev; scripts/install-deps installs them), "
+                                "docs/viewer.md");
     throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'",
                      kMainUsage);
   } catch (const UsageError& e) {

@@ -56,6 +56,7 @@ layouts: {}
 task: {}
 observation:
   mode: state
+  rgb_dtype: float32
   pointcloud:
     per_mask: 50
     masked_total: 800
@@ -363,6 +364,7 @@ EnvironmentOptions calcEnvironmentOptions(const ConfigNode& config) {
   // -- observation ------------------------------------------------------------
   // The schema allows only the modes' names.
   options.observation.mode = *findObservationMode(getPath(config, "observation.mode").scalar);
+  options.observation.rgb_dtype = *findRgbDtype(getPath(config, "observation.rgb_dtype").scalar);
   PointCloudSampling& sampling = options.observation.pointcloud;
   sampling.per_mask = uint32_t(*calcInt(getPath(config, "observation.pointcloud.per_mask")));
   sampling.masked_total = uint32_t(*calcInt(getPath(config, "observation.pointcloud.masked_total")));

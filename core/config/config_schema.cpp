@@ -122,6 +122,11 @@ std::vector<ConfigKey> makeSchema() {
                   "state: the task's vector; pointcloud and rgbd add the cameras' points or "
                   "images (and render)")
                   .oneOf(getObservationModeNames()));
+  k.push_back(Key("observation.rgb_dtype", T::Enum,
+                  "rgbd's rgb: float32 in [0, 1] (ManiSkill's layout) or uint8 in [0, 255] (the "
+                  "renderer's bytes: a quarter of the size, what image libraries expect; the "
+                  "Python package's default)")
+                  .oneOf(getRgbDtypeNames()));
   k.push_back(Key("observation.pointcloud", T::Map,
                   "subsampling of the fused point cloud (supplement D.1)"));
   k.push_back(Key("observation.pointcloud.per_mask", T::Int,

@@ -85,7 +85,11 @@ void writeObservations(const Handle& group, const Trajectory& t) {
       writeDataset(obs, "point_count", {n}, t.point_counts);
     }
   } else {
-    writeDataset(obs, "rgb", {n, t.height, t.width, 3 * hsize_t(t.camera_count)}, t.image_rgb);
+    const std::vector<hsize_t> rgb_dims{n, t.height, t.width, 3 * hsize_t(t.camera_count)};
+    if (t.image_rgb_bytes.empty())
+      writeDataset(obs, "rgb", rgb_dims, t.image_rgb);
+    else  // observation.rgb_dtype uint8
+      writeDataset(obs, "rgb", rgb_dims, t.image_rgb_bytes);
     writeDataset(obs, "depth", {n, t.height, t.width, t.camera_count}, t.depth);
     writeDataset(obs, "seg", {n, t.height, t.width, hsize_t(t.mask_count) * t.camera_count},
                  t.image_masks);
@@ -107,6 +111,8 @@ void writeTrajectory(const Handle& file, const std::string& name, const DemoFile
   writeAttribute(group, "total_reward", t.total_reward);
   const hsize_t steps = t.steps;
   writeDataset(group, "actions", {steps, t.action_dim}, t.actions);
+  if (!t.policy_actions.empty())
+    writeDataset(group, "policy_actions", {steps, t.action_dim}, t.policy_actions);
   writeDataset(group, "rewards", {steps}, t.rewards);
   writeDataset(group, "terminated", {steps}, t.terminated);
   writeDataset(group, "truncated", {steps}, t.truncated);
@@ -215,18 +221,25 @@ void readObservations(const Handle& group, const DemoFileInfo& info, Trajectory&
     t.width = uint32_t(dims[2]);
     expectDims(obs, "depth", {n, t.height, t.width, t.camera_count});
     expectDims(obs, "seg", {n, t.height, t.width, hsize_t(t.mask_count) * t.camera_count});
-    t.image_rgb = readDataset<float>(obs, "rgb");
+    if (readElementType(obs, "rgb").is_float)
+      t.image_rgb = readDataset<float>(obs, "rgb");
+    else
+      t.image_rgb_bytes = readDataset<uint8_t>(obs, "rgb");
     t.depth = readDataset<float>(obs, "depth");
     t.image_masks = readDataset<uint8_t>(obs, "seg");
   }
 }
 
-void readTrajectory(const Handle& group, const DemoFileInfo& info, Trajectory& t) {
+void readTrajectory(const Handle& group, const DemoFileInfo& info, bool with_env_states, Trajectory& t) {
   readSummaryInto(group, t);
   const hsize_t steps = t.steps;
   const std::vector<hsize_t> action_dims = expectDims(group, "actions", {steps, 0});
   t.action_dim = uint32_t(action_dims[1]);
   t.actions = readDataset<double>(group, "actions");
+  if (hasLink(group, "policy_actions")) {
+    expectDims(group, "policy_actions", {steps, t.action_dim});
+    t.policy_actions = readDataset<double>(group, "policy_actions");
+  }
   expectDims(group, "rewards", {steps});
   t.rewards = readDataset<double>(group, "rewards");
   for (const char* name : {"terminated", "truncated", "success"}) expectDims(group, name, {steps});
@@ -237,6 +250,7 @@ void readTrajectory(const Handle& group, const DemoFileInfo& info, Trajectory& t
   expectDims(group, "conditions", {steps, t.condition_count});
   t.conditions = readDataset<uint8_t>(group, "conditions");
   readObservations(group, info, t);
+  if (!with_env_states) return;
   expectDims(group, "env_state_offsets", {steps + 2});
   t.env_state_offsets = readDataset<uint64_t>(group, "env_state_offsets");
   t.env_states = readDataset<uint8_t>(group, "env_states");
@@ -364,12 +378,12 @@ const std::string& DemoReader::getPath() const { return impl_->path; }
 const DemoFileInfo& DemoReader::getInfo() const { return impl_->info; }
 const std::vector<std::string>& DemoReader::getTrajectoryNames() const { return impl_->names; }
 
-Trajectory DemoReader::read(const std::string& name) const {
+Trajectory DemoReader::read(const std::string& name, bool with_env_states) const {
   return withContext("'" + impl_->path + "', trajectory " + name, [&] {
     if (!hasLink(impl_->file, name)) throw DemoError("no such trajectory");
     const Handle group = openGroup(impl_->file, name);
     Trajectory t;
-    readTrajectory(group, impl_->info, t);
+    readTrajectory(group, impl_->info, with_env_states, t);
     return t;
   });
 }

@@ -58,6 +58,7 @@ std::string compareVisual(const VisualObservation& replayed, const VisualObserva
                         compareArrays("point cloud rgb", replayed.points.rgb, recorded.points.rgb),
                         compareArrays("point cloud masks", replayed.points.masks, recorded.points.masks),
                         compareArrays("image rgb", replayed.rgb, recorded.rgb),
+                        compareArrays("image rgb bytes", replayed.rgb_bytes, recorded.rgb_bytes),
                         compareArrays("image depth", replayed.depth, recorded.depth),
                         compareArrays("image masks", replayed.masks, recorded.masks)})
     if (!d.empty()) return d;

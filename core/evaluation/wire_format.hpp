@@ -167,10 +167,10 @@ void transferResult(Stream& s, Record& r) {
 template <class Stream, class Recorded>
 void transferTrajectory(Stream& s, Recorded& t) {
   s.fields(t.object_id, t.level, t.seed, t.steps, t.success, t.total_reward, t.action_dim,
-           t.condition_count, t.actions, t.rewards, t.terminated, t.truncated, t.success_flags,
+           t.condition_count, t.actions, t.policy_actions, t.rewards, t.terminated, t.truncated, t.success_flags,
            t.conditions, t.mode, t.state_dim, t.state, t.mask_count, t.point_counts, t.xyz,
-           t.point_rgb, t.point_masks, t.camera_count, t.height, t.width, t.image_rgb, t.depth,
-           t.image_masks, t.env_states, t.env_state_offsets);
+           t.point_rgb, t.point_masks, t.camera_count, t.height, t.width, t.image_rgb, t.image_rgb_bytes,
+           t.depth, t.image_masks, t.env_states, t.env_state_offsets);
 }
 
 }  // namespace manibench::evaluation_detail

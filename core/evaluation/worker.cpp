@@ -3,9 +3,11 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
-#include <manibench/trajectory.hpp>
 #include <manibench/episode.hpp>
+#include <manibench/sdk/random.hpp>
+#include <manibench/trajectory.hpp>
 #include <memory>
 #include <optional>
 
@@ -65,7 +67,7 @@ Phase toWorkerPhase(EpisodePhase phase) {
 // view of a worker that hangs or dies). With `record_trajectory` the
 // episode is recorded, and kept in the record when it succeeds.
 After runWorkerEpisode(Environment& env, PolicyInstance& policy, Slot& slot,
-                       bool record_trajectory, EpisodeRecord& record) {
+                       bool record_trajectory, double action_noise, EpisodeRecord& record) {
   const auto start = getMonotonicNs();
   const std::size_t conditions = env.getTaskDescription().success_conditions.size();
   record.flags.assign(conditions, 0);
@@ -80,12 +82,25 @@ After runWorkerEpisode(Environment& env, PolicyInstance& policy, Slot& slot,
     slot.total_reward.store(record.total_reward);
     return true;
   };
+  // Exploration noise: N(0, action_noise^2) on every action value, from a
+  // generator of the episode's seed (the same episode gets the same noise).
+  sdk::Random noise(record.spec.seed ^ 0x6e6f697365000000ULL);
+  Eigen::VectorXd policy_action;
+  if (action_noise > 0)
+    hooks.perturb_action = [&](Eigen::VectorXd& action) {
+      policy_action = action;
+      for (Eigen::Index i = 0; i < action.size(); ++i) {
+        // Box-Muller; 1 - u keeps the logarithm finite.
+        const double u = 1.0 - noise.uniform(0, 1), v = noise.uniform(0, 1);
+        action[i] += action_noise * std::sqrt(-2.0 * std::log(u)) * std::cos(2.0 * M_PI * v);
+      }
+    };
   std::optional<TrajectoryRecorder> recorder;
   if (record_trajectory) {
     recorder.emplace(env);
     hooks.on_reset = [&] { recorder->onReset(record.spec.object_id, record.spec.level, record.spec.seed); };
     hooks.on_transition = [&](const Eigen::VectorXd& action, const StepResult& step) {
-      recorder->onStep(action, step);
+      recorder->onStep(action, step, action_noise > 0 ? &policy_action : nullptr);
     };
   }
   try {
@@ -179,7 +194,8 @@ void runWorker(int fd, Slot& slot, const WorkerContext& context) {
       EpisodeRecord record;
       transferRun(in, record.spec);
       const After after =
-          runWorkerEpisode(*env, *policy, slot, context.options->record_successes, record);
+          runWorkerEpisode(*env, *policy, slot, context.options->record_successes,
+                           context.options->action_noise, record);
       Writer w;
       transferResult(w.u8(kResult), record);
       w.u8(record.trajectory ? 1 : 0);

@@ -249,6 +249,17 @@ void convertRgbRow(const std::uint8_t* rgba, std::size_t width, float* rgb, std:
   }
 }
 
+void copyRgbRow(const std::uint8_t* rgba, std::size_t width, std::uint8_t* rgb,
+                std::size_t stride, bool pad) {
+  // A pixel as one 4-byte store where the byte after its blue is written
+  // later anyway; else 3 bytes. No instruction-set variants: this is a
+  // load and a store per pixel, against the float rows' conversion.
+  const std::size_t wide = pad ? width : stride == 3 && width > 0 ? width - 1 : 0;
+  std::size_t col = 0;
+  for (; col < wide; ++col) std::memcpy(rgb + stride * col, rgba + 4 * col, 4);
+  for (; col < width; ++col) std::memcpy(rgb + stride * col, rgba + 4 * col, 3);
+}
+
 void linearizeDepthRow(const std::uint32_t* segment, const float* depth, std::size_t width,
                        std::uint32_t visual_count, double near, double far, float* out,
                        std::size_t stride, std::uint32_t* mask_index, InstructionSet set) {

@@ -26,6 +26,14 @@ InstructionSet getBestInstructionSet();  // of this processor (and build)
 void convertRgbRow(const std::uint8_t* rgba, std::size_t width, float* rgb, std::size_t stride,
                    bool pad, InstructionSet set = getBestInstructionSet());
 
+// rgb[stride * col + i] = rgba[4 * col + i] for i = 0, 1, 2: the bytes of
+// observation.rgb_dtype uint8. With `pad` (another camera's bytes follow,
+// written after), rgb[stride * col + 3] may be written too, so that a
+// pixel is one 4-byte store; so may it with stride 3 (one camera: the
+// next pixel's red follows), except after the row's last pixel.
+void copyRgbRow(const std::uint8_t* rgba, std::size_t width, std::uint8_t* rgb,
+                std::size_t stride, bool pad);
+
 // out[stride * col] = calcLinearDepth(depth[col], near, far) where the pixel
 // hit a visual (segments 1..visual_count) or the ground (kGroundSegment)
 // before the far plane, else 0; and mask_index[col] = the segment where it

@@ -1,6 +1,7 @@
 // Observation modes by name, and the checks of ObservationOptions.
 #include <manibench/observation.hpp>
 
+#include <iterator>
 #include <set>
 #include <stdexcept>
 
@@ -24,6 +25,24 @@ std::optional<ObservationMode> findObservationMode(const std::string& name) {
   for (std::size_t i = 0; i < kModeCount; ++i)
     if (name == kModeNames[i]) return ObservationMode(i);
   return std::nullopt;
+}
+
+namespace {
+constexpr const char* kRgbDtypeNames[] = {"float32", "uint8"};
+static_assert(std::size(kRgbDtypeNames) == std::size_t(RgbDtype::Uint8) + 1, "a name per dtype");
+}  // namespace
+
+const char* toString(RgbDtype dtype) { return kRgbDtypeNames[std::size_t(dtype)]; }
+
+std::optional<RgbDtype> findRgbDtype(const std::string& name) {
+  for (std::size_t i = 0; i < std::size(kRgbDtypeNames); ++i)
+    if (name == kRgbDtypeNames[i]) return RgbDtype(i);
+  return std::nullopt;
+}
+
+const std::vector<std::string>& getRgbDtypeNames() {
+  static const std::vector<std::string> names(std::begin(kRgbDtypeNames), std::end(kRgbDtypeNames));
+  return names;
 }
 
 void validateObservationOptions(const ObservationOptions& options) {

@@ -180,7 +180,10 @@ void VisualObserver::assembleImages(VisualObservation& out) {
   out.camera_count = static_cast<uint32_t>(cameras);
   out.height = static_cast<uint32_t>(h);
   out.width = static_cast<uint32_t>(w);
-  out.rgb.resize(h * w * 3 * cameras);
+  // One of the two rgb layouts (observation.rgb_dtype); the other is empty.
+  const bool bytes = options_.rgb_dtype == RgbDtype::Uint8;
+  out.rgb.resize(bytes ? 0 : h * w * 3 * cameras);
+  out.rgb_bytes.resize(bytes ? h * w * 3 * cameras : 0);
   out.depth.resize(h * w * cameras);
   out.masks.resize(h * w * k * cameras);
   mask_index_rows_.resize(cameras * w);
@@ -204,10 +207,15 @@ void VisualObserver::assembleImages(VisualObservation& out) {
     for (std::size_t c = 0; c < cameras; ++c) {
       const RawCameraImages& raw = raw_[c];
       const std::size_t base = raw.getIndex(int(row), 0);
-      // A camera's fourth float is the next camera's red, written after.
-      image_rows::convertRgbRow(raw.rgba.data() + 4 * base, w,
-                                out.rgb.data() + p0 * 3 * cameras + 3 * c, 3 * cameras,
-                                /*pad=*/c + 1 < cameras, set);
+      // A camera's fourth float (or byte) is the next camera's red, written after.
+      if (bytes)
+        image_rows::copyRgbRow(raw.rgba.data() + 4 * base, w,
+                               out.rgb_bytes.data() + p0 * 3 * cameras + 3 * c, 3 * cameras,
+                               /*pad=*/c + 1 < cameras);
+      else
+        image_rows::convertRgbRow(raw.rgba.data() + 4 * base, w,
+                                  out.rgb.data() + p0 * 3 * cameras + 3 * c, 3 * cameras,
+                                  /*pad=*/c + 1 < cameras, set);
       image_rows::linearizeDepthRow(raw.segment.data() + base, raw.depth.data() + base, w,
                                     raw.visual_count, raw.near, raw.far,
                                     out.depth.data() + p0 * cameras + c, cameras,

@@ -245,7 +245,7 @@ struct SceneRenderer::Impl {
   void checkDraw(const CameraSpec& camera, const Pose& camera_pose_world) const;
   // Under the context's lock.
   void draw(const CameraSpec& camera, const Pose& camera_pose_world);
-  void readBack(const CameraSpec& camera, RawCameraImages& out);
+  void readBack(const CameraSpec& camera, RawCameraImages& out, bool color_only = false);
   void setLightUniforms(const ShaderProgram& program, const Eigen::Isometry3d& world_to_view) const;
 };
 
@@ -575,6 +575,11 @@ void SceneRenderer::readBack(const CameraSpec& camera, RawCameraImages& out) {
   impl_->readBack(camera, out);
 }
 
+void SceneRenderer::readBackColor(const CameraSpec& camera, RawCameraImages& out) {
+  RenderLock lock(impl_->context, "SceneRenderer::readBackColor");
+  impl_->readBack(camera, out, /*color_only=*/true);
+}
+
 void SceneRenderer::Impl::draw(const CameraSpec& camera, const Pose& camera_pose_world) {
   Impl& d = *this;
   for (std::size_t k = 0; k < d.links.size(); ++k) {
@@ -675,7 +680,7 @@ void SceneRenderer::Impl::draw(const CameraSpec& camera, const Pose& camera_pose
       0, 0, 1;
 }
 
-void SceneRenderer::Impl::readBack(const CameraSpec& camera, RawCameraImages& out) {
+void SceneRenderer::Impl::readBack(const CameraSpec& camera, RawCameraImages& out, bool color_only) {
   const auto found = targets.find(camera.name);
   if (found == targets.end() || !found->second.drawn || found->second.width != camera.width ||
       found->second.height != camera.height)
@@ -685,15 +690,17 @@ void SceneRenderer::Impl::readBack(const CameraSpec& camera, RawCameraImages& ou
   const int width = target.width, height = target.height;
   const std::size_t pixels = static_cast<std::size_t>(width) * height;
   out.rgba.resize(pixels * 4);
-  out.segment.resize(pixels);
-  out.depth.resize(pixels);
+  out.segment.resize(color_only ? 0 : pixels);
+  out.depth.resize(color_only ? 0 : pixels);
   glBindFramebuffer(GL_READ_FRAMEBUFFER, target.framebuffer);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   glReadBuffer(GL_COLOR_ATTACHMENT0);
   glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, out.rgba.data());
-  glReadBuffer(GL_COLOR_ATTACHMENT1);
-  glReadPixels(0, 0, width, height, GL_RED_INTEGER, GL_UNSIGNED_INT, out.segment.data());
-  glReadPixels(0, 0, width, height, GL_DEPTH_COMPONENT, GL_FLOAT, out.depth.data());
+  if (!color_only) {
+    glReadBuffer(GL_COLOR_ATTACHMENT1);
+    glReadPixels(0, 0, width, height, GL_RED_INTEGER, GL_UNSIGNED_INT, out.segment.data());
+    glReadPixels(0, 0, width, height, GL_DEPTH_COMPONENT, GL_FLOAT, out.depth.data());
+  }
   checkGlError("reading a camera back");
   out.camera = camera.name;
   out.width = width;

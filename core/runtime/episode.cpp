@@ -20,6 +20,7 @@ EpisodeResult runEpisode(Environment& env, PolicyInstance& policy, const std::st
   for (;;) {
     enter(EpisodePhase::PolicyAct, env.getElapsedSteps());
     policy.act(env.getObservation(), env.getElapsedSteps(), action, env.getVisualObservation());
+    if (hooks.perturb_action) hooks.perturb_action(action);
     enter(EpisodePhase::EnvStep, env.getElapsedSteps());
     const StepResult step = env.step(action);
     if (hooks.on_transition) hooks.on_transition(action, step);

@@ -56,7 +56,8 @@ VisualObservation Trajectory::getVisualObservation(uint32_t t) const {
       const std::size_t size = pixels * channels;
       out.assign(all.begin() + std::ptrdiff_t(t * size), all.begin() + std::ptrdiff_t((t + 1) * size));
     };
-    slice(image_rgb, 3 * std::size_t(camera_count), v.rgb);
+    if (!image_rgb.empty()) slice(image_rgb, 3 * std::size_t(camera_count), v.rgb);
+    if (!image_rgb_bytes.empty()) slice(image_rgb_bytes, 3 * std::size_t(camera_count), v.rgb_bytes);
     slice(depth, std::size_t(camera_count), v.depth);
     slice(image_masks, std::size_t(mask_count) * camera_count, v.masks);
   }
@@ -83,6 +84,7 @@ void Trajectory::addObservation(const Eigen::VectorXd& observation, const Visual
     append(point_masks, visual.points.masks);
   } else if (mode == ObservationMode::Rgbd) {
     append(image_rgb, visual.rgb);
+    append(image_rgb_bytes, visual.rgb_bytes);
     append(depth, visual.depth);
     append(image_masks, visual.masks);
   }
@@ -93,12 +95,15 @@ void Trajectory::addEnvState(const std::vector<uint8_t>& blob) {
   env_state_offsets.push_back(env_states.size());
 }
 
-void Trajectory::addStep(const Eigen::VectorXd& action, const StepResult& result) {
+void Trajectory::addStep(const Eigen::VectorXd& action, const StepResult& result,
+                         const Eigen::VectorXd* policy_action) {
   if (steps == 0) {
     action_dim = uint32_t(action.size());
     condition_count = uint32_t(result.flags.size());
   }
   actions.insert(actions.end(), action.data(), action.data() + action.size());
+  if (policy_action) policy_actions.insert(policy_actions.end(), policy_action->data(),
+                                           policy_action->data() + policy_action->size());
   rewards.push_back(result.reward);
   // Gymnasium's split: ended by the task (success, when episodes stop
   // there) or by the time limit.
@@ -122,6 +127,7 @@ void Trajectory::clearObservations() {
   point_rgb.clear();
   point_masks.clear();
   image_rgb.clear();
+  image_rgb_bytes.clear();
   depth.clear();
   image_masks.clear();
 }
@@ -137,8 +143,9 @@ void TrajectoryRecorder::onReset(const std::string& object_id, uint64_t level, u
   trajectory_.addEnvState(env_.saveState());
 }
 
-void TrajectoryRecorder::onStep(const Eigen::VectorXd& action, const StepResult& result) {
-  trajectory_.addStep(action, result);
+void TrajectoryRecorder::onStep(const Eigen::VectorXd& action, const StepResult& result,
+                                const Eigen::VectorXd* policy_action) {
+  trajectory_.addStep(action, result, policy_action);
   trajectory_.addObservation(env_.getObservation(), env_.getVisualObservation());
   trajectory_.addEnvState(env_.saveState());
 }

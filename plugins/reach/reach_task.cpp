@@ -117,6 +117,7 @@ void ReachTask::buildScene(SceneView& scene, const std::string& object_id) {
   root.position = kShoulder;
   scene.addGround(0.0);
   robot_ = scene.addUrdfString(makeArmUrdf(geometry_), "", "arm", root, /*fixed_base=*/true);
+  scene.addArticulationToMask(0, robot_);  // the "robot" mask of describe()
   tip_ = scene.findLink(robot_, "fingertip");
 }
 

@@ -20,7 +20,8 @@ import manibench
 
 
 def single(args):
-    env = manibench.make(args.task, obs_mode=args.obs, controller=args.controller)
+    env = manibench.make(args.task, obs_mode=args.obs, controller=args.controller,
+                         dtypes=args.dtypes)
     objects = env.list_objects("train")
     rng = np.random.default_rng(0)
     actions = rng.uniform(-1, 1, size=(args.steps, env.action_space.shape[0]))
@@ -46,7 +47,7 @@ def single(args):
 
 def vector(args):
     venv = manibench.make_vec(args.task, num_envs=args.num_envs, spin_wait=args.spin_wait,
-                              obs_mode=args.obs, controller=args.controller)
+                              obs_mode=args.obs, controller=args.controller, dtypes=args.dtypes)
     rng = np.random.default_rng(0)
     venv.reset(seed=0)
     batches = max(1, args.steps // args.num_envs)
@@ -68,6 +69,8 @@ def main():
     parser.add_argument("--obs", default="state")
     parser.add_argument("--controller", default=None)
     parser.add_argument("--policy", choices=["random", "zero"], default="random")
+    parser.add_argument("--dtypes", choices=["compact", "cpp"], default="compact",
+                        help="make()'s dtypes (cpp: float64 vectors, float rgb)")
     parser.add_argument("--num-envs", type=int, default=0, help="time make_vec(N) (0: one env)")
     parser.add_argument("--spin-wait", type=float, default=None,
                         help="make_vec's spin_wait in seconds (default: make_vec's)")

@@ -5,6 +5,9 @@
 //   file: path/to/solution.py   # defines the policy class
 //   class: UserPolicy           # optional: the class to use (default:
 //                               # UserPolicy, else the only class with act)
+//   dtypes: compact             # optional: compact (float32 vectors and
+//                               # uint8 rgbd rgb, as manibench.make's
+//                               # default) or cpp (float64, float rgb)
 //
 // The class follows ManiSkill's evaluation kit (supplement B.5): act(obs)
 // returns the action; reset() (or reset(seed)) is optional; __init__ takes
@@ -24,6 +27,7 @@
 
 #include <dlfcn.h>
 
+#include <cmath>
 #include <cstring>
 #include <string>
 
@@ -92,6 +96,11 @@ class PythonPolicy : public sdk::Policy {
   PythonPolicy(const sdk::Config& config, const sdk::PolicyContext& context)
       : mode_(context.observation_mode), action_dim_(context.action.dim) {
     const std::string file = config.get<std::string>("file", "");
+    const std::string dtypes = config.get<std::string>("dtypes", "compact");
+    if (dtypes != "compact" && dtypes != "cpp")
+      throw sdk::Error("the python policy's dtypes must be compact or cpp, got '" + dtypes + "'",
+                       MB_INVALID_ARGUMENT);
+    float32_ = dtypes == "compact";
     if (file.empty())
       throw sdk::Error("the python policy needs `file: path/to/solution.py` in its configuration",
                        MB_INVALID_ARGUMENT);
@@ -183,7 +192,8 @@ class PythonPolicy : public sdk::Policy {
   }
 
   py::object makeObservation(const sdk::Observation& o) const {
-    py::array_t<double> state = copyRows(o.state.data(), {py::ssize_t(o.state.size())});
+    py::array state = copyRows(o.state.data(), {py::ssize_t(o.state.size())});
+    if (float32_) state = state.attr("astype")("float32");
     if (mode_ == "pointcloud") {
       const py::ssize_t n = o.points_xyz.rows(), k = o.mask_count;
       py::dict out;
@@ -196,7 +206,15 @@ class PythonPolicy : public sdk::Policy {
     if (mode_ == "rgbd") {
       const py::ssize_t h = o.image_height, w = o.image_width, c = o.camera_count, k = o.mask_count;
       py::dict out;
-      out["rgb"] = copyRows(o.image_rgb.data(), {h, w, 3 * c});
+      if (float32_) {  // the bytes back: the floats are byte / 255.0f exactly
+        py::array_t<std::uint8_t> rgb({h, w, 3 * c});
+        std::uint8_t* dst = rgb.mutable_data();
+        for (py::ssize_t i = 0; i < rgb.size(); ++i)
+          dst[i] = std::uint8_t(std::lround(o.image_rgb.data()[i] * 255.0f));
+        out["rgb"] = rgb;
+      } else {
+        out["rgb"] = copyRows(o.image_rgb.data(), {h, w, 3 * c});
+      }
       out["depth"] = copyRows(o.image_depth.data(), {h, w, c});
       out["seg"] = copyMasks(o.image_masks.data(), {h, w, k * c});
       out["agent"] = state;
@@ -206,6 +224,7 @@ class PythonPolicy : public sdk::Policy {
   }
 
   std::string mode_;
+  bool float32_ = true;  // dtypes: compact
   uint32_t action_dim_ = 0;
   py::object policy_;
   std::size_t reset_parameters_ = 0;

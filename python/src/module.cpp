@@ -84,9 +84,20 @@ py::list toSegments(const std::vector<mb::SegmentDescription>& segments) {
   return out;
 }
 
+// The state vector (and the visual modes' agent vector) as a new numpy
+// array: float64 as the environment computes it, or rounded to float32
+// (make()'s dtypes="compact").
+py::array copyVector(const Eigen::VectorXd& v, bool float32) {
+  if (!float32) return copyArray(v.data(), {py::ssize_t(v.size())});
+  py::array_t<float> out(py::ssize_t(v.size()));
+  float* dst = out.mutable_data();
+  for (Eigen::Index i = 0; i < v.size(); ++i) dst[i] = float(v[i]);
+  return std::move(out);
+}
+
 // The observation's arrays in the environment's mode: the shape, dtype
 // and bounds of each, as the package's spaces are built from them.
-py::dict describeObservation(const mb::Environment& env) {
+py::dict describeObservation(const mb::Environment& env, bool float32) {
   const mb::TaskDescription& task = env.getTaskDescription();
   const mb::ObservationOptions& o = env.getOptions().observation;
   const double inf = std::numeric_limits<double>::infinity();
@@ -94,11 +105,12 @@ py::dict describeObservation(const mb::Environment& env) {
     return py::dict(py::arg("shape") = py::tuple(py::cast(shape)), py::arg("dtype") = dtype,
                     py::arg("low") = low, py::arg("high") = high);
   };
+  const char* vector = float32 ? "float32" : "float64";
   py::dict fields;
   const py::ssize_t masks = py::ssize_t(task.masks.size());
   switch (o.mode) {
     case mb::ObservationMode::State:
-      fields["state"] = field({py::ssize_t(task.observation_dim)}, "float64", -inf, inf);
+      fields["state"] = field({py::ssize_t(task.observation_dim)}, vector, -inf, inf);
       break;
     case mb::ObservationMode::PointCloud: {
       // Without padding the cloud may be smaller: total is its maximum.
@@ -106,17 +118,20 @@ py::dict describeObservation(const mb::Environment& env) {
       fields["xyz"] = field({n, 3}, "float32", -inf, inf);
       fields["rgb"] = field({n, 3}, "float32", 0, 1);
       fields["seg"] = field({n, masks}, "bool", 0, 1);
-      fields["agent"] = field({py::ssize_t(task.agent_state_dim)}, "float64", -inf, inf);
+      fields["agent"] = field({py::ssize_t(task.agent_state_dim)}, vector, -inf, inf);
       break;
     }
     case mb::ObservationMode::Rgbd: {
       const py::ssize_t c = py::ssize_t(o.cameras.size());
       const py::ssize_t h = c ? o.cameras.front().spec.height : 0;
       const py::ssize_t w = c ? o.cameras.front().spec.width : 0;
-      fields["rgb"] = field({h, w, 3 * c}, "float32", 0, 1);
+      if (o.rgb_dtype == mb::RgbDtype::Uint8)
+        fields["rgb"] = field({h, w, 3 * c}, "uint8", 0, 255);
+      else
+        fields["rgb"] = field({h, w, 3 * c}, "float32", 0, 1);
       fields["depth"] = field({h, w, c}, "float32", 0, inf);
       fields["seg"] = field({h, w, masks * c}, "bool", 0, 1);
-      fields["agent"] = field({py::ssize_t(task.agent_state_dim)}, "float64", -inf, inf);
+      fields["agent"] = field({py::ssize_t(task.agent_state_dim)}, vector, -inf, inf);
       break;
     }
   }
@@ -124,13 +139,16 @@ py::dict describeObservation(const mb::Environment& env) {
 }
 
 // An environment as the CLI configures it (apps/manibench/cli.cpp
-// makeEnvironment), with numpy in and out.
+// makeEnvironment), with numpy in and out. With `float32_vectors` the state
+// and agent vectors come out as float32 (actions of either dtype go in).
 class PyEnvironment {
  public:
   PyEnvironment(const std::string& environment_id, const std::vector<std::string>& config_files,
-                const std::vector<std::string>& overrides, bool stop_on_success)
+                const std::vector<std::string>& overrides, bool stop_on_success,
+                bool float32_vectors)
       : config_(mb::loadTaskConfig(updRegistry(), environment_id,
-                                   makeSources(config_files, overrides))) {
+                                   makeSources(config_files, overrides))),
+        float32_(float32_vectors) {
     mb::EnvironmentOptions options = mb::calcEnvironmentOptions(config_);
     options.stop_on_success = stop_on_success;
     try {
@@ -159,7 +177,8 @@ class PyEnvironment {
     env.reset(object_id, seed);
   }
 
-  // (reward, done, success, flags, values)
+  // (reward, terminated, truncated, success, flags, values): the step's
+  // StepResult, which decides terminated and truncated.
   py::tuple step(py::array_t<double, py::array::c_style | py::array::forcecast> action) {
     mb::Environment& env = upd();
     if (action.ndim() != 1)
@@ -182,8 +201,7 @@ class PyEnvironment {
   // visual modes. Each array is a fresh copy of the environment's buffers.
   py::object getObservation() const {
     const mb::Environment& env = get();
-    const Eigen::VectorXd& state = env.getObservation();
-    py::array_t<double> vector = copyArray(state.data(), {py::ssize_t(state.size())});
+    py::array vector = copyVector(env.getObservation(), float32_);
     const mb::VisualObservation& v = env.getVisualObservation();
     if (v.mode == mb::ObservationMode::State) return std::move(vector);
     py::dict out;
@@ -195,7 +213,10 @@ class PyEnvironment {
       out["seg"] = copyMasks(v.points.masks, {n, k});
     } else {
       const py::ssize_t h = v.height, w = v.width, c = v.camera_count;
-      out["rgb"] = copyArray(v.rgb.data(), {h, w, 3 * c});
+      if (v.rgb_bytes.empty())
+        out["rgb"] = copyArray(v.rgb.data(), {h, w, 3 * c});
+      else
+        out["rgb"] = copyArray(v.rgb_bytes.data(), {h, w, 3 * c});
       out["depth"] = copyArray(v.depth.data(), {h, w, c});
       out["seg"] = copyMasks(v.masks, {h, w, k * c});
     }
@@ -230,14 +251,14 @@ class PyEnvironment {
   // parent's Step commands from `slot` of `block` and answers each in the
   // block (the scalars, flags and values, the observation's fields in
   // describeObservation's order), without Python, until the parent posts
-  // ToPipe or a Step arrives for an episode that ended (the auto-reset,
-  // which the package does). An exception of a step leaves the loop as
-  // it would leave step(): the package sends it through the pipe.
-  // Terminated and truncated are the step's (StepResult);
-  // `max_episode_steps`, which the package passes, is the same limit and
-  // no longer read here.
-  ServeExit serveSteps(StepBlock& block, std::size_t slot, double spin_wait,
-                       int64_t /*max_episode_steps*/, int parent_pid) {
+  // ToPipe or a Step arrives for an episode that ended (the next-step
+  // auto-reset, which the package does) or, with `same_step`, a Step ends
+  // the episode (the package resets at once and answers on the pipe). An
+  // exception of a step leaves the loop as it would leave step(): the
+  // package sends it through the pipe. Terminated and truncated are the
+  // step's (StepResult).
+  ServeExit serveSteps(StepBlock& block, std::size_t slot, double spin_wait, int parent_pid,
+                       bool same_step) {
     mb::Environment& env = upd();
     const StepBlockLayout& layout = block.getLayout();
     if (slot >= layout.slot_count) throw std::out_of_range("no slot " + std::to_string(slot));
@@ -251,7 +272,8 @@ class PyEnvironment {
       if (command != StepCommand::Step) return ServeExit::ToPipe;
       if (header.needs_reset) return ServeExit::AutoReset;
       action_ = Eigen::Map<const Eigen::VectorXd>(block.updAction(slot), Eigen::Index(layout.action_dim));
-      const mb::StepResult r = env.step(action_);
+      last_step_ = env.step(action_);
+      const mb::StepResult& r = last_step_;
       header.reward = r.reward;
       header.success = r.success;
       header.terminated = r.terminated;
@@ -260,9 +282,20 @@ class PyEnvironment {
       header.needs_reset = header.terminated || header.truncated;
       std::memcpy(block.updFlags(slot), r.flags.data(), r.flags.size());
       std::memcpy(block.updValues(slot), r.values.data(), r.values.size() * sizeof(double));
+      if (same_step && header.needs_reset) return ServeExit::EpisodeEnded;
       writeObservation(block, slot);
       block.finish(slot, StepResultPlace::InBlock);
     }
+  }
+
+  // (reward, terminated, truncated, success, flags, values) of
+  // serve_steps' last step, as step() returns them.
+  py::tuple getLastStep() const {
+    py::list flags, values;
+    for (uint8_t f : last_step_.flags) flags.append(bool(f));
+    for (double v : last_step_.values) values.append(v);
+    return py::make_tuple(last_step_.reward, last_step_.terminated, last_step_.truncated,
+                          last_step_.success, flags, values);
   }
 
   py::bytes saveState() {
@@ -304,7 +337,7 @@ class PyEnvironment {
     d["observation_dim"] = task.observation_dim;
     d["observation_segments"] = toSegments(task.observation_segments);
     d["agent_state_dim"] = task.agent_state_dim;
-    d["observation"] = describeObservation(env);
+    d["observation"] = describeObservation(env, float32_);
     d["controller"] = controller.name;
     d["action_dim"] = controller.action_dim;
     d["action_segments"] = toSegments(controller.action_segments);
@@ -351,14 +384,26 @@ class PyEnvironment {
       put(v.points.rgb.data(), v.points.rgb.size() * sizeof(float));
       put(v.points.masks.data(), v.points.masks.size());
     } else if (v.mode == mb::ObservationMode::Rgbd) {
-      put(v.rgb.data(), v.rgb.size() * sizeof(float));
+      if (v.rgb_bytes.empty())
+        put(v.rgb.data(), v.rgb.size() * sizeof(float));
+      else
+        put(v.rgb_bytes.data(), v.rgb_bytes.size());
       put(v.depth.data(), v.depth.size() * sizeof(float));
       put(v.masks.data(), v.masks.size());
     }
-    put(state.data(), std::size_t(state.size()) * sizeof(double));
+    if (!float32_) {
+      put(state.data(), std::size_t(state.size()) * sizeof(double));
+      return;
+    }
+    vector32_.resize(std::size_t(state.size()));
+    for (Eigen::Index i = 0; i < state.size(); ++i) vector32_[std::size_t(i)] = float(state[i]);
+    put(vector32_.data(), vector32_.size() * sizeof(float));
   }
 
   mb::ConfigNode config_;
+  bool float32_;  // state and agent vectors as float32
+  std::vector<float> vector32_;  // writeObservation's float32 vector
+  mb::StepResult last_step_;     // serve_steps' last step
   std::unique_ptr<mb::Environment> env_;
   Eigen::VectorXd action_;
   mb::CameraImages frame_;
@@ -370,6 +415,7 @@ class PyEnvironment {
 void bindStepBlock(py::module_& m) {
   m.attr("SERVE_TO_PIPE") = int(ServeExit::ToPipe);
   m.attr("SERVE_AUTO_RESET") = int(ServeExit::AutoReset);
+  m.attr("SERVE_EPISODE_ENDED") = int(ServeExit::EpisodeEnded);
   auto layout = [](std::size_t slots, std::size_t action_dim, std::size_t conditions,
                    std::vector<std::size_t> field_bytes) {
     StepBlockLayout l;
@@ -557,9 +603,9 @@ PYBIND11_MODULE(_core, m) {
 
   py::class_<PyEnvironment>(m, "Environment")
       .def(py::init<const std::string&, const std::vector<std::string>&,
-                    const std::vector<std::string>&, bool>(),
+                    const std::vector<std::string>&, bool, bool>(),
            py::arg("environment_id"), py::arg("config_files"), py::arg("overrides"),
-           py::arg("stop_on_success"))
+           py::arg("stop_on_success"), py::arg("float32_vectors") = false)
       .def("reset", &PyEnvironment::reset, py::arg("object_id"), py::arg("seed"))
       .def("step", &PyEnvironment::step, py::arg("action"))
       .def("get_observation", &PyEnvironment::getObservation)
@@ -577,14 +623,15 @@ PYBIND11_MODULE(_core, m) {
       .def("close", &PyEnvironment::close)
       .def(
           "serve_steps",
-          [](PyEnvironment& e, StepBlock& block, std::size_t slot, double spin_wait,
-             int64_t max_episode_steps, int parent_pid) {
-            return int(e.serveSteps(block, slot, spin_wait, max_episode_steps, parent_pid));
-          },
-          py::arg("block"), py::arg("slot"), py::arg("spin_wait"), py::arg("max_episode_steps"),
-          py::arg("parent_pid"),
+          [](PyEnvironment& e, StepBlock& block, std::size_t slot, double spin_wait, int parent_pid,
+             bool same_step) { return int(e.serveSteps(block, slot, spin_wait, parent_pid, same_step)); },
+          py::arg("block"), py::arg("slot"), py::arg("spin_wait"), py::arg("parent_pid"),
+          py::arg("same_step") = false,
           "make_vec's worker loop: answers the block's steps until the parent posts ToPipe "
-          "(returns SERVE_TO_PIPE) or an ended episode gets a step (SERVE_AUTO_RESET).");
+          "(returns SERVE_TO_PIPE), an ended episode gets a step (SERVE_AUTO_RESET) or, with "
+          "same_step, a step ends the episode (SERVE_EPISODE_ENDED).")
+      .def("get_last_step", &PyEnvironment::getLastStep,
+           "(reward, terminated, truncated, success, flags, values) of serve_steps' last step.");
 
   bindStepBlock(m);
 }

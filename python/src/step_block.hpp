@@ -50,6 +50,8 @@ enum class StepResultPlace : uint32_t {
 enum class ServeExit : uint32_t {
   ToPipe = 2,     // the parent posted ToPipe
   AutoReset = 3,  // a Step arrived for an episode that ended
+  EpisodeEnded = 4,  // (same-step auto-reset) this Step ended the episode: the
+                     // header holds its scalars, the slot is not finished
 };
 
 struct alignas(64) StepSlotHeader {

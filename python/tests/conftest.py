@@ -15,6 +15,21 @@ def assert_same_obs(a, b):
     assert a.tobytes() == b.tobytes()
 
 
+def assert_same_info(a, b):
+    """Equal vector info dicts: the same keys, arrays of the same dtype,
+    shape and values (byte for byte; object arrays element by element)."""
+    assert a.keys() == b.keys()
+    for key in a:
+        if isinstance(a[key], dict):
+            assert_same_info(a[key], b[key])
+            continue
+        assert a[key].dtype == b[key].dtype and a[key].shape == b[key].shape, key
+        if a[key].dtype == object:
+            assert list(a[key]) == list(b[key]), key
+        else:
+            assert a[key].tobytes() == b[key].tobytes(), key
+
+
 @pytest.fixture
 def actions():
     """A fixed sequence of Reach-v0 actions (2 joints), in [-1, 1]."""

@@ -38,7 +38,8 @@ def test_python_replays_the_cli_trajectories_bit_for_bit(task, policy, controlle
                    check=True, capture_output=True)
     sidecar = json.loads((tmp_path / "demos.json").read_text())
     assert len(sidecar["episodes"]) == 2
-    with manibench.make(task, controller=controller) as env:
+    # dtypes="cpp": the C++ program's float64 vectors, byte for byte.
+    with manibench.make(task, controller=controller, dtypes="cpp") as env:
         dim, adim = env.observation_space.shape[0], env.action_space.shape[0]
         for episode in sidecar["episodes"]:
             name, steps = episode["name"], episode["elapsed_steps"]

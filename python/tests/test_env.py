@@ -51,7 +51,7 @@ def test_spaces():
     env = manibench.make("Reach-v0")
     try:
         a = env.action_space
-        assert a.shape == (2,) and a.dtype == np.float64
+        assert a.shape == (2,) and a.dtype == np.float32
         assert np.all(a.low == -1) and np.all(a.high == 1)
         a.seed(3)
         first = a.sample()
@@ -59,7 +59,7 @@ def test_spaces():
         assert np.array_equal(first, a.sample())
         assert a.contains(first) and not a.contains(first * 3) and not a.contains(first[:1])
         o = env.observation_space
-        assert o.shape == (env.description["observation_dim"],) and o.dtype == np.float64
+        assert o.shape == (env.description["observation_dim"],) and o.dtype == np.float32
     finally:
         env.close()
 
@@ -67,7 +67,7 @@ def test_spaces():
 def test_reset_and_step_state():
     with manibench.make("Reach-v0") as env:
         obs, info = env.reset(seed=3)
-        assert isinstance(obs, np.ndarray) and obs.dtype == np.float64
+        assert isinstance(obs, np.ndarray) and obs.dtype == np.float32
         assert obs.shape == env.observation_space.shape
         assert info["seed"] == 3 and info["object_id"] in env.list_objects("train")
         obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
@@ -76,10 +76,48 @@ def test_reset_and_step_state():
         assert terminated is False and truncated is False
         assert list(info["eval_info"]) == env.success_conditions
         assert info["elapsed_steps"] == 1 and info["success"] is False
+        assert info["is_success"] is False  # Stable-Baselines3's name for it
         # The observation is a copy: the next step does not change it.
         kept = obs.copy()
         env.step(np.zeros(2))
         assert np.array_equal(obs, kept)
+
+
+def test_dtypes_compact_rounds_the_cpp_vectors_to_float32(actions):
+    with manibench.make("Reach-v0", obs_mode="pointcloud") as compact, \
+            manibench.make("Reach-v0", obs_mode="pointcloud", dtypes="cpp") as cpp:
+        assert compact.observation_space["agent"].dtype == np.float32
+        assert cpp.observation_space["agent"].dtype == np.float64
+        assert compact.action_space.dtype == np.float32 and cpp.action_space.dtype == np.float64
+        a, _ = compact.reset(seed=2)
+        b, _ = cpp.reset(seed=2)
+        for action in actions[:3]:
+            # The same trajectory: float32 actions are float64 actions exactly.
+            assert a["agent"].tobytes() == b["agent"].astype(np.float32).tobytes()
+            assert a["xyz"].tobytes() == b["xyz"].tobytes()
+            a = compact.step(action.astype(np.float32))[0]
+            b = cpp.step(action.astype(np.float32).astype(np.float64))[0]
+        assert a["agent"].tobytes() == b["agent"].astype(np.float32).tobytes()
+    with pytest.raises(ValueError, match="dtypes"):
+        manibench.make("Reach-v0", dtypes="float16")
+
+
+def test_compact_rgbd_rgb_is_the_cpp_rgb_as_bytes():
+    with manibench.make("Reach-v0", obs_mode="rgbd") as compact, \
+            manibench.make("Reach-v0", obs_mode="rgbd", dtypes="cpp") as cpp:
+        space = compact.observation_space["rgb"]
+        assert space.dtype == np.uint8 and space.low.max() == 0 and space.high.min() == 255
+        assert cpp.observation_space["rgb"].dtype == np.float32
+        a, _ = compact.reset(seed=4)
+        b, _ = cpp.reset(seed=4)
+        assert a["rgb"].dtype == np.uint8 and b["rgb"].dtype == np.float32
+        assert np.array_equal(a["rgb"].astype(np.float32) / np.float32(255), b["rgb"])
+        assert a["depth"].tobytes() == b["depth"].tobytes()
+        assert a["seg"].tobytes() == b["seg"].tobytes()
+    # cpp keeps the configuration's: observation.rgb_dtype chooses there.
+    with manibench.make("Reach-v0", obs_mode="rgbd", dtypes="cpp",
+                        overrides={"observation.rgb_dtype": "uint8"}) as env:
+        assert env.reset(seed=4)[0]["rgb"].tobytes() == a["rgb"].tobytes()
 
 
 def test_reset_options_and_fixed_object_ids():
@@ -117,7 +155,10 @@ def test_visual_observations_match_their_space(mode):
             # Something was seen (Reach's "robot" mask is declared, never filled).
             seen = obs["xyz"].any(axis=1) if mode == "pointcloud" else obs["depth"] > 0
             assert seen.sum() > 100
-            assert 0 <= obs["rgb"].min() and obs["rgb"].max() <= 1
+            if mode == "pointcloud":  # per-point features: floats in [0, 1]
+                assert obs["rgb"].dtype == np.float32 and obs["rgb"].max() <= 1
+            else:  # an image: bytes (dtypes="compact")
+                assert obs["rgb"].dtype == np.uint8 and obs["rgb"].max() > 1
             obs = env.step(env.action_space.sample())[0]
 
 

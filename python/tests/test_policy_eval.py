@@ -27,8 +27,12 @@ class UserPolicy:
     def act(self, obs):
         if "{mode}" == "pointcloud":
             assert obs["xyz"].shape == (1200, 3) and obs["seg"].dtype == bool
+            assert obs["agent"].dtype == np.float32  # as manibench.make gives them
+        elif "{mode}" == "rgbd":
+            assert obs["rgb"].dtype == np.uint8 and obs["rgb"].shape == (240, 320, 3)
+            assert obs["rgb"].max() > 1 and obs["agent"].dtype == np.float32
         else:
-            assert obs.shape == (15,)
+            assert obs.shape == (15,) and obs.dtype == np.float32
         return self.rng.uniform(-1, 1, self.dim)
 """
 
@@ -68,7 +72,7 @@ def evaluate(tmp_path, source, *extra):
     return summary, episodes
 
 
-@pytest.mark.parametrize("mode", ["state", "pointcloud"])
+@pytest.mark.parametrize("mode", ["state", "pointcloud", "rgbd"])
 def test_a_python_random_policy_is_evaluated(tmp_path, mode):
     summary, episodes = evaluate(tmp_path, RANDOM_POLICY.format(mode=mode), "--obs", mode)
     assert summary["episodes_run"] == 8 and summary["complete"]
@@ -102,6 +106,23 @@ def test_python_policy_errors_name_the_file(tmp_path):
     missing = subprocess.run([BINARY, "eval", "Reach-v0", "--policy", str(tmp_path / "none.py")],
                              capture_output=True, text=True)
     assert missing.returncode != 0 and "none.py" in missing.stderr
+
+
+def test_python_policy_dtypes_cpp_gives_the_float64_vectors(tmp_path):
+    policy = tmp_path / "solution.py"
+    policy.write_text("import numpy as np\n\nclass UserPolicy:\n    def act(self, obs):\n"
+                      "        assert obs.dtype == np.float64, obs.dtype\n"
+                      "        return np.zeros(2)\n")
+    for dtypes, failures in (("cpp", {}), ("compact", {"policy_error": 1})):
+        config = tmp_path / f"{dtypes}.yaml"
+        config.write_text(f"file: {policy}\ndtypes: {dtypes}\n")
+        out = tmp_path / dtypes
+        run = subprocess.run([BINARY, "eval", "Reach-v0", "--policy", "python", "--policy-config",
+                              str(config), "--objects", "8", "--episodes-per-object", "1",
+                              "--workers", "1", "--no-progress", "--out", str(out)],
+                             capture_output=True, text=True)
+        assert run.returncode == 0, run.stdout + run.stderr
+        assert json.loads((out / "summary.json").read_text())["failures"] == failures, dtypes
 
 
 # Misbehaves ({what}) on object 8 only (told apart by its link lengths,

@@ -27,7 +27,7 @@ def test_observations_match_spaces_and_info(task, mode):
         for o in (obs, step[0]):
             if mode == "state":
                 assert o.shape == space.shape == (info["observation_dim"],)
-                assert o.dtype == space.dtype == np.float64
+                assert o.dtype == space.dtype == np.float32  # dtypes="compact"
                 continue
             assert set(o) == set(space.keys()) == set(info["observation"])
             for key, value in o.items():

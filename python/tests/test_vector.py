@@ -12,18 +12,7 @@ import numpy as np
 import pytest
 
 import manibench
-from conftest import assert_same_obs
-
-
-def assert_same_info(a, b):
-    """Equal info dicts: the same keys, arrays of the same dtype and values."""
-    assert a.keys() == b.keys()
-    for key in a:
-        if isinstance(a[key], dict):
-            assert_same_info(a[key], b[key])
-        else:
-            assert a[key].dtype == b[key].dtype, key
-            assert list(a[key]) == list(b[key]), key
+from conftest import assert_same_info, assert_same_obs
 
 
 def sequential_reference(seed, actions, **make_kwargs):
@@ -60,7 +49,7 @@ def test_vector_env_matches_sequential_envs_with_auto_reset():
         dim = venv.single_observation_space.shape[0]
         assert venv.observation_space.shape == (2, dim)
         obs, info = venv.reset(seed=20)
-        assert obs.shape == (2, dim) and obs.dtype == np.float64
+        assert obs.shape == (2, dim) and obs.dtype == np.float32
         assert list(info["seed"]) == [20, 21]
         rows = [(obs, np.zeros(2), np.zeros(2, bool), np.zeros(2, bool), info)]
         for t in range(actions.shape[0]):
@@ -79,8 +68,8 @@ def test_vector_env_matches_sequential_envs_with_auto_reset():
             assert rewards[i] == e_reward
             assert terminated[i] == e_terminated and truncated[i] == e_truncated
         if t > 0:  # the batched info is gymnasium's stacking of the envs' infos
-            assert_same_info(info, manibench.vector._stack_infos(
-                [expected[0][t][4], expected[1][t][4]]))
+            assert_same_info(info, manibench.vector.stack_infos(
+                2, {0: expected[0][t][4], 1: expected[1][t][4]}))
     # The two environments ran different episodes (seeds 20 and 21).
     assert not np.array_equal(rows[1][0][0], rows[1][0][1])
 
@@ -247,3 +236,28 @@ def test_bad_actions_and_blocks_are_errors_that_say_what():
             manibench._core.StepBlock.attach(block.name, 1, 2, 0, [4096])
     finally:
         block.unlink_name()
+
+
+def test_a_script_without_a_main_guard_can_make_vec_after_rendering(tmp_path):
+    # After render() the workers are not forked (an EGL context does not
+    # survive fork); they are fresh interpreters that import manibench and
+    # not this script, so the script needs no `if __name__ == "__main__":`.
+    script = tmp_path / "no_guard.py"
+    script.write_text(textwrap.dedent("""
+        import numpy as np
+        import manibench
+        env = manibench.make("Reach-v0", render_size=(32, 32))
+        env.reset(seed=0)
+        env.render()
+        venv = manibench.make_vec("Reach-v0", num_envs=2)
+        obs, _ = venv.reset(seed=0)
+        obs, *_ = venv.step(np.zeros((2, 2)))
+        print("context", venv.context, "obs", obs.shape)
+        venv.close()
+    """))
+    package_root = os.path.dirname(os.path.dirname(os.path.abspath(manibench.__file__)))
+    result = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                            timeout=300, cwd=tmp_path,
+                            env=dict(os.environ, PYTHONPATH=package_root))
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.count("context spawn obs (2,") == 1  # the script ran once

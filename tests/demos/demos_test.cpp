@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <cstdlib>
 #include <fstream>
@@ -217,6 +219,44 @@ TEST_F(ReachDemos, BadFilesAreClearErrors) {
 
 // The commands as a user runs them: generate, info, replay --check,
 // convert in two workers, the converted set replayed, a video, h5ls.
+// --action-noise: the executed actions carry the noise (replay is exact),
+// the policy's own are kept beside them, and the same seeds give the same
+// noise.
+TEST(DemoCommands, ActionNoiseKeepsThePolicysActionsAndReplaysExactly) {
+  using testing::runCli;
+  const auto dir = testing::makeDemoDir("noise");
+  const std::string a = (dir / "a.h5").string(), b = (dir / "b.h5").string(), plain = (dir / "plain.h5").string();
+  for (const std::string& file : {a, b}) {
+    const auto r = runCli({"demos", "generate", "Reach-v0", "--policy", "reach_expert", "--objects", "0,1",
+                           "--per-object", "2", "--workers", "2", "--action-noise", "0.05", "--out", file});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  const auto r = runCli({"demos", "generate", "Reach-v0", "--policy", "reach_expert", "--objects", "0,1",
+                         "--per-object", "2", "--out", plain});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  DemoReader noisy(a), again(b), clean(plain);
+  for (const std::string& name : noisy.getTrajectoryNames()) {
+    const Trajectory t = noisy.read(name), u = again.read(name);
+    ASSERT_EQ(t.policy_actions.size(), t.actions.size()) << name;
+    EXPECT_FALSE(sameBits(t.policy_actions, t.actions)) << name;
+    double largest = 0;
+    for (std::size_t i = 0; i < t.actions.size(); ++i)
+      largest = std::max(largest, std::abs(t.actions[i] - t.policy_actions[i]));
+    EXPECT_GT(largest, 0.05) << name;  // dozens of draws of N(0, 0.05^2)
+    EXPECT_TRUE(sameBits(t.actions, u.actions)) << name;
+    EXPECT_TRUE(sameBits(t.policy_actions, u.policy_actions)) << name;
+  }
+  EXPECT_TRUE(clean.read("traj_0").policy_actions.empty());
+  const auto replayed = runCli({"demos", "replay", a, "--check"});
+  EXPECT_EQ(replayed.exit_code, 0) << replayed.out << replayed.err;
+  expectMentions(replayed.out, {"4 trajectories: 4 bit-identical, 0 differ"});
+  const auto bad = runCli({"demos", "generate", "Reach-v0", "--policy", "reach_expert", "--action-noise", "-1",
+                           "--out", (dir / "bad.h5").string()});
+  EXPECT_EQ(bad.exit_code, 2);
+  expectMentions(bad.err, {"--action-noise needs a non-negative number"});
+  std::filesystem::remove_all(dir);
+}
+
 TEST(DemoCommands, GenerateInfoReplayConvertAndVideo) {
   using testing::runCli;
   const auto dir = testing::makeDemoDir("cli");
@@ -240,6 +280,22 @@ TEST(DemoCommands, GenerateInfoReplayConvertAndVideo) {
   EXPECT_EQ(cloud_replayed.exit_code, 0) << cloud_replayed.out;
   expectMentions(cloud_replayed.out, {"2 trajectories: 2 bit-identical"});
   EXPECT_FALSE(std::filesystem::exists(cloud + ".part0"));  // the workers' parts are gone
+
+  // Images with observation.rgb_dtype uint8: stored as bytes, replayed exactly.
+  const std::string images = (dir / "reach_rgbd.h5").string();
+  const auto to_rgbd = runCli({"demos", "convert", file, "--obs", "rgbd", "--set",
+                               "observation.rgb_dtype=uint8", "--out", images, "--workers", "1"});
+  ASSERT_EQ(to_rgbd.exit_code, 0) << to_rgbd.out << to_rgbd.err;
+  const auto images_replayed = runCli({"demos", "replay", images, "--check", "--trajectories", "traj_2"});
+  EXPECT_EQ(images_replayed.exit_code, 0) << images_replayed.out;
+  expectMentions(images_replayed.out, {"1 trajectories: 1 bit-identical"});
+  {
+    DemoReader reader(images);
+    const Trajectory t = reader.read("traj_2");
+    EXPECT_TRUE(t.image_rgb.empty());
+    EXPECT_EQ(t.image_rgb_bytes.size(),
+              std::size_t(t.getObservationCount()) * t.height * t.width * 3 * t.camera_count);
+  }
 
   const std::string videos = (dir / "videos").string();
   const auto video = runCli({"demos", "replay", file, "--trajectories", "traj_1", "--video", videos,

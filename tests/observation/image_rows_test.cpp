@@ -116,6 +116,33 @@ TEST(ImageRows, RgbIsEachByteOver255InEveryVariant) {
       }
 }
 
+TEST(ImageRows, RgbBytesAreTheRendererBytes) {
+  std::mt19937 random(5);
+  const std::uint8_t kCanary = 0xA5;
+  for (std::size_t width : kWidths)
+    for (std::size_t stride : {std::size_t(3), std::size_t(9)})
+      for (bool pad : {false, true}) {
+        SCOPED_TRACE("width " + std::to_string(width) + " stride " + std::to_string(stride) +
+                     (pad ? " pad" : ""));
+        const Row row = makeRow(width, random);
+        std::vector<std::uint8_t> rgb(stride * width + 4, kCanary);
+        image_rows::copyRgbRow(row.rgba.data(), width, rgb.data(), stride, pad);
+        for (std::size_t col = 0; col < width; ++col) {
+          for (std::size_t i = 0; i < 3; ++i)
+            ASSERT_EQ(rgb[stride * col + i], row.rgba[4 * col + i]) << "column " << col;
+          // The fourth byte: written only with pad, or where the next
+          // pixel's red follows (stride 3) and is written after.
+          if (!pad && stride > 3) {
+            ASSERT_EQ(rgb[stride * col + 3], kCanary) << "column " << col;
+          }
+          for (std::size_t i = 4; i < stride; ++i) ASSERT_EQ(rgb[stride * col + i], kCanary);
+        }
+        if (!pad) {
+          ASSERT_EQ(rgb[stride * width], kCanary) << "nothing past the row";
+        }
+      }
+}
+
 TEST(ImageRows, DepthIsTheLinearDepthOfHitPixelsInEveryVariant) {
   std::mt19937 random(2);
   const double near = 0.01, far = 10.0;

@@ -331,6 +331,42 @@ TEST(ObservationModes, RgbdStacksCamerasAlongChannels) {
               1e-9);
 }
 
+// observation.rgb_dtype uint8: the renderer's bytes where the float32 layout
+// has byte / 255.0f, everything else the same; policies still see floats.
+TEST(ObservationModes, RgbdRgbAsBytesIsTheFloatLayoutTimes255) {
+  Environment floats(getRegistry(), "RobotTestbed-v0", makeOptions({"observation.mode=rgbd"}));
+  Environment bytes(getRegistry(), "RobotTestbed-v0",
+                    makeOptions({"observation.mode=rgbd", "observation.rgb_dtype=uint8"}));
+  ASSERT_EQ(bytes.getOptions().observation.rgb_dtype, RgbDtype::Uint8);
+  floats.reset("0", 2);
+  bytes.reset("0", 2);
+  const VisualObservation& f = floats.getVisualObservation();
+  const VisualObservation& b = bytes.getVisualObservation();
+  EXPECT_TRUE(f.rgb_bytes.empty() && b.rgb.empty());
+  ASSERT_EQ(b.rgb_bytes.size(), f.rgb.size());
+  std::size_t lit = 0;
+  for (std::size_t i = 0; i < f.rgb.size(); ++i) {
+    ASSERT_EQ(float(b.rgb_bytes[i]) / 255.0f, f.rgb[i]) << "value " << i;
+    lit += b.rgb_bytes[i] > 0;
+  }
+  EXPECT_GT(lit, f.rgb.size() / 2);
+  EXPECT_EQ(b.depth, f.depth);
+  EXPECT_EQ(b.masks, f.masks);
+  // A policy gets the float layout's values (mb_observation.image_rgb is float).
+  std::vector<float> converted;
+  const mb_observation view =
+      makeObservationView(bytes.getObservation(), 0, b, converted);
+  ASSERT_EQ(view.image_rgb, converted.data());
+  EXPECT_EQ(converted, f.rgb);
+  EXPECT_EQ(makeObservationView(floats.getObservation(), 0, f, converted).image_rgb, f.rgb.data());
+  // And a whole episode of a plugin policy runs with it.
+  EnvironmentOptions options =
+      makeOptions({"observation.mode=rgbd", "observation.rgb_dtype=uint8", "episode.max_steps=2"});
+  Environment env(getRegistry(), "RobotTestbed-v0", options);
+  PolicyInstance random(getRegistry(), "random", "", env.calcPolicyLayout());
+  EXPECT_EQ(runEpisode(env, random, "0", 4).steps, 2u);
+}
+
 // Several masks (the cabinet's handle, target link and robot): each pixel's
 // mask bytes are its visual's bits, in the masks' order.
 TEST(ObservationModes, RgbdMaskBytesAreTheVisualsMaskBits) {

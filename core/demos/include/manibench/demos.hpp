@@ -68,7 +68,9 @@ class DemoReader {
   const DemoFileInfo& getInfo() const;
   // traj_0, traj_1, ... in order.
   const std::vector<std::string>& getTrajectoryNames() const;
-  Trajectory read(const std::string& name) const;
+  // Without `with_env_states`, the environment states (most of a state-mode
+  // file) are not read: what learning needs is the rest.
+  Trajectory read(const std::string& name, bool with_env_states = true) const;
   // The attributes only (object, level, seed, steps, success, reward).
   Trajectory readSummary(const std::string& name) const;
   // Bytes the trajectory's datasets take in the file.

@@ -109,6 +109,11 @@ struct EvaluationOptions {
   // Workers record every episode (observations, actions, a state per step)
   // and send back the successful ones in their EpisodeRecord (demos).
   bool record_successes = false;
+  // Gaussian noise of this standard deviation added to every action the
+  // policy gives before it is executed (0: none), drawn from the episode's
+  // seed; recorded trajectories keep the policy's own actions beside the
+  // executed ones (demos generate --action-noise).
+  double action_noise = 0;
 };
 
 // What a worker reports after setting up: the task as configured.

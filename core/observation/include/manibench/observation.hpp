@@ -32,6 +32,7 @@ struct ObservationOptions {
   // or the stacked images (see VisualObservation). Only these two modes
   // create a renderer (and so touch EGL), lazily.
   ObservationMode mode = ObservationMode::State;
+  RgbDtype rgb_dtype = RgbDtype::Float32;  // Rgbd's rgb (VisualObservation)
   std::vector<CameraMount> cameras;  // names unique; Rgbd: all of one size
   LightingSpec lighting;
   PointCloudSampling pointcloud;

@@ -223,6 +223,9 @@ class SceneRenderer {
   // needed), unconverted. readBack() of a camera never drawn throws.
   void draw(const CameraSpec& camera, const Pose& camera_pose_world);
   void readBack(const CameraSpec& camera, RawCameraImages& out);
+  // readBack() of the colour alone (`out`'s segment and depth are left
+  // empty): what a window showing the image needs.
+  void readBackColor(const CameraSpec& camera, RawCameraImages& out);
 
   void setLighting(const LightingSpec& lighting);
   const LightingSpec& getLighting() const;

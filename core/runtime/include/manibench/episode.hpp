@@ -42,8 +42,13 @@ struct EpisodeHooks {
   // After the environment's reset, before the policy's (a recorder takes
   // the first observation and state here). May be empty.
   std::function<void()> on_reset;
-  // After each env step and before on_step, with the action the policy gave
-  // (as given: unclipped). May be empty.
+  // Between the policy's act and the env step: may change the action that
+  // is executed (exploration noise injected into a scripted expert's
+  // actions while the clean ones are recorded, say). May be empty.
+  std::function<void(Eigen::VectorXd& action)> perturb_action;
+  // After each env step and before on_step, with the action executed (as
+  // the policy gave it, or as perturb_action left it: unclipped). May be
+  // empty.
   std::function<void(const Eigen::VectorXd& action, const StepResult& step)> on_transition;
   // After each env step, with that step and the episode so far; returning
   // false ends the episode after this step (a step budget). May be empty.

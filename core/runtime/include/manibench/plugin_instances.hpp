@@ -118,6 +118,11 @@ class ControllerInstance {
 // `visual` (which must outlive it); the visual fields of visual.mode only.
 mb_observation makeObservationView(const Eigen::VectorXd& state, uint32_t step,
                                    const VisualObservation& visual);
+// As above, and rgb bytes (observation.rgb_dtype uint8) converted into
+// `rgb_floats` (byte / 255.0f: the float32 layout's values) for
+// mb_observation.image_rgb, which is float.
+mb_observation makeObservationView(const Eigen::VectorXd& state, uint32_t step,
+                                   const VisualObservation& visual, std::vector<float>& rgb_floats);
 
 struct PolicyLayout {
   std::string task_name;
@@ -140,7 +145,8 @@ class PolicyInstance {
   const std::string& getLibraryPath() const { return library_path_; }
   void reset(uint64_t seed);
   // Writes the raw action; validation is the environment's job. `visual`
-  // fills the ABI 1.1 fields of its mode (none in State).
+  // fills the ABI 1.1 fields of its mode (none in State); rgb as bytes
+  // reaches the policy as the float32 layout's floats (makeObservationView).
   void act(const Eigen::VectorXd& observation, uint32_t step, Eigen::VectorXd& action,
            const VisualObservation& visual = VisualObservation());
 
@@ -150,6 +156,7 @@ class PolicyInstance {
   std::string name_;
   std::string library_path_;
   uint32_t action_dim_ = 0;
+  std::vector<float> rgb_floats_;  // act(): rgb bytes as floats for the ABI
 };
 
 }  // namespace manibench

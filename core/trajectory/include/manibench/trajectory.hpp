@@ -37,6 +37,9 @@ struct Trajectory {
 
   uint32_t action_dim = 0, condition_count = 0;
   std::vector<double> actions;  // T x action_dim, as the policy gave them (unclipped)
+  // T x action_dim: the policy's own actions where noise was added to the
+  // executed ones (demos generate --action-noise); empty otherwise.
+  std::vector<double> policy_actions;
   std::vector<double> rewards;  // T
   std::vector<uint8_t> terminated, truncated, success_flags;  // T: success, time limit, `success`
   std::vector<uint8_t> conditions;  // T x condition_count: each success condition's flag
@@ -45,7 +48,8 @@ struct Trajectory {
   // modes: the agent's part). Point clouds: point_counts[t] points each (the
   // same for every t unless the sampling does not pad), concatenated, rgb
   // in [0, 1]. Images: cameras stacked along the channels as
-  // VisualObservation.
+  // VisualObservation, rgb as floats (image_rgb) or bytes (image_rgb_bytes,
+  // observation.rgb_dtype uint8).
   ObservationMode mode = ObservationMode::State;
   uint32_t state_dim = 0;
   std::vector<double> state;
@@ -55,7 +59,7 @@ struct Trajectory {
   std::vector<uint8_t> point_masks;
   uint32_t camera_count = 0, height = 0, width = 0;
   std::vector<float> image_rgb, depth;
-  std::vector<uint8_t> image_masks;
+  std::vector<uint8_t> image_rgb_bytes, image_masks;
 
   // Environment::saveState() of the reset and of every step: T + 1 blobs,
   // blob t is env_states[env_state_offsets[t], env_state_offsets[t + 1]).
@@ -73,7 +77,10 @@ struct Trajectory {
   // Recording (what TrajectoryRecorder does).
   void addObservation(const Eigen::VectorXd& state, const VisualObservation& visual);
   void addEnvState(const std::vector<uint8_t>& blob);
-  void addStep(const Eigen::VectorXd& action, const StepResult& result);
+  // `policy_action`: what the policy gave when noise changed the executed
+  // `action` (nullptr: the same).
+  void addStep(const Eigen::VectorXd& action, const StepResult& result,
+               const Eigen::VectorXd* policy_action = nullptr);
   // Drops every observation (before convertTrajectory records others).
   void clearObservations();
 };
@@ -84,7 +91,8 @@ class TrajectoryRecorder {
  public:
   explicit TrajectoryRecorder(Environment& env) : env_(env) {}
   void onReset(const std::string& object_id, uint64_t level, uint64_t seed);
-  void onStep(const Eigen::VectorXd& action, const StepResult& result);
+  void onStep(const Eigen::VectorXd& action, const StepResult& result,
+              const Eigen::VectorXd* policy_action = nullptr);
   Trajectory& get() { return trajectory_; }
   Trajectory take() { return std::move(trajectory_); }
 

@@ -1,0 +1,267 @@
+#!/usr/bin/env python3
+"""Training speed of the learning module's networks beside the same networks
+in python3-torch (Debian's, on the same libtorch 1.13 and OpenBLAS).
+
+Runs manibench_learning_bench (C++) and this file's PyTorch twin of each
+network alternately, `--pairs` times, and prints iterations per second
+(BC updates: forward, MSE, backward, Adam) and the latency of one action.
+The twins are the networks of learning/src/networks.cpp written the direct
+way, as ManiSkill-Learn writes them (every PointNet sees every point, the
+state concatenated to each point): the same parameters, the same outputs
+up to rounding. `--definition` runs the C++ side that way too.
+
+  python3 bench/learning_speed.py --cxx build/bin/manibench_learning_bench
+"""
+import argparse
+import os
+import subprocess
+import sys
+import time
+
+
+def parse():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--cxx", default="build/bin/manibench_learning_bench")
+    p.add_argument("--nets", default="mlp:1024,mlp:128,pointnet:128,pn_transformer:128",
+                   help="net:batch pairs")
+    p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--seconds", type=float, default=20)
+    p.add_argument("--pairs", type=int, default=3)
+    p.add_argument("--definition", action="store_true", help="the C++ side without its fast PointNet")
+    p.add_argument("--python-only", action="store_true", help=argparse.SUPPRESS)
+    p.add_argument("--net", help=argparse.SUPPRESS)
+    p.add_argument("--batch", type=int, help=argparse.SUPPRESS)
+    return p.parse_args()
+
+
+def run_python(net, batch, threads, seconds):
+    """One measurement in this process (called in a child, see main)."""
+    import torch
+    from torch import nn
+    torch.set_num_threads(threads)
+    torch.manual_seed(0)
+
+    def linear(i, o):
+        layer = nn.Linear(i, o)
+        nn.init.xavier_uniform_(layer.weight)
+        nn.init.zeros_(layer.bias)
+        return layer
+
+    class Mlp(nn.Module):
+        def __init__(self, i, layers, activate_last):
+            super().__init__()
+            self.layers = nn.ModuleList()
+            for o in layers:
+                self.layers.append(linear(i, o))
+                i = o
+            self.activate_last = activate_last
+
+        def forward(self, x):
+            for k, layer in enumerate(self.layers):
+                x = layer(x)
+                if k + 1 < len(self.layers) or self.activate_last:
+                    x = torch.relu(x)
+            return x
+
+    def pool(f, mask):
+        half = f.shape[-1] // 2
+        m = mask.unsqueeze(-1)
+        count = mask.sum(1, keepdim=True)
+        mx = f[..., :half].masked_fill(m == 0, float("-inf")).amax(1)
+        mx = torch.where(count > 0, mx, torch.zeros_like(mx))
+        mean = (f[..., half:] * m).sum(1) / count.clamp(min=1)
+        return torch.cat([mx, mean], -1)
+
+    class PointNet(nn.Module):
+        def __init__(self, masks, state, layers, activate_last):
+            super().__init__()
+            self.mlp = Mlp(3 + 3 + masks + 3 + state, layers, activate_last)
+
+        def forward(self, xyz, rgb, seg, state, mask):
+            m = mask.unsqueeze(-1)
+            mean = (xyz * m).sum(1, keepdim=True) / m.sum(1, keepdim=True).clamp(min=1)
+            f = torch.cat([xyz - mean, rgb, seg, mean.expand_as(xyz),
+                           state.unsqueeze(1).expand(-1, xyz.shape[1], -1)], -1)
+            return pool(self.mlp(f), mask)
+
+    class Attention(nn.Module):
+        def __init__(self, w, heads, d, dropout):
+            super().__init__()
+            self.q, self.k, self.v = linear(w, heads * d), linear(w, heads * d), linear(w, heads * d)
+            self.out = linear(heads * d, w)
+            self.heads, self.d = heads, d
+            self.dropout = nn.Dropout(dropout)
+
+        def forward(self, x, mask):
+            b, t, _ = x.shape
+            split = lambda y: y.view(b, t, self.heads, self.d).transpose(1, 2)
+            q, k, v = split(self.q(x)), split(self.k(x)), split(self.v(x))
+            s = (q @ k.transpose(-2, -1)) / self.d ** 0.5
+            s = s.masked_fill(mask.unsqueeze(1) == 0, float("-inf"))
+            a = self.dropout(torch.softmax(s, -1))
+            return self.out((a @ v).transpose(1, 2).reshape(b, t, -1))
+
+    class Block(nn.Module):
+        def __init__(self, w=256, heads=4, d=32, ff=1024, dropout=0.1):
+            super().__init__()
+            self.attention = Attention(w, heads, d, dropout)
+            self.mlp = Mlp(w, [ff, w], False)
+            self.norm1, self.norm2 = nn.LayerNorm(w), nn.LayerNorm(w)
+            self.dropout = nn.Dropout(dropout)
+
+        def forward(self, x, mask):
+            x = self.norm1(x + self.attention(x, mask))
+            return self.norm2(x + self.dropout(self.mlp(x)))
+
+    class Pooling(nn.Module):
+        def __init__(self, w=256, heads=4, d=32):
+            super().__init__()
+            self.query = nn.Parameter(torch.empty(heads, d))
+            nn.init.xavier_normal_(self.query)
+            self.k, self.v, self.out = linear(w, heads * d), linear(w, heads * d), linear(heads * d, w)
+            self.heads, self.d = heads, d
+
+        def forward(self, x, mask):
+            b, t, _ = x.shape
+            k = self.k(x).view(b, t, self.heads, self.d)
+            v = self.v(x).view(b, t, self.heads, self.d)
+            s = (k * self.query).sum(-1) / self.d ** 0.5
+            s = s.masked_fill(mask.unsqueeze(-1) == 0, float("-inf"))
+            w = torch.softmax(s, 1).unsqueeze(-1)
+            return self.out((w * v).sum(1).reshape(b, -1))
+
+    class PnTransformer(nn.Module):
+        def __init__(self, masks, state, out, w=256, layers=6):
+            super().__init__()
+            self.masks = masks
+            self.pointnets = nn.ModuleList([PointNet(masks, state, [w, w], False) for _ in range(masks + 2)])
+            self.globals = nn.ModuleList([Mlp(w, [w, w], False) for _ in range(masks + 2)])
+            self.state_mlp = Mlp(state, [w, w], False)
+            self.task = nn.Parameter(torch.empty(1, 1, w))
+            nn.init.xavier_normal_(self.task)
+            self.blocks = nn.ModuleList([Block(w) for _ in range(layers)])
+            self.pooling = Pooling(w)
+            self.head = Mlp(w, [128, out], False)
+
+        def forward(self, obs):
+            b = obs["state"].shape[0]
+            valid, seg = obs["valid"], obs["seg"]
+            some = (seg.sum(-1) > 0.5).float()
+            masks = [valid * (1 - some)] + [seg[..., j] * valid for j in range(self.masks)] + [valid]
+            tokens = [self.state_mlp(obs["state"])]
+            present = [torch.ones(b)]
+            for i, m in enumerate(masks):
+                tokens.append(self.globals[i](self.pointnets[i](obs["xyz"], obs["rgb"], seg, obs["state"], m)))
+                present.append((m.sum(1) > 0).float())
+            x = torch.cat([self.task.expand(b, 1, -1), torch.stack(tokens, 1)], 1)
+            p = torch.stack(present, 1)
+            mask = p.unsqueeze(2) * p.unsqueeze(1)
+            mask = torch.cat([torch.ones(b, 1, mask.shape[2]), mask], 1)
+            mask = torch.cat([torch.ones(b, mask.shape[1], 1), mask], 2)
+            for block in self.blocks:
+                x = block(x, mask)
+            return self.head(self.pooling(x, mask[:, -1]))
+
+    class VanillaPointNet(nn.Module):
+        def __init__(self, masks, state, out):
+            super().__init__()
+            self.pointnet = PointNet(masks, state, [256, 512], True)
+            self.head = Mlp(512, [256, out], False)
+
+        def forward(self, obs):
+            return self.head(self.pointnet(obs["xyz"], obs["rgb"], obs["seg"], obs["state"], obs["valid"]))
+
+    class StateMlp(nn.Module):
+        def __init__(self, state, out):
+            super().__init__()
+            self.mlp = Mlp(state, [256, 256, 256, out], False)
+
+        def forward(self, obs):
+            return self.mlp(obs["state"])
+
+    def make_batch(cloud, n):
+        obs = {"state": torch.randn(n, 51 if cloud else 80)}
+        if cloud:
+            obs["xyz"], obs["rgb"] = torch.rand(n, 1200, 3), torch.rand(n, 1200, 3)
+            seg = torch.zeros(n, 1200, 3)
+            seg[:, 0:100, 0] = 1
+            seg[:, 0:400, 1] = 1
+            seg[:, 400:800, 2] = 1
+            obs["seg"], obs["valid"] = seg, torch.ones(n, 1200)
+        return obs
+
+    cloud = net != "mlp"
+    model = {"mlp": lambda: StateMlp(80, 11), "pointnet": lambda: VanillaPointNet(3, 51, 11),
+             "pn_transformer": lambda: PnTransformer(3, 51, 11)}[net]()
+    optimizer = torch.optim.Adam(model.parameters(), lr=3e-4, weight_decay=5e-6)
+    obs, actions = make_batch(cloud, batch), torch.rand(batch, 11) * 2 - 1
+
+    def update():
+        model.train()
+        loss = torch.nn.functional.mse_loss(model(obs), actions)
+        optimizer.zero_grad()
+        loss.backward()
+        optimizer.step()
+        return loss.item()
+
+    for _ in range(2):
+        update()
+    iterations, start = 0, time.perf_counter()
+    while time.perf_counter() - start < seconds or iterations < 3:
+        update()
+        iterations += 1
+    elapsed = time.perf_counter() - start
+    one = make_batch(cloud, 1)
+    model.eval()
+    with torch.no_grad():
+        for _ in range(3):
+            model(one)
+        acts, act_start = 0, time.perf_counter()
+        while time.perf_counter() - act_start < min(5.0, seconds) or acts < 10:
+            model(one)
+            acts += 1
+        act_elapsed = time.perf_counter() - act_start
+    parameters = sum(p.numel() for p in model.parameters())
+    print(f"python3-torch {net} batch {batch} threads {threads}: {iterations / elapsed:.3f} it/s "
+          f"({iterations} iterations in {elapsed:.1f} s), act {1e3 * act_elapsed / acts:.3f} ms, "
+          f"{parameters} parameters")
+
+
+def measure(command, env):
+    out = subprocess.run(command, env=env, check=True, capture_output=True, text=True).stdout.strip()
+    rate = float(out.split(": ")[1].split(" it/s")[0])
+    act = float(out.split("act ")[1].split(" ms")[0])
+    return rate, act, out
+
+
+def main():
+    args = parse()
+    if args.python_only:
+        run_python(args.net, args.batch, args.threads, args.seconds)
+        return
+    env = dict(os.environ, OPENBLAS_NUM_THREADS=str(args.threads), OMP_NUM_THREADS=str(args.threads))
+    rows = []
+    for spec in args.nets.split(","):
+        net, batch = spec.split(":")
+        cxx = [args.cxx, "--net", net, "--batch", batch, "--threads", str(args.threads),
+               "--seconds", str(args.seconds)] + (["--definition"] if args.definition else [])
+        py = [sys.executable, __file__, "--python-only", "--net", net, "--batch", batch,
+              "--threads", str(args.threads), "--seconds", str(args.seconds)]
+        results = {"manibench": [], "python3-torch": []}
+        for pair in range(args.pairs):
+            for name, command in (("manibench", cxx), ("python3-torch", py)):
+                rate, act, line = measure(command, env)
+                results[name].append((rate, act))
+                print(line, flush=True)
+        rows.append((net, batch, results))
+    print(f"\n{'network':16} {'batch':>5} {'manibench it/s':>15} {'python3-torch it/s':>19} {'ratio':>6} "
+          f"{'act ms (mb / py)':>17}")
+    for net, batch, r in rows:
+        med = lambda xs: sorted(xs)[len(xs) // 2]
+        a, b = med([x[0] for x in r["manibench"]]), med([x[0] for x in r["python3-torch"]])
+        la, lb = med([x[1] for x in r["manibench"]]), med([x[1] for x in r["python3-torch"]])
+        print(f"{net:16} {batch:>5} {a:15.2f} {b:19.2f} {a / b:6.2f} {la:8.2f} / {lb:6.2f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,112 @@
+// The training loop of `manibench train`: demonstrations in, checkpoints,
+// a loss log and (through a hook) success rates out, in one directory:
+//
+//   DIR/train.yaml            the options (what --resume DIR reads back)
+//   DIR/log.csv               iteration, seconds, each loss (averaged since the previous row), it/s
+//   DIR/eval.csv              iteration, split, episodes, successes, success_rate
+//   DIR/checkpoints/iter_N.pt every --checkpoint-every iterations, at the end and on a stop
+//   DIR/policy.yaml           `checkpoint: <the newest>`: what --policy-config takes
+//   DIR/environment.yaml      the demonstrations' environment configuration (--config takes it)
+//   DIR/eval/iter_N/          each evaluation's results (manibench eval --out)
+//
+// Same seed, same data, same options, one thread: the same weights bit for
+// bit; a resumed run continues as if it had never stopped.
+#pragma once
+
+#include <manibench/learning/algorithms.hpp>
+#include <manibench/learning/dataset.hpp>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace manibench {
+class PluginRegistry;
+}
+
+namespace manibench::learning {
+
+struct TrainOptions {
+  std::string out_dir;
+  AlgorithmOptions algorithm = AlgorithmOptions::makeDefaults("bc");
+  NetOptions network;
+  // network.kind was not chosen: mlp for state demonstrations,
+  // pn_transformer for point clouds.
+  bool pick_network = false;
+  DatasetOptions data;
+  int64_t iterations = 10000;  // gradient steps in all
+  uint64_t seed = 0;
+  int threads = 1;
+  std::string device = "cpu";
+  int64_t checkpoint_every = 1000;
+  int64_t log_every = 100;
+  bool normalize_state = false;  // (s - mean) / std per feature, from the demonstrations
+  // Success of the current policy every eval_every iterations (0: never),
+  // through TrainHooks::evaluate.
+  int64_t eval_every = 0;
+  std::string eval_task;  // a task or fixed-object id (default: the demonstrations' environment)
+  std::string eval_split = "train";
+  std::vector<std::string> eval_objects;  // empty: the split's
+  uint32_t eval_episodes = 10;            // per object
+  // The evaluation's base seed: not 0, the default of `demos generate`, so
+  // that the episodes are not the demonstrations' own.
+  uint64_t eval_seed = 1000;
+  unsigned eval_workers = 1;
+  std::string command;  // how it was started, for train.yaml
+
+  void writeYaml(YAML::Node& node) const;
+  static TrainOptions readYaml(const YAML::Node& node);
+};
+
+struct TrainProgress {
+  int64_t iteration = 0;  // done
+  int64_t total = 0;
+  std::vector<std::string> loss_names;
+  std::vector<double> losses;  // the last iteration's
+  double elapsed = 0;          // s, this run
+  double iterations_per_second = 0;
+};
+
+struct EvaluationOutcome {
+  uint32_t episodes = 0, successes = 0;
+  double success_rate = 0;
+};
+
+// What to evaluate: the newest checkpoint's policy configuration, on the
+// demonstrations' environment (their configuration file, written into the
+// training's directory as environment.yaml) unless the options name another.
+struct EvaluationRequest {
+  const TrainOptions* options = nullptr;
+  std::string environment_id;      // the demonstrations' (a task or fixed-object id)
+  std::string environment_config;  // DIR/environment.yaml
+  std::string policy_config;       // DIR/policy.yaml
+  std::string out_dir;             // DIR/eval/iter_N
+  int64_t iteration = 0;
+};
+
+struct TrainHooks {
+  std::function<void(const std::string&)> on_message;       // lines for the user (may be empty)
+  std::function<void(const TrainProgress&)> on_progress;    // after each iteration (may be empty)
+  std::function<bool()> should_stop;                        // polled every iteration (may be empty)
+  // Runs the evaluation the request describes; may be empty.
+  std::function<EvaluationOutcome(const EvaluationRequest&)> evaluate;
+};
+
+struct TrainResult {
+  int64_t iteration = 0;  // reached
+  bool interrupted = false;
+  std::string checkpoint;  // the newest
+  double seconds = 0;
+};
+
+// Starts a training in options.out_dir (which must not hold one already).
+TrainResult train(const PluginRegistry& registry, const TrainOptions& options, const TrainHooks& hooks);
+// Continues the training in `dir` from its newest checkpoint, up to
+// `iterations` (0: as train.yaml says).
+TrainResult resumeTraining(const PluginRegistry& registry, const std::string& dir, int64_t iterations,
+                           const TrainHooks& hooks);
+
+// The newest checkpoint in DIR/checkpoints ("" if none).
+std::string findNewestCheckpoint(const std::string& dir);
+
+}  // namespace manibench::learning

@@ -1,0 +1,92 @@
+// libmanibench_learning_runtime: the half of the torch_policy plugin that
+// links libtorch (torch_policy.cpp opens it on first use). Turns the SDK's
+// observation into the networks' batch and runs an InferencePolicy.
+#include <manibench/learning/inference.hpp>
+#include <manibench/learning/runtime_entry.hpp>
+#include <manibench/sdk.hpp>
+
+#include <cstring>
+
+namespace manibench::learning {
+
+namespace {
+
+namespace sdk = manibench::sdk;
+
+std::vector<SpecSegment> toSegments(const sdk::Layout& layout) {
+  std::vector<SpecSegment> out;
+  for (const sdk::SegmentInfo& s : layout.segments) out.push_back({s.name, s.offset, s.size});
+  return out;
+}
+
+ObservationSpec makeHostSpec(const sdk::PolicyContext& context) {
+  ObservationSpec spec;
+  spec.task = context.task_name;
+  spec.mode = context.observation_mode;
+  spec.state_dim = context.observation.dim;
+  spec.state_segments = toSegments(context.observation);
+  spec.action_dim = context.action.dim;
+  spec.action_segments = toSegments(context.action);
+  return spec;
+}
+
+ObservationBatch makeBatch(const sdk::Observation& o) {
+  ObservationBatch b;
+  b.state = torch::empty({1, int64_t(o.state.size())}, torch::kFloat32);
+  float* state = b.state.data_ptr<float>();
+  for (Eigen::Index i = 0; i < o.state.size(); ++i) state[i] = float(o.state[i]);
+  if (o.points_xyz.rows() > 0) {
+    const int64_t n = o.points_xyz.rows(), k = o.mask_count;
+    b.xyz = torch::from_blob(const_cast<float*>(o.points_xyz.data()), {1, n, 3}, torch::kFloat32).clone();
+    b.rgb = torch::from_blob(const_cast<float*>(o.points_rgb.data()), {1, n, 3}, torch::kFloat32).clone();
+    torch::Tensor seg = torch::zeros({1, n, k}, torch::kUInt8);
+    if (k > 0 && o.points_mask.rows() == n)
+      std::memcpy(seg.data_ptr<uint8_t>(), o.points_mask.data(), std::size_t(n * k));
+    b.valid = calcValidPoints(b.xyz, b.rgb, seg);
+    b.seg = seg.to(torch::kFloat32);
+  }
+  return b;
+}
+
+class TorchPolicy : public sdk::Policy {
+ public:
+  TorchPolicy(const sdk::Config& config, const sdk::PolicyContext& context) {
+    config.requireKnownKeys({"checkpoint", "torchscript", "device", "threads"}, "torch_policy");
+    InferenceOptions options;
+    options.checkpoint = config.get<std::string>("checkpoint", "");
+    options.torchscript = config.get<std::string>("torchscript", "");
+    options.device = config.get<std::string>("device", "cpu");
+    options.threads = config.get<int>("threads", 1);
+    policy_ = loadInferencePolicy(options, makeHostSpec(context));
+    action_dim_ = context.action.dim;
+  }
+  void reset(uint64_t seed) override { policy_->reset(seed); }
+  Eigen::VectorXd act(const sdk::Observation& o) override {
+    const torch::Tensor action = policy_->act(makeBatch(o)).contiguous();
+    Eigen::VectorXd out(action.size(0));
+    const float* a = action.data_ptr<float>();
+    for (Eigen::Index i = 0; i < out.size(); ++i) out[i] = double(a[i]);
+    return out;
+  }
+
+ private:
+  std::unique_ptr<InferencePolicy> policy_;
+  uint32_t action_dim_ = 0;
+};
+
+}  // namespace
+
+}  // namespace manibench::learning
+
+extern "C" manibench::sdk::Policy* manibench_learning_make_policy(const char* config_yaml,
+                                                                  const manibench::sdk::PolicyContext* context,
+                                                                  char* error, std::size_t error_size) {
+  try {
+    return new manibench::learning::TorchPolicy(manibench::sdk::Config(config_yaml), *context);
+  } catch (const c10::Error& e) {
+    std::snprintf(error, error_size, "%s", e.what_without_backtrace());
+  } catch (const std::exception& e) {
+    std::snprintf(error, error_size, "%s", e.what());
+  }
+  return nullptr;
+}

@@ -1,0 +1,363 @@
+#include <manibench/learning/checkpoint.hpp>
+#include <manibench/learning/compute.hpp>
+#include <manibench/learning/trainer.hpp>
+
+#include <manibench/evaluation.hpp>
+
+#include <yaml-cpp/yaml.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+namespace manibench::learning {
+
+namespace fs = std::filesystem;
+
+// --- options ------------------------------------------------------------------------------
+
+void TrainOptions::writeYaml(YAML::Node& node) const {
+  node["out_dir"] = out_dir;
+  YAML::Node a, n, d, e;
+  algorithm.writeYaml(a);
+  network.writeYaml(n);
+  node["algorithm"] = a;
+  node["network"] = n;
+  d["paths"] = data.paths;
+  d["objects"] = data.objects;
+  d["per_object"] = data.per_object;
+  d["cache_bytes"] = data.cache_bytes;
+  d["executed_actions"] = data.executed_actions;
+  node["data"] = d;
+  node["iterations"] = iterations;
+  node["seed"] = seed;
+  node["threads"] = threads;
+  node["device"] = device;
+  node["checkpoint_every"] = checkpoint_every;
+  node["log_every"] = log_every;
+  node["normalize_state"] = normalize_state;
+  e["every"] = eval_every;
+  e["task"] = eval_task;
+  e["split"] = eval_split;
+  e["objects"] = eval_objects;
+  e["episodes"] = eval_episodes;
+  e["seed"] = eval_seed;
+  e["workers"] = eval_workers;
+  node["evaluation"] = e;
+  node["command"] = command;
+}
+
+TrainOptions TrainOptions::readYaml(const YAML::Node& node) {
+  TrainOptions o;
+  o.out_dir = node["out_dir"].as<std::string>();
+  o.algorithm = AlgorithmOptions::readYaml(node["algorithm"]);
+  o.network = NetOptions::readYaml(node["network"]);
+  const YAML::Node d = node["data"];
+  o.data.paths = d["paths"].as<std::vector<std::string>>();
+  o.data.objects = d["objects"].as<std::vector<std::string>>(std::vector<std::string>());
+  o.data.per_object = d["per_object"].as<uint32_t>();
+  o.data.cache_bytes = d["cache_bytes"].as<uint64_t>();
+  o.data.executed_actions = d["executed_actions"].as<bool>(false);
+  o.iterations = node["iterations"].as<int64_t>();
+  o.seed = node["seed"].as<uint64_t>();
+  o.threads = node["threads"].as<int>();
+  o.device = node["device"].as<std::string>();
+  o.checkpoint_every = node["checkpoint_every"].as<int64_t>();
+  o.log_every = node["log_every"].as<int64_t>();
+  o.normalize_state = node["normalize_state"].as<bool>();
+  const YAML::Node e = node["evaluation"];
+  o.eval_every = e["every"].as<int64_t>();
+  o.eval_task = e["task"].as<std::string>();
+  o.eval_split = e["split"].as<std::string>();
+  o.eval_objects = e["objects"].as<std::vector<std::string>>(std::vector<std::string>());
+  o.eval_episodes = e["episodes"].as<uint32_t>();
+  o.eval_seed = e["seed"].as<uint64_t>(1000);
+  o.eval_workers = e["workers"].as<unsigned>();
+  o.command = node["command"].as<std::string>("");
+  return o;
+}
+
+// --- the loop -----------------------------------------------------------------------------
+
+namespace {
+
+std::string yamlText(const YAML::Node& node) {
+  YAML::Emitter out;
+  out << node;
+  return std::string(out.c_str()) + "\n";
+}
+
+void writeText(const fs::path& path, const std::string& text) {
+  const fs::path temporary = path.string() + ".tmp";
+  {
+    std::ofstream out(temporary);
+    out << text;
+    if (!out) throw LearningError("cannot write '" + path.string() + "'");
+  }
+  fs::rename(temporary, path);
+}
+
+std::string checkpointName(int64_t iteration) {
+  std::ostringstream name;
+  name << "iter_" << std::setw(7) << std::setfill('0') << iteration << ".pt";
+  return name.str();
+}
+
+std::string formatNumber(double value) {
+  std::ostringstream out;
+  out << std::setprecision(9) << value;
+  return out.str();
+}
+
+// Keeps the CSV's header and the rows of iterations up to `iteration`
+// (a resumed run rewrites what came after its checkpoint).
+void truncateCsv(const fs::path& path, int64_t iteration) {
+  std::ifstream in(path);
+  if (!in) return;
+  std::string line, kept;
+  bool header = true;
+  while (std::getline(in, line)) {
+    if (header || std::stoll(line.substr(0, line.find(','))) <= iteration) kept += line + "\n";
+    header = false;
+  }
+  in.close();
+  writeText(path, kept);
+}
+
+class Trainer {
+ public:
+  Trainer(const PluginRegistry& registry, const TrainOptions& options, const TrainHooks& hooks)
+      : options_(options), hooks_(hooks), dir_(options.out_dir), device_(parseDevice(options.device)) {
+    setComputeThreads(options.threads);
+    say(describeCompute(calcComputeInfo(), device_));
+    dataset_ = std::make_unique<DemoDataset>(options.data);
+    spec_ = calcDemoSpec(registry, *dataset_);
+    if (options_.pick_network) {
+      options_.network.kind = spec_.isPointCloud() ? NetKind::PnTransformer : NetKind::Mlp;
+      options_.pick_network = false;
+    }
+    say("demonstrations: " + std::to_string(dataset_->getTrajectories().size()) + " trajectories, " +
+        std::to_string(dataset_->getTransitionCount()) + " transitions, " +
+        std::to_string(dataset_->calcTotalBytes() >> 20) + " MiB as tensors (" +
+        (dataset_->isStreamed() ? "streamed: more than the cache of " : "cached in memory; cache ") +
+        std::to_string(options.data.cache_bytes >> 20) + " MiB); " + spec_.describe());
+  }
+
+  TrainResult start() {
+    if (fs::exists(dir_ / "train.yaml"))
+      throw LearningError("'" + dir_.string() + "' holds a training already: continue it with --resume " +
+                          dir_.string() + ", or choose another --out");
+    fs::create_directories(dir_ / "checkpoints");
+    YAML::Node node;
+    options_.writeYaml(node);
+    writeText(dir_ / "train.yaml", yamlText(node));
+    writeText(dir_ / "environment.yaml", dataset_->getInfo().config);
+    torch::manual_seed(options_.seed);
+    algorithm_ = makeAlgorithm(options_.algorithm, options_.network, spec_, device_);
+    if (options_.normalize_state) {
+      auto [mean, std] = dataset_->calcStateStatistics();
+      torch::Tensor scale = torch::where(std > 1e-6, 1.0 / std, torch::ones_like(std));
+      // Every stacked observation alike; actions and the step as they are.
+      const int64_t rest = calcInputStateDim(options_.network, spec_) - options_.network.history * spec_.state_dim;
+      mean = torch::cat({mean.repeat({options_.network.history}), torch::zeros({rest})});
+      scale = torch::cat({scale.repeat({options_.network.history}), torch::ones({rest})});
+      algorithm_->setStateNormalization(mean.to(device_), scale.to(device_));
+    }
+    sampler_ = std::make_unique<BatchSampler>(*dataset_, options_.algorithm.batch_size, options_.seed,
+                                              algorithm_->needsNextObservations(), options_.network);
+    for (const auto& [name, network] : algorithm_->getNetworks())
+      say("network " + name + ": " + toString(options_.network.kind) + ", " +
+          std::to_string(countParameters(*network)) + " parameters");
+    writeCsvHeaders();
+    return run(0);
+  }
+
+  TrainResult resume(int64_t iterations) {
+    const std::string newest = findNewestCheckpoint(dir_.string());
+    if (newest.empty()) throw LearningError("'" + dir_.string() + "' has no checkpoint to resume from");
+    LoadedCheckpoint loaded = loadCheckpoint(newest, device_, true, {"torch_generator", "sampler", "log_row"});
+    loaded.info.spec.checkSame(spec_, "the checkpoint '" + newest + "'", "the demonstrations");
+    algorithm_ = std::move(loaded.algorithm);
+    if (iterations > 0) options_.iterations = iterations;
+    YAML::Node node;
+    options_.writeYaml(node);
+    writeText(dir_ / "train.yaml", yamlText(node));
+    at::Generator generator = at::detail::getDefaultCPUGenerator();  // shares the default's state
+    generator.set_state(loaded.extras.at("torch_generator"));
+    sampler_ = std::make_unique<BatchSampler>(*dataset_, options_.algorithm.batch_size, options_.seed,
+                                              algorithm_->needsNextObservations(), options_.network);
+    const torch::Tensor s = loaded.extras.at("sampler");
+    sampler_->setPosition({uint64_t(s[0].item<int64_t>()), s[1].item<int64_t>(), s[2].item<int64_t>()});
+    log_row_ = loaded.extras.at("log_row");
+    truncateCsv(dir_ / "log.csv", loaded.info.iteration);
+    truncateCsv(dir_ / "eval.csv", loaded.info.iteration);
+    say("resuming from " + newest + " (iteration " + std::to_string(loaded.info.iteration) + ")");
+    return run(loaded.info.iteration);
+  }
+
+ private:
+  void say(const std::string& line) {
+    if (hooks_.on_message) hooks_.on_message(line);
+  }
+
+  void writeCsvHeaders() {
+    std::ofstream log(dir_ / "log.csv");
+    log << "iteration,seconds";
+    for (const std::string& name : algorithm_->getLossNames()) log << "," << name;
+    log << ",iterations_per_second\n";
+    std::ofstream eval(dir_ / "eval.csv");
+    eval << "iteration,split,episodes,successes,success_rate\n";
+  }
+
+  std::string saveCheckpointAt(int64_t iteration) {
+    CheckpointInfo info;
+    info.iteration = iteration;
+    info.algorithm = options_.algorithm;
+    info.network = options_.network;
+    info.spec = spec_;
+    info.manibench_version = getManibenchVersion();
+    YAML::Node node;
+    options_.writeYaml(node);
+    info.training_yaml = yamlText(node);
+    const BatchSampler::Position p = sampler_->getPosition();
+    const torch::Tensor sampler = torch::tensor({int64_t(p.epoch_seed), p.epoch, p.batch}, torch::kInt64);
+    const fs::path path = fs::absolute(dir_ / "checkpoints" / checkpointName(iteration));
+    saveCheckpoint(path.string(), info, *algorithm_,
+                   {{"torch_generator", at::detail::getDefaultCPUGenerator().get_state()},
+                    {"sampler", sampler},
+                    {"log_row", log_row_}});
+    writeText(dir_ / "policy.yaml", "# manibench eval TASK --policy torch_policy --policy-config " +
+                                        (dir_ / "policy.yaml").string() + "\ncheckpoint: '" + path.string() + "'\n");
+    last_checkpoint_ = path.string();
+    return last_checkpoint_;
+  }
+
+  void evaluate(int64_t iteration) {
+    if (!hooks_.evaluate) return;
+    EvaluationRequest request;
+    request.options = &options_;
+    request.environment_id = dataset_->getInfo().environment_id;
+    request.environment_config = fs::absolute(dir_ / "environment.yaml").string();
+    request.policy_config = fs::absolute(dir_ / "policy.yaml").string();
+    request.out_dir = fs::absolute(dir_ / "eval" / ("iter_" + std::to_string(iteration))).string();
+    request.iteration = iteration;
+    const EvaluationOutcome outcome = hooks_.evaluate(request);
+    std::ofstream eval(dir_ / "eval.csv", std::ios::app);
+    eval << iteration << "," << options_.eval_split << "," << outcome.episodes << "," << outcome.successes << ","
+         << formatNumber(outcome.success_rate) << "\n";
+    say("iteration " + std::to_string(iteration) + ": success " + std::to_string(outcome.successes) + "/" +
+        std::to_string(outcome.episodes) + " on the " + options_.eval_split + " objects");
+  }
+
+  TrainResult run(int64_t first) {
+    using clock = std::chrono::steady_clock;
+    const auto started = clock::now();
+    const std::vector<std::string> names = algorithm_->getLossNames();
+    // The log row in progress: its iteration count, then each loss's sum
+    // (in checkpoints, so a resumed run's rows equal an uninterrupted one's).
+    if (!log_row_.defined()) log_row_ = torch::zeros({int64_t(names.size()) + 1}, torch::kFloat64);
+    double* row = log_row_.data_ptr<double>();
+    auto row_started = clock::now();
+    std::ofstream log(dir_ / "log.csv", std::ios::app);
+    TrainResult result;
+    int64_t iteration = first;
+    while (iteration < options_.iterations) {
+      if (hooks_.should_stop && hooks_.should_stop()) {
+        result.interrupted = true;
+        break;
+      }
+      const TransitionBatch batch = sampler_->next().to(device_);
+      const std::vector<double> losses = algorithm_->update(batch, iteration);
+      for (std::size_t i = 0; i < losses.size(); ++i) {
+        if (!std::isfinite(losses[i]))
+          throw LearningError("iteration " + std::to_string(iteration + 1) + ": the " + names[i] + " is " +
+                              formatNumber(losses[i]) + "; training stopped (" +
+                              (last_checkpoint_.empty() ? std::string("no checkpoint was written")
+                                                        : "the newest checkpoint, " + last_checkpoint_ + ", is intact") +
+                              "): try a lower --lr, --normalize-state, or check the demonstrations");
+        row[i + 1] += losses[i];
+      }
+      ++iteration;
+      row[0] += 1;
+      const double elapsed = std::chrono::duration<double>(clock::now() - started).count();
+      if (hooks_.on_progress)
+        hooks_.on_progress({iteration, options_.iterations, names, losses, elapsed,
+                            double(iteration - first) / std::max(elapsed, 1e-9)});
+      if (iteration % options_.log_every == 0 || iteration == options_.iterations) {
+        const double row_seconds = std::chrono::duration<double>(clock::now() - row_started).count();
+        log << iteration << "," << formatNumber(elapsed);
+        for (std::size_t i = 0; i < names.size(); ++i) log << "," << formatNumber(row[i + 1] / row[0]);
+        log << "," << formatNumber(row[0] / std::max(row_seconds, 1e-9)) << "\n" << std::flush;
+        log_row_.zero_();
+        row_started = clock::now();
+      }
+      const bool checkpoint = iteration % options_.checkpoint_every == 0 || iteration == options_.iterations;
+      const bool evaluation = options_.eval_every > 0 &&
+                              (iteration % options_.eval_every == 0 || iteration == options_.iterations);
+      if (checkpoint || evaluation) saveCheckpointAt(iteration);
+      if (evaluation) evaluate(iteration);
+    }
+    if (result.interrupted && iteration > first && !fs::exists(dir_ / "checkpoints" / checkpointName(iteration)))
+      saveCheckpointAt(iteration);
+    result.iteration = iteration;
+    result.checkpoint = last_checkpoint_.empty() ? findNewestCheckpoint(dir_.string()) : last_checkpoint_;
+    result.seconds = std::chrono::duration<double>(clock::now() - started).count();
+    return result;
+  }
+
+  TrainOptions options_;
+  TrainHooks hooks_;
+  fs::path dir_;
+  torch::Device device_;
+  std::unique_ptr<DemoDataset> dataset_;
+  ObservationSpec spec_;
+  std::unique_ptr<Algorithm> algorithm_;
+  std::unique_ptr<BatchSampler> sampler_;
+  torch::Tensor log_row_;
+  std::string last_checkpoint_;
+};
+
+}  // namespace
+
+std::string findNewestCheckpoint(const std::string& dir) {
+  const fs::path folder = fs::path(dir) / "checkpoints";
+  std::string newest;
+  if (!fs::is_directory(folder)) return newest;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("iter_", 0) == 0 && entry.path().extension() == ".pt" &&
+        (newest.empty() || name > fs::path(newest).filename().string()))
+      newest = entry.path().string();
+  }
+  return newest;
+}
+
+TrainResult train(const PluginRegistry& registry, const TrainOptions& options, const TrainHooks& hooks) {
+  if (options.out_dir.empty()) throw LearningError("no output directory (--out DIR)");
+  if (options.iterations <= 0) throw LearningError("--iterations must be positive");
+  if (options.checkpoint_every <= 0 || options.log_every <= 0)
+    throw LearningError("--checkpoint-every and --log-every must be positive");
+  Trainer trainer(registry, options, hooks);
+  return trainer.start();
+}
+
+TrainResult resumeTraining(const PluginRegistry& registry, const std::string& dir, int64_t iterations,
+                           const TrainHooks& hooks) {
+  const fs::path file = fs::path(dir) / "train.yaml";
+  if (!fs::exists(file)) throw LearningError("'" + dir + "' holds no training (no train.yaml)");
+  TrainOptions options;
+  try {
+    options = TrainOptions::readYaml(YAML::LoadFile(file.string()));
+  } catch (const YAML::Exception& e) {
+    throw LearningError("'" + file.string() + "': " + e.what());
+  }
+  options.out_dir = dir;
+  Trainer trainer(registry, options, hooks);
+  return trainer.resume(iterations);
+}
+
+}  // namespace manibench::learning

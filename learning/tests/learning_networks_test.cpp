@@ -1,0 +1,295 @@
+// The networks, algorithms and checkpoints of the learning module on
+// synthetic batches (no files, no environment): shapes, PointNet's
+// invariances, PointNet + Transformer's routing of masked points, the fast
+// PointNet against its definition, and checkpoints that restore exactly.
+#include <manibench/learning/algorithms.hpp>
+#include <manibench/learning/checkpoint.hpp>
+#include <manibench/learning/networks.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+namespace manibench::learning {
+namespace {
+
+ObservationSpec makeStateSpec() {
+  ObservationSpec s;
+  s.task = "Synthetic-v0";
+  s.mode = "state";
+  s.state_dim = 10;
+  s.state_segments = {{"a", 0, 4}, {"b", 4, 6}};
+  s.action_dim = 3;
+  s.action_segments = {{"arm", 0, 3}};
+  return s;
+}
+
+ObservationSpec makeCloudSpec() {
+  ObservationSpec s = makeStateSpec();
+  s.mode = "pointcloud";
+  s.state_dim = 6;
+  s.state_segments = {{"agent", 0, 6}};
+  s.point_count = 64;
+  s.mask_count = 3;
+  return s;
+}
+
+// Clouds whose points are each in at most one mask: mask j for points
+// 8j..8j+7, no mask for the rest; the last 4 points pad the cloud.
+ObservationBatch makeCloudBatch(int64_t batch, const ObservationSpec& spec, uint64_t seed = 1) {
+  torch::manual_seed(seed);
+  ObservationBatch b;
+  const int64_t n = spec.point_count, k = spec.mask_count;
+  b.state = torch::randn({batch, int64_t(spec.state_dim)});
+  b.xyz = torch::rand({batch, n, 3}) + 0.1;
+  b.rgb = torch::rand({batch, n, 3});
+  torch::Tensor seg = torch::zeros({batch, n, k});
+  for (int64_t j = 0; j < k; ++j) seg.slice(1, 8 * j, 8 * j + 8).select(2, j).fill_(1);
+  b.xyz.slice(1, n - 4).zero_();
+  b.rgb.slice(1, n - 4).zero_();
+  b.seg = seg;
+  b.valid = calcValidPoints(b.xyz, b.rgb, b.seg);
+  return b;
+}
+
+ObservationBatch makeStateBatch(int64_t batch, const ObservationSpec& spec) {
+  ObservationBatch b;
+  b.state = torch::randn({batch, int64_t(spec.state_dim)});
+  return b;
+}
+
+NetOptions makeNet(NetKind kind) {
+  NetOptions o;
+  o.kind = kind;
+  o.layers = 2;  // small Transformers keep the tests quick
+  return o;
+}
+
+TEST(LearningNetworks, OutputShapesPerNetworkAndMode) {
+  torch::manual_seed(0);
+  const ObservationSpec state = makeStateSpec(), cloud = makeCloudSpec();
+  const auto mlp = makeNetwork(makeNet(NetKind::Mlp), state, 0, 3);
+  EXPECT_EQ(mlp->forward(makeStateBatch(5, state), {}).sizes(), (std::vector<int64_t>{5, 3}));
+  const auto q = makeNetwork(makeNet(NetKind::Mlp), state, 3, 1);
+  EXPECT_EQ(q->forward(makeStateBatch(5, state), torch::zeros({5, 3})).sizes(), (std::vector<int64_t>{5, 1}));
+  for (NetKind kind : {NetKind::PointNet, NetKind::PnTransformer}) {
+    SCOPED_TRACE(toString(kind));
+    const auto actor = makeNetwork(makeNet(kind), cloud, 0, 3);
+    EXPECT_EQ(actor->forward(makeCloudBatch(4, cloud), {}).sizes(), (std::vector<int64_t>{4, 3}));
+    const auto critic = makeNetwork(makeNet(kind), cloud, 3, 1);
+    EXPECT_EQ(critic->forward(makeCloudBatch(4, cloud), torch::zeros({4, 3})).sizes(),
+              (std::vector<int64_t>{4, 1}));
+  }
+}
+
+TEST(LearningNetworks, NetworksRefuseTheWrongMode) {
+  try {
+    makeNetwork(makeNet(NetKind::PointNet), makeStateSpec(), 0, 3);
+    FAIL() << "a pointnet on state observations was made";
+  } catch (const LearningError& e) {
+    EXPECT_NE(std::string(e.what()).find("needs pointcloud observations"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("demos convert"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(makeNetwork(makeNet(NetKind::Mlp), makeCloudSpec(), 0, 3), LearningError);
+}
+
+TEST(LearningNetworks, PaddingPointsAreInvalid) {
+  const ObservationBatch b = makeCloudBatch(2, makeCloudSpec());
+  EXPECT_EQ(b.valid.sum().item<float>(), 2 * 60);
+  EXPECT_EQ(b.valid[0][63].item<float>(), 0);
+  EXPECT_EQ(b.valid[0][0].item<float>(), 1);
+}
+
+TEST(LearningNetworks, PointNetsAreInvariantToTheOrderOfPoints) {
+  torch::manual_seed(0);
+  const ObservationSpec spec = makeCloudSpec();
+  for (NetKind kind : {NetKind::PointNet, NetKind::PnTransformer}) {
+    SCOPED_TRACE(toString(kind));
+    const auto net = makeNetwork(makeNet(kind), spec, 0, 3);
+    net->eval();
+    const ObservationBatch b = makeCloudBatch(3, spec);
+    const torch::Tensor order = torch::randperm(spec.point_count);
+    ObservationBatch shuffled = b;
+    shuffled.xyz = b.xyz.index_select(1, order);
+    shuffled.rgb = b.rgb.index_select(1, order);
+    shuffled.seg = b.seg.index_select(1, order);
+    shuffled.valid = b.valid.index_select(1, order);
+    const torch::Tensor a = net->forward(b, {}), c = net->forward(shuffled, {});
+    EXPECT_TRUE(torch::allclose(a, c, 1e-5, 1e-5)) << a << c;
+    EXPECT_FALSE(torch::equal(a, net->forward(makeCloudBatch(3, spec, 7), {})));
+  }
+}
+
+TEST(LearningNetworks, FastPointNetEqualsItsDefinition) {
+  torch::manual_seed(3);
+  const ObservationSpec spec = makeCloudSpec();
+  PointNet pointnet(3, 6, std::vector<int64_t>{32, 16}, false);
+  const ObservationBatch b = makeCloudBatch(4, spec);
+  // Mask 1 of each cloud, but none in cloud 2 (an empty sub-cloud pools to zeros).
+  torch::Tensor mask = b.seg.select(2, 1) * b.valid;
+  mask[2].zero_();
+  const torch::Tensor fast = pointnet->forward(b.xyz, b.rgb, b.seg, b.state, mask);
+  const torch::Tensor definition = pointnet->forwardDefinition(b.xyz, b.rgb, b.seg, b.state, mask);
+  EXPECT_TRUE(torch::allclose(fast, definition, 1e-5, 1e-5)) << fast - definition;
+  EXPECT_EQ(fast[2].abs().sum().item<float>(), 0);
+  EXPECT_GT(fast[0].abs().sum().item<float>(), 0);
+  // And with every valid point (no gathering).
+  EXPECT_TRUE(torch::allclose(pointnet->forward(b.xyz, b.rgb, b.seg, b.state, b.valid),
+                              pointnet->forwardDefinition(b.xyz, b.rgb, b.seg, b.state, b.valid), 1e-5, 1e-5));
+}
+
+// Which of the K + 3 tokens change when point `point` of cloud 0 changes colour.
+std::vector<int64_t> changedTokens(Network& net, const ObservationBatch& b, int64_t point) {
+  const torch::Tensor before = calcTransformerTokens(net, b, {});
+  ObservationBatch changed = b;
+  changed.rgb = b.rgb.clone();
+  changed.rgb[0][point] += 0.5;
+  const torch::Tensor after = calcTransformerTokens(net, changed, {});
+  std::vector<int64_t> out;
+  for (int64_t t = 0; t < before.size(1); ++t)
+    if (!torch::equal(before[0][t], after[0][t])) out.push_back(t);
+  EXPECT_TRUE(torch::equal(before[1], after[1])) << "another cloud changed";
+  return out;
+}
+
+TEST(LearningNetworks, APointInMaskJReachesOnlyPointNetJAndTheWholeCloud) {
+  torch::manual_seed(0);
+  const ObservationSpec spec = makeCloudSpec();
+  const auto net = makeNetwork(makeNet(NetKind::PnTransformer), spec, 0, 3);
+  net->eval();
+  const ObservationBatch b = makeCloudBatch(2, spec);
+  // Tokens: 0 state, 1 points in no mask, 2 + j mask j, 2 + K the whole cloud.
+  for (int64_t j = 0; j < 3; ++j) {
+    SCOPED_TRACE("mask " + std::to_string(j));
+    EXPECT_EQ(changedTokens(*net, b, 8 * j + 3), (std::vector<int64_t>{2 + j, 5}));
+  }
+  EXPECT_EQ(changedTokens(*net, b, 40), (std::vector<int64_t>{1, 5}));  // in no mask
+}
+
+TEST(LearningNetworks, TheStateNormalizationIsPartOfTheNetwork) {
+  torch::manual_seed(0);
+  const ObservationSpec spec = makeStateSpec();
+  const auto net = makeNetwork(makeNet(NetKind::Mlp), spec, 0, 3);
+  const ObservationBatch b = makeStateBatch(2, spec);
+  const torch::Tensor plain = net->forward(b, {});
+  net->setStateNormalization(torch::full({10}, 0.5), torch::full({10}, 2.0));
+  ObservationBatch scaled;
+  scaled.state = (b.state - 0.5) * 2;
+  net->setStateNormalization(torch::zeros({10}), torch::ones({10}));
+  const torch::Tensor expected = net->forward(scaled, {});
+  net->setStateNormalization(torch::full({10}, 0.5), torch::full({10}, 2.0));
+  EXPECT_TRUE(torch::allclose(net->forward(b, {}), expected));
+  EXPECT_FALSE(torch::allclose(net->forward(b, {}), plain));
+}
+
+TransitionBatch makeTransitions(int64_t batch, const ObservationSpec& spec) {
+  TransitionBatch t;
+  t.obs = spec.isPointCloud() ? makeCloudBatch(batch, spec, 5) : makeStateBatch(batch, spec);
+  t.next_obs = spec.isPointCloud() ? makeCloudBatch(batch, spec, 6) : makeStateBatch(batch, spec);
+  t.actions = torch::rand({batch, int64_t(spec.action_dim)}) * 2 - 1;
+  t.rewards = torch::randn({batch});
+  t.dones = torch::zeros({batch});
+  return t;
+}
+
+TEST(LearningAlgorithms, EveryAlgorithmStepsAndActsOnEveryNetwork) {
+  for (const char* name : {"bc", "bcq", "td3bc"})
+    for (NetKind kind : {NetKind::Mlp, NetKind::PointNet, NetKind::PnTransformer}) {
+      SCOPED_TRACE(std::string(name) + " " + toString(kind));
+      const ObservationSpec spec = kind == NetKind::Mlp ? makeStateSpec() : makeCloudSpec();
+      AlgorithmOptions options = AlgorithmOptions::makeDefaults(name);
+      options.eval_samples = 7;
+      options.train_samples = 3;
+      torch::manual_seed(0);
+      auto algorithm = makeAlgorithm(options, makeNet(kind), spec, torch::kCPU);
+      const TransitionBatch batch = makeTransitions(4, spec);
+      for (int64_t i = 0; i < 2; ++i) {
+        const std::vector<double> losses = algorithm->update(batch, i);
+        ASSERT_EQ(losses.size(), algorithm->getLossNames().size());
+        for (double l : losses) EXPECT_TRUE(std::isfinite(l));
+      }
+      at::Generator generator = at::detail::createCPUGenerator(1);
+      const torch::Tensor a = algorithm->act(batch.obs, generator);
+      EXPECT_EQ(a.sizes(), (std::vector<int64_t>{4, 3}));
+      if (std::string(name) != "bc") EXPECT_LE(a.abs().max().item<float>(), 1.0f);
+    }
+}
+
+TEST(LearningAlgorithms, BcFitsAFixedBatch) {
+  torch::manual_seed(0);
+  const ObservationSpec spec = makeStateSpec();
+  auto bc = makeAlgorithm(AlgorithmOptions::makeDefaults("bc"), makeNet(NetKind::Mlp), spec, torch::kCPU);
+  const TransitionBatch batch = makeTransitions(16, spec);
+  const double first = bc->update(batch, 0)[0];
+  double last = first;
+  for (int64_t i = 1; i < 400; ++i) last = bc->update(batch, i)[0];
+  EXPECT_LT(last, first / 100) << first << " -> " << last;
+}
+
+TEST(LearningCheckpoints, ACheckpointRestoresTheSameActions) {
+  const std::string path = (std::filesystem::temp_directory_path() / "manibench_checkpoint_test.pt").string();
+  torch::manual_seed(0);
+  const ObservationSpec spec = makeCloudSpec();
+  AlgorithmOptions options = AlgorithmOptions::makeDefaults("td3bc");
+  auto algorithm = makeAlgorithm(options, makeNet(NetKind::PointNet), spec, torch::kCPU);
+  const TransitionBatch batch = makeTransitions(4, spec);
+  for (int64_t i = 0; i < 3; ++i) algorithm->update(batch, i);
+  CheckpointInfo info;
+  info.iteration = 3;
+  info.algorithm = options;
+  info.network = makeNet(NetKind::PointNet);
+  info.spec = spec;
+  saveCheckpoint(path, info, *algorithm, {{"marker", torch::arange(3)}});
+  const CheckpointInfo read = readCheckpointInfo(path);
+  EXPECT_EQ(read.iteration, 3);
+  EXPECT_EQ(read.algorithm.name, "td3bc");
+  EXPECT_NO_THROW(read.spec.checkSame(spec, "read", "written"));
+  torch::manual_seed(99);  // a different initialization, overwritten by the load
+  LoadedCheckpoint loaded = loadCheckpoint(path, torch::kCPU, true, {"marker"});
+  at::Generator g1 = at::detail::createCPUGenerator(1), g2 = at::detail::createCPUGenerator(1);
+  EXPECT_TRUE(torch::equal(algorithm->act(batch.obs, g1), loaded.algorithm->act(batch.obs, g2)));
+  EXPECT_TRUE(torch::equal(loaded.extras.at("marker"), torch::arange(3)));
+  std::remove(path.c_str());
+}
+
+TEST(LearningCheckpoints, FilesThatAreNotCheckpointsAreClearErrors) {
+  const auto dir = std::filesystem::temp_directory_path();
+  try {
+    readCheckpointInfo((dir / "manibench_no_such_checkpoint.pt").string());
+    FAIL();
+  } catch (const LearningError& e) {
+    EXPECT_NE(std::string(e.what()).find("no such checkpoint"), std::string::npos) << e.what();
+  }
+  const std::string text = (dir / "manibench_not_a_checkpoint.pt").string();
+  std::ofstream(text) << "hello";
+  try {
+    readCheckpointInfo(text);
+    FAIL();
+  } catch (const LearningError& e) {
+    EXPECT_NE(std::string(e.what()).find("manibench_not_a_checkpoint.pt"), std::string::npos) << e.what();
+  }
+  std::remove(text.c_str());
+}
+
+TEST(LearningSpec, DifferentLayoutsAreErrorsNamingBoth) {
+  ObservationSpec a = makeStateSpec(), b = makeStateSpec();
+  b.state_segments[1].name = "c";
+  try {
+    a.checkSame(b, "the checkpoint X", "the demonstrations Y");
+    FAIL();
+  } catch (const LearningError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("state layout"), std::string::npos) << m;
+    EXPECT_NE(m.find("the checkpoint X: Synthetic-v0, state, state 10 [a 4, b 6]"), std::string::npos) << m;
+    EXPECT_NE(m.find("the demonstrations Y: Synthetic-v0, state, state 10 [a 4, c 6]"), std::string::npos) << m;
+  }
+  b = makeStateSpec();
+  b.task = "Other-v0";
+  EXPECT_THROW(a.checkSame(b, "x", "y"), LearningError);
+  EXPECT_NO_THROW(a.checkSame(makeStateSpec(), "x", "y"));
+}
+
+}  // namespace
+}  // namespace manibench::learning

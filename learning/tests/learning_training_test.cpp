@@ -1,0 +1,432 @@
+// Training from real demonstration files (made by the built CLI from the
+// Reach-v0 expert, converted to point clouds by the renderer), checkpoints
+// and resumes, the torch_policy plugin loaded through the registry (the
+// checkpoint's actions and a TorchScript module written by python3-torch),
+// and the errors a user meets.
+#include <manibench/learning/checkpoint.hpp>
+#include <manibench/learning/dataset.hpp>
+#include <manibench/learning/trainer.hpp>
+
+#include <manibench/demos.hpp>
+#include <manibench/environment.hpp>
+#include <manibench/plugin_instances.hpp>
+
+#include <test_registry.hpp>
+#include <test_support.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+namespace manibench::learning {
+namespace {
+
+namespace fs = std::filesystem;
+using manibench::testing::contains;
+using manibench::testing::getBuildTreeRegistry;
+using manibench::testing::runCli;
+
+fs::path g_dir;
+
+std::string file(const std::string& name) { return (g_dir / name).string(); }
+
+class LearningTraining : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    g_dir = fs::temp_directory_path() / ("manibench_learning_test_" + std::to_string(getpid()));
+    fs::create_directories(g_dir);
+    auto run = [](const std::vector<std::string>& args) {
+      const manibench::testing::CommandResult r = runCli(args);
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+    };
+    run({"demos", "generate", "Reach-v0", "--policy", "reach_expert", "--split", "train", "--per-object", "2",
+         "--workers", "2", "--no-progress", "--out", file("reach.h5")});
+    run({"demos", "convert", file("reach.h5"), "--obs", "pointcloud", "--trajectories", "traj_0,traj_1,traj_2,traj_3",
+         "--workers", "2", "--no-progress", "--out", file("reach_pc.h5")});
+    run({"demos", "generate", "Reach-v0", "--policy", "reach_expert", "--split", "train", "--objects", "0",
+         "--per-object", "1", "--action-noise", "0.05", "--no-progress", "--out", file("reach_noisy.h5")});
+    run({"demos", "generate", "OpenCabinetDrawer_2000_link_0-v0", "--policy", "open_cabinet_expert", "--controller",
+         "mobile_panda_ee", "--per-object", "1", "--no-progress", "--out", file("drawer.h5")});
+  }
+  static void TearDownTestSuite() { fs::remove_all(g_dir); }
+
+  static TrainOptions makeOptions(const std::string& algorithm, const std::string& out, int64_t iterations) {
+    TrainOptions o;
+    o.algorithm = AlgorithmOptions::makeDefaults(algorithm);
+    o.algorithm.batch_size = 32;
+    o.data.paths = {file("reach.h5")};
+    o.out_dir = file(out);
+    o.iterations = iterations;
+    o.checkpoint_every = iterations;
+    o.log_every = 10;
+    return o;
+  }
+};
+
+// Every parameter and buffer of every network of two checkpoints, bit for bit.
+bool sameWeights(const std::string& a, const std::string& b) {
+  const LoadedCheckpoint x = loadCheckpoint(a, torch::kCPU, false), y = loadCheckpoint(b, torch::kCPU, false);
+  const auto& nx = x.algorithm->getNetworks();
+  const auto& ny = y.algorithm->getNetworks();
+  if (nx.size() != ny.size()) return false;
+  for (std::size_t i = 0; i < nx.size(); ++i) {
+    const auto px = nx[i].second->named_parameters(), py = ny[i].second->named_parameters();
+    for (const auto& p : px)
+      if (!torch::equal(p.value(), py[p.key()])) return false;
+    const auto bx = nx[i].second->named_buffers(), by = ny[i].second->named_buffers();
+    for (const auto& p : bx)
+      if (!torch::equal(p.value(), by[p.key()])) return false;
+  }
+  return true;
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+TEST_F(LearningTraining, BcDrivesTheLossOnOneShortTrajectoryNearZero) {
+  TrainOptions o = makeOptions("bc", "one_trajectory", 1500);
+  o.data.objects = {"0"};
+  o.data.per_object = 1;
+  o.algorithm.batch_size = 8;
+  o.algorithm.weight_decay = 0;
+  const TrainResult r = train(getBuildTreeRegistry(), o, {});
+  EXPECT_EQ(r.iteration, 1500);
+  // log.csv: iteration,seconds,loss,iterations_per_second; the first and last rows.
+  std::ifstream log(file("one_trajectory/log.csv"));
+  std::string header, line, first, last;
+  std::getline(log, header);
+  EXPECT_EQ(header, "iteration,seconds,loss,iterations_per_second");
+  while (std::getline(log, line)) (first.empty() ? first : last) = line;
+  auto loss = [](const std::string& row) {
+    const std::size_t a = row.find(',', row.find(',') + 1) + 1;
+    return std::stod(row.substr(a, row.find(',', a) - a));
+  };
+  EXPECT_LT(loss(last), 1e-4) << last;
+  EXPECT_LT(loss(last), loss(first) / 100) << first << " / " << last;
+}
+
+TEST_F(LearningTraining, TheSameSeedGivesTheSameWeightsAndAnotherSeedOthers) {
+  const TrainResult a = train(getBuildTreeRegistry(), makeOptions("bc", "seed_a", 40), {});
+  const TrainResult b = train(getBuildTreeRegistry(), makeOptions("bc", "seed_b", 40), {});
+  TrainOptions other = makeOptions("bc", "seed_c", 40);
+  other.seed = 1;
+  const TrainResult c = train(getBuildTreeRegistry(), other, {});
+  EXPECT_TRUE(sameWeights(a.checkpoint, b.checkpoint));
+  EXPECT_FALSE(sameWeights(a.checkpoint, c.checkpoint));
+}
+
+// log.csv without its timing columns (seconds, iterations per second).
+std::vector<std::string> readLosses(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<std::string> rows;
+  for (std::string line; std::getline(in, line);) {
+    const std::size_t a = line.find(','), b = line.find(',', a + 1), c = line.rfind(',');
+    rows.push_back(line.substr(0, a) + line.substr(b, c - b));
+  }
+  return rows;
+}
+
+TEST_F(LearningTraining, AResumedTrainingContinuesExactly) {
+  struct Case {
+    std::string algorithm, data;
+    NetKind net;
+    int64_t iterations;
+  };
+  // TD3+BC: targets, a delayed actor, noise; pn_transformer: dropout.
+  for (const Case& c : {Case{"td3bc", "reach.h5", NetKind::Mlp, 30}, Case{"bcq", "reach.h5", NetKind::Mlp, 20},
+                        Case{"bc", "reach_pc.h5", NetKind::PnTransformer, 6}}) {
+    SCOPED_TRACE(c.algorithm + " " + toString(c.net));
+    auto options = [&](const std::string& out, int64_t iterations) {
+      TrainOptions o = makeOptions(c.algorithm, out, iterations);
+      o.data.paths = {file(c.data)};
+      o.network.kind = c.net;
+      o.network.width = 32;
+      o.network.layers = 1;
+      o.algorithm.batch_size = 8;
+      o.checkpoint_every = 1000;
+      return o;
+    };
+    const std::string name = c.algorithm + "_" + toString(c.net);
+    const TrainResult straight = train(getBuildTreeRegistry(), options(name + "_straight", c.iterations), {});
+    // A run stopped half-way (as Ctrl-C does: a checkpoint at the stop), then resumed.
+    int64_t seen = 0;
+    TrainHooks stop_half_way;
+    stop_half_way.on_progress = [&](const TrainProgress& p) { seen = p.iteration; };
+    stop_half_way.should_stop = [&] { return seen >= c.iterations / 2; };
+    const TrainResult stopped = train(getBuildTreeRegistry(), options(name + "_resumed", c.iterations), stop_half_way);
+    EXPECT_TRUE(stopped.interrupted);
+    EXPECT_EQ(stopped.iteration, c.iterations / 2);
+    const TrainResult resumed = resumeTraining(getBuildTreeRegistry(), file(name + "_resumed"), 0, {});
+    EXPECT_EQ(resumed.iteration, c.iterations);
+    EXPECT_TRUE(sameWeights(straight.checkpoint, resumed.checkpoint));
+    // The loss log reads as one run's.
+    EXPECT_EQ(readLosses(file(name + "_straight/log.csv")), readLosses(file(name + "_resumed/log.csv")));
+  }
+}
+
+// The observations of a trajectory as the host hands them to a policy.
+struct Recorded {
+  Eigen::VectorXd state;
+  VisualObservation visual;
+};
+std::vector<Recorded> readObservations(const std::string& path, int count) {
+  DemoReader reader(path);
+  const Trajectory t = reader.read(reader.getTrajectoryNames().front(), false);
+  std::vector<Recorded> out;
+  for (uint32_t i = 0; i < uint32_t(count) && i < t.getObservationCount(); ++i)
+    out.push_back({t.getObservationState(i), t.getVisualObservation(i)});
+  return out;
+}
+
+std::unique_ptr<Environment> makeEnvironmentOf(const std::string& demos) {
+  DemoReader reader(demos);
+  return makeDemoEnvironment(getBuildTreeRegistry(), reader.getInfo());
+}
+
+TEST_F(LearningTraining, ThePolicyPluginActsAsTheNetwork) {
+  for (const std::string data : {"reach.h5", "reach_pc.h5", "history"}) {
+    SCOPED_TRACE(data);
+    TrainOptions o = makeOptions("bc", "plugin_" + data, 20);
+    o.data.paths = {file(data == "history" ? "reach.h5" : data)};
+    o.network.kind = data == "reach_pc.h5" ? NetKind::PnTransformer : NetKind::Mlp;
+    o.network.layers = 1;
+    if (data == "history") {
+      o.network.history = 3;
+      o.network.step_input = true;
+    }
+    const TrainResult r = train(getBuildTreeRegistry(), o, {});
+    const LoadedCheckpoint loaded = loadCheckpoint(r.checkpoint, torch::kCPU, false);
+    const auto env = makeEnvironmentOf(o.data.paths[0]);
+    PolicyInstance policy(getBuildTreeRegistry(), "torch_policy", "checkpoint: '" + r.checkpoint + "'",
+                          env->calcPolicyLayout());
+    policy.reset(0);
+    DemoReader reader(o.data.paths[0]);
+    const Trajectory t = reader.read("traj_0", false);
+    DatasetOptions d;
+    d.paths = o.data.paths;
+    const DemoDataset dataset(d);
+    const DataChunk chunk = dataset.load({0});
+    at::Generator generator = at::detail::createCPUGenerator(0);
+    for (uint32_t i = 0; i < 5; ++i) {
+      Eigen::VectorXd action(2);
+      policy.act(t.getObservationState(i), i, action, t.getVisualObservation(i));
+      const torch::Tensor expected =
+          loaded.algorithm->act(chunk.gatherObservations(torch::tensor({int64_t(i)}), o.network), generator);
+      for (int j = 0; j < 2; ++j) EXPECT_EQ(action[j], double(expected[0][j].item<float>())) << "step " << i;
+    }
+  }
+}
+
+TEST_F(LearningTraining, InputsWithHistoryAreBuiltAlikeWhileActingAndTraining) {
+  DatasetOptions d;
+  d.paths = {file("reach.h5")};
+  const DemoDataset dataset(d);
+  const DataChunk chunk = dataset.load({1, 0});  // the second trajectory first: rows do not start at 0
+  const ObservationSpec spec = calcDemoSpec(getBuildTreeRegistry(), dataset);
+  NetOptions inputs;
+  inputs.history = 3;
+  inputs.action_history = 2;
+  inputs.step_input = true;
+  EXPECT_EQ(calcInputStateDim(inputs, spec), 3 * 15 + 2 * 2 + 1);
+  InputHistory history(inputs, spec);
+  const int64_t first = dataset.getTrajectories()[1].steps + 1;  // trajectory 0's first row
+  for (int episode = 0; episode < 2; ++episode) {  // reset() starts over
+    history.reset();
+    for (int64_t t = 0; t < 6; ++t) {
+      const torch::Tensor row = torch::tensor({first + t});
+      const torch::Tensor acting = history.makeInput(chunk.state.index_select(0, row), t);
+      const torch::Tensor training = chunk.gatherObservations(row, inputs).state;
+      ASSERT_TRUE(torch::equal(acting, training)) << "step " << t << "\n" << acting << training;
+      history.setAction(chunk.actions[chunk.obs_transition[first + t].item<int64_t>()]);
+    }
+  }
+}
+
+TEST_F(LearningTraining, ATorchScriptModuleFromPythonRunsThroughThePlugin) {
+  const std::string script = file("export.py"), state = file("state.pt"), cloud = file("cloud.pt");
+  std::ofstream(script) << R"(import sys
+from typing import Dict
+import torch
+class State(torch.nn.Module):
+    def forward(self, obs: Dict[str, torch.Tensor]) -> torch.Tensor:
+        return torch.tanh(0.5 * obs["state"][:, 0:2] + 0.1)
+class Cloud(torch.nn.Module):
+    def forward(self, obs: Dict[str, torch.Tensor]) -> torch.Tensor:
+        seen = obs["seg"][:, :, 0].to(torch.float32)
+        mean = (obs["xyz"][:, :, 0] * seen).sum(1) / seen.sum(1).clamp(min=1.0)
+        return torch.stack([mean, obs["agent"][:, 1] * 0.0 + 0.25], dim=1)
+torch.jit.save(torch.jit.script(State()), sys.argv[1])
+torch.jit.save(torch.jit.script(Cloud()), sys.argv[2])
+)";
+  const std::string command = "/usr/bin/python3 " + script + " " + state + " " + cloud;
+  ASSERT_EQ(std::system(command.c_str()), 0) << command << ": python3-torch is needed (scripts/install-deps)";
+  {
+    const auto env = makeEnvironmentOf(file("reach.h5"));
+    PolicyInstance policy(getBuildTreeRegistry(), "torch_policy", "torchscript: '" + state + "'",
+                          env->calcPolicyLayout());
+    for (const Recorded& r : readObservations(file("reach.h5"), 3)) {
+      Eigen::VectorXd action(2);
+      policy.act(r.state, 0, action, r.visual);
+      for (int j = 0; j < 2; ++j)
+        EXPECT_NEAR(action[j], std::tanh(0.5 * float(r.state[j]) + 0.1), 1e-6);
+    }
+  }
+  {
+    const auto env = makeEnvironmentOf(file("reach_pc.h5"));
+    PolicyInstance policy(getBuildTreeRegistry(), "torch_policy", "torchscript: '" + cloud + "'",
+                          env->calcPolicyLayout());
+    for (const Recorded& r : readObservations(file("reach_pc.h5"), 3)) {
+      Eigen::VectorXd action(2);
+      policy.act(r.state, 0, action, r.visual);
+      double sum = 0, count = 0;
+      const std::size_t n = r.visual.points.size();
+      for (std::size_t p = 0; p < n; ++p)
+        if (r.visual.points.masks[p * r.visual.points.mask_count] != 0) {
+          sum += r.visual.points.xyz[3 * p];
+          ++count;
+        }
+      ASSERT_GT(count, 0) << n << " points, " << r.visual.points.mask_count << " masks, " << r.visual.points.masks.size() << " mask bytes";
+      EXPECT_NEAR(action[0], sum / count, 1e-5);
+      EXPECT_EQ(action[1], 0.25);
+    }
+  }
+  // And an evaluation through the kit: workers load libtorch after their fork.
+  std::ofstream(file("script_policy.yaml")) << "torchscript: '" << state << "'\n";
+  const auto r = runCli({"eval", "Reach-v0", "--policy", "torch_policy", "--policy-config", file("script_policy.yaml"),
+                         "--split", "train", "--objects", "0,1", "--episodes-per-object", "1", "--workers", "2",
+                         "--no-progress", "--out", file("script_eval")});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(contains(readFile(file("script_eval/summary.csv")), "all,2,")) << readFile(file("script_eval/summary.csv"));
+  EXPECT_FALSE(contains(readFile(file("script_eval/episodes.csv")), "policy_error"));
+}
+
+TEST_F(LearningTraining, TrainEvaluatesThroughTheCommandLine) {
+  const auto r = runCli({"train", "bc", "--demos", file("reach.h5"), "--out", file("cli_run"), "--iterations", "60",
+                         "--batch-size", "16", "--eval-every", "30", "--eval-objects", "0", "--eval-episodes", "1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(contains(r.err, "BLAS: ")) << r.err;
+  EXPECT_TRUE(contains(r.err, "intra-op thread")) << r.err;
+  const std::string eval = readFile(file("cli_run/eval.csv"));
+  EXPECT_TRUE(contains(eval, "\n30,train,1,")) << eval;
+  EXPECT_TRUE(contains(eval, "\n60,train,1,")) << eval;
+  EXPECT_TRUE(fs::exists(file("cli_run/checkpoints/iter_0000060.pt")));
+  EXPECT_TRUE(contains(readFile(file("cli_run/policy.yaml")), "iter_0000060.pt"));
+  // Starting again into the same directory is refused; --resume to more iterations is not.
+  const auto again = runCli({"train", "bc", "--demos", file("reach.h5"), "--out", file("cli_run")});
+  EXPECT_EQ(again.exit_code, 1);
+  EXPECT_TRUE(contains(again.err, "holds a training already")) << again.err;
+  const auto resumed = runCli({"train", "--resume", file("cli_run"), "--iterations", "70"});
+  EXPECT_EQ(resumed.exit_code, 0) << resumed.err;
+  EXPECT_TRUE(fs::exists(file("cli_run/checkpoints/iter_0000070.pt")));
+  const auto usage = runCli({"train", "--demos", file("reach.h5")});
+  EXPECT_EQ(usage.exit_code, 2);
+  EXPECT_TRUE(contains(usage.err, "name one algorithm")) << usage.err;
+}
+
+TEST_F(LearningTraining, BadInputsAreClearErrors) {
+  const PluginRegistry& registry = getBuildTreeRegistry();
+  auto message = [&](TrainOptions o) {
+    try {
+      train(registry, o, {});
+    } catch (const LearningError& e) {
+      return std::string(e.what());
+    }
+    ADD_FAILURE() << "trained";
+    return std::string();
+  };
+  // A missing file.
+  TrainOptions o = makeOptions("bc", "missing", 10);
+  o.data.paths = {file("nothing.h5")};
+  std::string m = message(o);
+  EXPECT_TRUE(contains(m, "no such demonstration file") && contains(m, "nothing.h5")) << m;
+  // Files of two tasks, and of two modes: both named.
+  o = makeOptions("bc", "mixed", 10);
+  o.data.paths = {file("reach.h5"), file("drawer.h5")};
+  m = message(o);
+  EXPECT_TRUE(contains(m, "disagree on the task") && contains(m, "Reach-v0") && contains(m, "OpenCabinetDrawer-v0"))
+      << m;
+  o.data.paths = {file("reach.h5"), file("reach_pc.h5")};
+  m = message(o);
+  EXPECT_TRUE(contains(m, "observation mode") && contains(m, "reach_pc.h5")) << m;
+  // A network of the wrong mode.
+  o = makeOptions("bc", "wrong_net", 10);
+  o.network.kind = NetKind::PointNet;
+  m = message(o);
+  EXPECT_TRUE(contains(m, "needs pointcloud observations")) << m;
+  // A loss that is not finite stops the training, naming the iteration.
+  o = makeOptions("bc", "diverges", 200);
+  o.algorithm.lr = 1e30;
+  m = message(o);
+  EXPECT_TRUE(contains(m, "iteration ") && contains(m, "the loss is") && contains(m, "training stopped")) << m;
+}
+
+TEST_F(LearningTraining, ACheckpointOfAnotherTaskIsRefusedNamingBoth) {
+  const TrainResult r = train(getBuildTreeRegistry(), makeOptions("bc", "other_task", 10), {});
+  const auto env = makeEnvironmentOf(file("drawer.h5"));
+  try {
+    PolicyInstance policy(getBuildTreeRegistry(), "torch_policy", "checkpoint: '" + r.checkpoint + "'",
+                          env->calcPolicyLayout());
+    FAIL() << "a Reach checkpoint ran on OpenCabinetDrawer";
+  } catch (const std::exception& e) {
+    const std::string m = e.what();
+    EXPECT_TRUE(contains(m, "the task of the checkpoint") && contains(m, "Reach-v0") &&
+                contains(m, "OpenCabinetDrawer-v0"))
+        << m;
+  }
+  // A key the plugin does not know, and a checkpoint that is not there.
+  EXPECT_THROW(PolicyInstance(getBuildTreeRegistry(), "torch_policy", "chekpoint: x", env->calcPolicyLayout()),
+               std::exception);
+  try {
+    PolicyInstance(getBuildTreeRegistry(), "torch_policy", "checkpoint: /nowhere/x.pt", env->calcPolicyLayout());
+    FAIL();
+  } catch (const std::exception& e) {
+    EXPECT_TRUE(contains(e.what(), "no such checkpoint '/nowhere/x.pt'")) << e.what();
+  }
+}
+
+TEST_F(LearningTraining, NoisyDemonstrationsTeachThePolicysOwnActions) {
+  DemoReader reader(file("reach_noisy.h5"));
+  const Trajectory t = reader.read("traj_0", false);
+  ASSERT_FALSE(t.policy_actions.empty());
+  for (const bool executed : {false, true}) {
+    DatasetOptions d;
+    d.paths = {file("reach_noisy.h5")};
+    d.executed_actions = executed;
+    const DataChunk chunk = DemoDataset(d).load({0});
+    const std::vector<double>& expected = executed ? t.actions : t.policy_actions;
+    ASSERT_EQ(chunk.actions.numel(), int64_t(expected.size()));
+    for (std::size_t i = 0; i < expected.size(); ++i)
+      ASSERT_EQ(chunk.actions.view({-1})[int64_t(i)].item<float>(), float(std::clamp(expected[i], -1.0, 1.0)))
+          << (executed ? "executed " : "policy ") << i;
+  }
+}
+
+TEST_F(LearningTraining, AStreamedSetVisitsEveryTransitionOncePerEpoch) {
+  DatasetOptions d;
+  d.paths = {file("reach.h5")};
+  d.cache_bytes = 20000;  // a few trajectories per window
+  const DemoDataset dataset(d);
+  ASSERT_TRUE(dataset.isStreamed());
+  BatchSampler a(dataset, 16, 5, true), b(dataset, 16, 5, true);
+  std::set<std::vector<float>> seen;
+  for (int64_t i = 0; i < a.getBatchesPerEpoch(); ++i) {
+    const TransitionBatch x = a.next(), y = b.next();
+    ASSERT_TRUE(torch::equal(x.obs.state, y.obs.state));
+    for (int64_t r = 0; r < x.obs.size(); ++r) {
+      const torch::Tensor row = torch::cat({x.obs.state[r], x.actions[r]});
+      seen.insert(std::vector<float>(row.data_ptr<float>(), row.data_ptr<float>() + row.numel()));
+    }
+  }
+  EXPECT_EQ(seen.size(), std::size_t(a.getBatchesPerEpoch() * 16));  // no transition twice
+  EXPECT_GT(seen.size(), dataset.getTransitionCount() * 8 / 10);    // few dropped
+}
+
+}  // namespace
+}  // namespace manibench::learning
