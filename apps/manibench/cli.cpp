@@ -15,6 +15,18 @@
 
 namespace manibench::cli {
 
+int runMain(const std::string& program, const std::function<int()>& body, bool break_line_first) {
+  try {
+    return body();
+  } catch (const UsageError& e) {
+    std::cerr << program << ": " << e.what() << "\n\n" << e.usage();
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << (break_line_first ? "\n" : "") << program << ": error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
 Arguments parseArguments(int argc, char** argv, int first, const std::vector<std::string>& valued,
                          const std::vector<std::string>& flags, const char* usage,
                          const std::vector<std::string>& repeatable) {
