@@ -17,6 +17,19 @@ void expectSameStartAfterAnotherObject(Environment& env, const std::string& obje
   EXPECT_EQ(start, env.getObservation()) << object << " after " << other;
 }
 
+StepResult runRandomEpisode(Environment& env, std::mt19937_64& rng,
+                            const std::function<void(const StepResult&)>& each) {
+  std::uniform_real_distribution<double> u(-1, 1);
+  Eigen::VectorXd action(env.getControllerDescription().action_dim);
+  StepResult r;
+  do {
+    for (Eigen::Index i = 0; i < action.size(); ++i) action[i] = u(rng);
+    r = env.step(action);
+    if (each) each(r);
+  } while (!r.isDone());
+  return r;
+}
+
 ExpertSetup makeExpertSetup(const std::string& task, const std::string& policy,
                             const std::vector<std::string>& overrides) {
   std::vector<std::string> all = {"control.controller=mobile_panda_ee"};

@@ -7,7 +7,9 @@
 #include <manibench/environment.hpp>
 #include <manibench/plugin_instances.hpp>
 
+#include <functional>
 #include <memory>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -22,6 +24,12 @@ std::unique_ptr<Environment> makeEnvironment(const std::string& task, const std:
 // Resetting `object` with a seed after an episode of `other` gives the
 // start that seed gave before (the episode does not depend on what ran).
 void expectSameStartAfterAnotherObject(Environment& env, const std::string& object, const std::string& other);
+
+// Steps `env` (reset already) with actions uniform in [-1, 1] drawn from
+// `rng` until the episode ends; `each` sees every step's result. Returns
+// the last one. (The families' "random flailing never succeeds" tests.)
+StepResult runRandomEpisode(Environment& env, std::mt19937_64& rng,
+                            const std::function<void(const StepResult&)>& each = {});
 
 // A scripted expert and its environment: `task` with the mobile_panda_ee
 // controller (`overrides` after it), `policy` on the state observation.

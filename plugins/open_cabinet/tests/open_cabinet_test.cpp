@@ -211,18 +211,12 @@ TEST(OpenCabinet, RandomPolicyNeverSucceeds) {
   for (const std::string task : {"OpenCabinetDoor-v0", "OpenCabinetDrawer-v0"}) {
     const auto env = makeEnv(task, {"episode.max_steps=40"});
     std::mt19937_64 rng(11);
-    std::uniform_real_distribution<double> u(-1, 1);
     const std::vector<std::string> objects = env->listObjects("train");
     for (uint64_t seed = 0; seed < 2; ++seed) {
       env->reset(objects[seed * 7 % objects.size()], seed);
-      Eigen::VectorXd action(env->getControllerDescription().action_dim);
-      mb::StepResult r;
       double most_open = 0;
-      do {
-        for (Eigen::Index i = 0; i < action.size(); ++i) action[i] = u(rng);
-        r = env->step(action);
-        most_open = std::max(most_open, r.values[0]);
-      } while (!r.isDone());
+      const mb::StepResult r = mb::testing::runRandomEpisode(
+          *env, rng, [&](const mb::StepResult& step) { most_open = std::max(most_open, step.values[0]); });
       EXPECT_FALSE(r.success) << task << " seed " << seed;
       EXPECT_LT(most_open, 0.9) << task << " seed " << seed;
     }

@@ -263,17 +263,11 @@ TEST(PushChair, SuccessNeedsTheChairCloseStaticAndUprightForTenSteps) {
 TEST(PushChair, RandomPolicyNeverSucceeds) {
   const auto env = makeEnv({"episode.max_steps=40"});
   std::mt19937_64 rng(11);
-  std::uniform_real_distribution<double> u(-1, 1);
   const std::vector<std::string> objects = env->listObjects("train");
   for (uint64_t seed = 0; seed < 2; ++seed) {
     env->reset(objects[seed * 7 % objects.size()], seed);
-    Eigen::VectorXd action(env->getControllerDescription().action_dim);
-    mb::StepResult r;
-    do {
-      for (Eigen::Index i = 0; i < action.size(); ++i) action[i] = u(rng);
-      r = env->step(action);
-      EXPECT_TRUE(env->getObservation().allFinite());
-    } while (!r.isDone());
+    const mb::StepResult r = mb::testing::runRandomEpisode(
+        *env, rng, [&](const mb::StepResult&) { EXPECT_TRUE(env->getObservation().allFinite()); });
     EXPECT_FALSE(r.success) << "seed " << seed;
     EXPECT_FALSE(r.flags[0]) << "seed " << seed;
   }
