@@ -228,8 +228,24 @@ class MoveBucketExpert : public mobile_panda::Expert<ExpertPhase> {
   void reset(uint64_t seed) override;
   Eigen::VectorXd act(const sdk::Observation& observation) override;
 
+  struct View;     // what one step reads from the state (move_bucket_expert.cpp)
+  struct Command;  // what one step commands
+
  private:
   using Phase = ExpertPhase;
+  View read(const sdk::Observation& observation);
+  // One function per phase: each sets its part of the command and says
+  // when the next phase begins.
+  void approach(const View& v, Command& c);
+  void descend(const View& v, Command& c);
+  void squeeze(const View& v, Command& c);
+  void lift(const View& v, Command& c);
+  void carry(const View& v, Command& c);
+  void lower(const View& v, Command& c);
+  void release(const View& v, Command& c);
+  void retreat(const View& v, Command& c);
+  Eigen::VectorXd calcAction(const View& v, const Command& c) const;
+
   double grip_side_ = 1;        // which way along the bucket's y the base's y points
   std::array<double, 2> finger_sign_{-1, -1};  // per arm: fingers along +-the grip axis
   double grasp_lift_ = 0;       // lift when the grippers closed
