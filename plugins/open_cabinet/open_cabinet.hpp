@@ -198,8 +198,21 @@ class OpenCabinetExpert : public mobile_panda::Expert<ExpertPhase> {
   void reset(uint64_t seed) override;
   Eigen::VectorXd act(const sdk::Observation& observation) override;
 
+  struct View;     // what one step reads from the state (open_cabinet_expert.cpp)
+  struct Command;  // the phase's TCP goal and gripper
+
  private:
   using Phase = ExpertPhase;
+  View read(const sdk::Observation& observation) const;
+  // One function per phase: each sets the TCP goal and gripper and says
+  // when the next phase begins.
+  void approach(const View& v, Command& c);  // kApproach and kPreGrasp
+  void grasp(const View& v, Command& c);
+  void closeFingers(const View& v, Command& c);
+  void pull(const View& v, Command& c);
+  // The whole robot servos the TCP to the goal.
+  Eigen::VectorXd calcAction(const View& v, const Command& c) const;
+
   bool nominal_ready_ = false;
   Eigen::Vector2d nominal_offset_ = Eigen::Vector2d::Zero();  // TCP from the base, base frame
   double nominal_height_ = 0;  // TCP height minus lift at the start

@@ -34,92 +34,105 @@ void OpenCabinetExpert::reset(uint64_t seed) {
   nominal_ready_ = false;
 }
 
-Eigen::VectorXd OpenCabinetExpert::act(const sdk::Observation& observation) {
-  using L = ObservationLayout;
-  const Eigen::VectorXd s = observation.state;
-  const mobile_panda::AgentOffsets::Reading robot = agent_.read(s);
-  const Eigen::Vector3d& tcp = robot.tcp[0];
-  const Eigen::Vector3d handle = getVector3(s, L::kHandlePose);
-  const Eigen::Matrix3d hr = getQuaternion(s, L::kHandlePose + 3).toRotationMatrix();
-  const Eigen::Vector3d hx = hr.col(0), hy = hr.col(1), hz = hr.col(2);
-  const bool door = s[L::kTargetJointType] < 0.5;
-  const double q = s[L::kTargetJoint], lower = s[L::kTargetJoint + 2], upper = s[L::kTargetJoint + 3];
-  const double open_fraction = (q - lower) / (upper - lower);
-  const Eigen::Vector3d axis = getVector3(s, L::kJointAxis), origin = getVector3(s, L::kJointOrigin);
-  const double fingers = s[agent_.joint_positions + 11] + s[agent_.joint_positions + 12];  // opening, m
+struct OpenCabinetExpert::View {
+  mobile_panda::AgentOffsets::Reading robot;
+  Eigen::Vector3d tcp;
+  Eigen::Vector3d handle, hx;  // the handle's grasp frame: position, x (out of the handle)
+  bool door = false;
+  double open_fraction = 0;
+  Eigen::Vector3d axis, origin;  // the target joint's
+  double qdot = 0;               // its speed
+  double fingers = 0;            // opening, m
+  Eigen::Vector3d motion;        // the handle's direction of motion as the joint opens
+  Eigen::AngleAxisd orientation_error;  // from the TCP to the grasp orientation
+};
 
-  if (!nominal_ready_) {  // the canonical arm pose's TCP, relative to the base
-    const Eigen::Vector3d offset = robot.base_rotation.transpose() * (tcp - Eigen::Vector3d(robot.base.x(), robot.base.y(), 0));
-    nominal_offset_ = Eigen::Vector2d(offset.x(), offset.y());
-    nominal_height_ = tcp.z() - robot.lift;
-    nominal_ready_ = true;
-  }
-
-  // The phase's TCP goal and gripper.
-  ++phase_steps_;
-  Eigen::Vector3d goal = handle;
+struct OpenCabinetExpert::Command {
+  Eigen::Vector3d goal;
   double gripper = 1.0;
   double lead_speed = 0.0;  // m/s along the motion while pulling
-  Eigen::Vector3d motion = door ? axis.cross(handle - origin) : axis;
-  motion = motion.norm() > 1e-9 ? Eigen::Vector3d(motion.normalized()) : Eigen::Vector3d(hx);
-  const Eigen::Matrix3d grasp_rotation = (Eigen::Matrix3d() << hz, hy, -hx).finished();
-  const Eigen::AngleAxisd orientation_error(grasp_rotation * robot.tcp_rotation[0].transpose());
-  const double angle_error = std::abs(orientation_error.angle());
-  switch (phase_) {
-    case Phase::kApproach:
-    case Phase::kPreGrasp: {
-      goal = handle + 0.12 * hx;
-      if (phase_ == Phase::kPreGrasp && phase_steps_ < 5) {  // after a slip: open in place first
-        goal = tcp;
-        break;
-      }
-      const double error = (goal - tcp).norm();
-      if ((error < 0.025 && angle_error < 0.1) || (phase_steps_ > 90 && error < 0.04)) enter(Phase::kGrasp);
-      break;
-    }
-    case Phase::kGrasp: {
-      goal = handle + 0.005 * hx;
-      if ((goal - tcp).norm() < 0.01 || phase_steps_ > 20) enter(Phase::kClose);
-      break;
-    }
-    case Phase::kClose:
-      gripper = -1.0;
-      if (phase_steps_ > 5) enter(Phase::kPull);
-      break;
-    case Phase::kPull: {
-      gripper = -1.0;
-      // ramp up: breaking the joint's friction loose at full speed tears
-      // the handle out of the fingers
-      lead_speed = std::min(door ? door_speed_ : 0.18, 0.05 + 0.02 * phase_steps_);
-      // Drawers: the goal leads the handle. Doors: a short lead with a stiff
-      // gain, so that the pull never exceeds what the fingers hold by
-      // friction (a heavily damped door then just opens slower).
-      goal = handle + (door ? kDoorLead : lead_speed / 5.0) * motion;
-      const bool empty = fingers < 0.004;  // closed on nothing: the handle slipped out
-      if (open_fraction > 0.94) {
-        enter(Phase::kHold);
-      } else if ((empty || (handle - tcp).norm() > 0.05) && phase_steps_ > 3) {
-        enter(Phase::kPreGrasp);  // let go and grasp again
-      }
-      break;
-    }
-    case Phase::kHold:
-      gripper = -1.0;
-      break;
-  }
+};
 
+OpenCabinetExpert::View OpenCabinetExpert::read(const sdk::Observation& observation) const {
+  using L = ObservationLayout;
+  const Eigen::VectorXd s = observation.state;
+  View v;
+  v.robot = agent_.read(s);
+  v.tcp = v.robot.tcp[0];
+  v.handle = getVector3(s, L::kHandlePose);
+  const Eigen::Matrix3d hr = getQuaternion(s, L::kHandlePose + 3).toRotationMatrix();
+  const Eigen::Vector3d hx = hr.col(0), hy = hr.col(1), hz = hr.col(2);
+  v.hx = hx;
+  v.door = s[L::kTargetJointType] < 0.5;
+  const double q = s[L::kTargetJoint], lower = s[L::kTargetJoint + 2], upper = s[L::kTargetJoint + 3];
+  v.open_fraction = (q - lower) / (upper - lower);
+  v.axis = getVector3(s, L::kJointAxis);
+  v.origin = getVector3(s, L::kJointOrigin);
+  v.qdot = s[L::kTargetJoint + 1];
+  v.fingers = s[agent_.joint_positions + 11] + s[agent_.joint_positions + 12];
+  const Eigen::Vector3d motion = v.door ? v.axis.cross(v.handle - v.origin) : v.axis;
+  v.motion = motion.norm() > 1e-9 ? Eigen::Vector3d(motion.normalized()) : Eigen::Vector3d(hx);
+  const Eigen::Matrix3d grasp_rotation = (Eigen::Matrix3d() << hz, hy, -hx).finished();
+  v.orientation_error = Eigen::AngleAxisd(grasp_rotation * v.robot.tcp_rotation[0].transpose());
+  return v;
+}
+
+// To 12 cm in front of the grip (after a slip: open in place first).
+void OpenCabinetExpert::approach(const View& v, Command& c) {
+  c.goal = v.handle + 0.12 * v.hx;
+  if (phase_ == Phase::kPreGrasp && phase_steps_ < 5) {
+    c.goal = v.tcp;
+    return;
+  }
+  const double error = (c.goal - v.tcp).norm();
+  const double angle_error = std::abs(v.orientation_error.angle());
+  if ((error < 0.025 && angle_error < 0.1) || (phase_steps_ > 90 && error < 0.04)) enter(Phase::kGrasp);
+}
+
+void OpenCabinetExpert::grasp(const View& v, Command& c) {
+  c.goal = v.handle + 0.005 * v.hx;
+  if ((c.goal - v.tcp).norm() < 0.01 || phase_steps_ > 20) enter(Phase::kClose);
+}
+
+void OpenCabinetExpert::closeFingers(const View&, Command& c) {
+  c.gripper = -1.0;
+  if (phase_steps_ > 5) enter(Phase::kPull);
+}
+
+void OpenCabinetExpert::pull(const View& v, Command& c) {
+  c.gripper = -1.0;
+  // ramp up: breaking the joint's friction loose at full speed tears
+  // the handle out of the fingers
+  c.lead_speed = std::min(v.door ? door_speed_ : 0.18, 0.05 + 0.02 * phase_steps_);
+  // Drawers: the goal leads the handle. Doors: a short lead with a stiff
+  // gain, so that the pull never exceeds what the fingers hold by
+  // friction (a heavily damped door then just opens slower).
+  c.goal = v.handle + (v.door ? kDoorLead : c.lead_speed / 5.0) * v.motion;
+  const bool empty = v.fingers < 0.004;  // closed on nothing: the handle slipped out
+  if (v.open_fraction > 0.94) {
+    enter(Phase::kHold);
+  } else if ((empty || (v.handle - v.tcp).norm() > 0.05) && phase_steps_ > 3) {
+    enter(Phase::kPreGrasp);  // let go and grasp again
+  }
+}
+
+Eigen::VectorXd OpenCabinetExpert::calcAction(const View& v, const Command& c) const {
+  const mobile_panda::AgentOffsets::Reading& robot = v.robot;
+  const Eigen::Vector3d& tcp = v.tcp;
+  const Eigen::Vector3d& goal = c.goal;
+  const bool door = v.door;
   // Base: keep the goal at the nominal offset from the base.
   const bool holding = phase_ == Phase::kClose || phase_ == Phase::kPull || phase_ == Phase::kHold;
   // Facing the handle; while a door turns, the base turns with it (the
   // arm alone runs out of wrist range), compensated in the arm below.
-  const double yaw_goal = std::atan2(-hx.y(), -hx.x());
+  const double yaw_goal = std::atan2(-v.hx.y(), -v.hx.x());
   const Eigen::Matrix2d goal_rotation = Eigen::Rotation2Dd(yaw_goal).toRotationMatrix();
   const Eigen::Vector2d base_goal = goal.head<2>() - goal_rotation * nominal_offset_;
   Eigen::Vector2d base_velocity = 3.0 * (base_goal - robot.base);
-  const double qdot = s[L::kTargetJoint + 1];
-  const Eigen::Vector3d handle_velocity = door ? Eigen::Vector3d(qdot * axis.cross(handle - origin)) : Eigen::Vector3d(qdot * axis);
+  const Eigen::Vector3d handle_velocity =
+      door ? Eigen::Vector3d(v.qdot * v.axis.cross(v.handle - v.origin)) : Eigen::Vector3d(v.qdot * v.axis);
   if (phase_ == Phase::kPull)
-    base_velocity = base_follow_ * (base_velocity + (door ? handle_velocity.head<2>() : Eigen::Vector2d(lead_speed * motion.head<2>())));
+    base_velocity = base_follow_ * (base_velocity + (door ? handle_velocity.head<2>() : Eigen::Vector2d(c.lead_speed * v.motion.head<2>())));
   // Where the arm alone falls short (reach, joint limits), the base helps.
   base_velocity += 1.5 * (goal - tcp).head<2>();
   if (phase_ == Phase::kHold || phase_ == Phase::kClose) base_velocity.setZero();
@@ -142,16 +155,39 @@ Eigen::VectorXd OpenCabinetExpert::act(const sdk::Observation& observation) {
   const Eigen::Vector3d lever = tcp - Eigen::Vector3d(robot.base.x(), robot.base.y(), tcp.z());
   arm_velocity -= Eigen::Vector3d(base_velocity.x(), base_velocity.y(), 0) +
                   Eigen::Vector3d(0, 0, yaw_rate).cross(lever);
-  Eigen::Vector3d angular = 4.0 * orientation_error.angle() * orientation_error.axis();
+  Eigen::Vector3d angular = 4.0 * v.orientation_error.angle() * v.orientation_error.axis();
   angular.z() -= yaw_rate;  // the base turns the hand too
-  if (phase_ == Phase::kPull && door) angular += axis * qdot;  // turn with the door
+  if (phase_ == Phase::kPull && door) angular += v.axis * v.qdot;  // turn with the door
   angular = clipNorm(angular, kEeAngularSpeed);
 
   Eigen::VectorXd action = Eigen::VectorXd::Zero(action_.dim);
   setBaseAction(action, action_.base, base_local, yaw_rate, lift_rate);
   setEeAction(action, action_.arms[0].linear, action_.arms[0].angular, robot.base_rotation, arm_velocity, angular);
-  action[action_.arms[0].gripper] = gripper;
+  action[action_.arms[0].gripper] = c.gripper;
   return action;
+}
+
+Eigen::VectorXd OpenCabinetExpert::act(const sdk::Observation& observation) {
+  const View v = read(observation);
+  if (!nominal_ready_) {  // the canonical arm pose's TCP, relative to the base
+    const Eigen::Vector3d offset =
+        v.robot.base_rotation.transpose() * (v.tcp - Eigen::Vector3d(v.robot.base.x(), v.robot.base.y(), 0));
+    nominal_offset_ = Eigen::Vector2d(offset.x(), offset.y());
+    nominal_height_ = v.tcp.z() - v.robot.lift;
+    nominal_ready_ = true;
+  }
+  ++phase_steps_;
+  Command c;
+  c.goal = v.handle;
+  switch (phase_) {
+    case Phase::kApproach:
+    case Phase::kPreGrasp: approach(v, c); break;
+    case Phase::kGrasp: grasp(v, c); break;
+    case Phase::kClose: closeFingers(v, c); break;
+    case Phase::kPull: pull(v, c); break;
+    case Phase::kHold: c.gripper = -1.0; break;
+  }
+  return calcAction(v, c);
 }
 
 }  // namespace open_cabinet
