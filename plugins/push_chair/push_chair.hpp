@@ -191,8 +191,20 @@ class PushChairExpert : public mobile_panda::Expert<ExpertPhase> {
   void reset(uint64_t seed) override;
   Eigen::VectorXd act(const sdk::Observation& observation) override;
 
+  struct View;     // what one step reads from the state (push_chair_expert.cpp)
+  struct Command;  // the base's velocity and heading
+
  private:
   using Phase = ExpertPhase;
+  View read(const sdk::Observation& observation) const;
+  // One function per phase: each sets the base's command and says when
+  // the next phase begins.
+  void approach(const View& v, Command& c);
+  void push(const View& v, Command& c);
+  void release(const View& v, Command& c);
+  // The base, the lift and the two hands (a rigid paddle) as commanded.
+  Eigen::VectorXd calcAction(const View& v, const Command& c) const;
+
   bool nominal_ready_ = false;
   std::array<Eigen::Matrix3d, 2> nominal_rotation_{};  // TCP orientation in the base frame at the start
   double nominal_height_ = 0;  // the TCPs' mean height above the lift at the start
