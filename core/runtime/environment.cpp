@@ -193,12 +193,10 @@ void Environment::observe() {
   stage_times_.task += secondsSince(start);
   if (isVisualMode(options_.observation.mode))
     observation_.conservativeResize(description_.agent_state_dim);
-  // Each step samples anew, yet (seed, step) fixes the sample.
-  const uint64_t sample_seed = seed_ * 0x9E3779B97F4A7C15ull + elapsed_steps_;
   // A renderer failure (EGL, a camera it refuses) ends the episode like a
   // diverged simulation, naming task, object, seed and step.
   try {
-    observer_->observe(sample_seed, visual_);
+    observer_->observe(calcSampleSeed(), visual_);
   } catch (const RenderError& e) {
     throw EpisodeFailure(describeEpisode() + ": rendering the '" +
                          toString(options_.observation.mode) + "' observation failed: " + e.what());

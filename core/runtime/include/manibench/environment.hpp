@@ -131,6 +131,9 @@ class Environment {
   const StageTimes& getStageTimes() const { return stage_times_; }
   const std::string& getObjectId() const { return object_id_; }
   uint64_t getSeed() const { return seed_; }
+  // The seed of this step's point-cloud sample: each step samples anew, yet
+  // (seed, step) fixes the sample (the viewer's clouds draw the same).
+  uint64_t calcSampleSeed() const { return seed_ * 0x9E3779B97F4A7C15ull + elapsed_steps_; }
   const Scene& getScene() const;
   Scene& updScene();
 
