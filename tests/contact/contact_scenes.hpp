@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -258,6 +259,17 @@ inline void expectPileReplays(const std::string& integrator) {
   pile.scene.restoreState(saved);
   for (int k = 150; k < 250; ++k) pile.tick(k);
   EXPECT_TRUE(isBitIdentical(first, pile.snapshot())) << integrator;
+}
+
+// Expects `call` to throw a SceneError mentioning every one of `needles`.
+inline void expectSceneError(const std::function<void()>& call, const std::vector<std::string>& needles) {
+  try {
+    call();
+    ADD_FAILURE() << "no SceneError";
+  } catch (const SceneError& e) {
+    for (const std::string& needle : needles)
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace contact_scenes
