@@ -228,7 +228,12 @@ def run_python(net, batch, threads, seconds):
 
 
 def measure(command, env):
-    out = subprocess.run(command, env=env, check=True, capture_output=True, text=True).stdout.strip()
+    done = subprocess.run(command, env=env, capture_output=True, text=True)
+    if done.returncode != 0:
+        # A failed side names itself and its own error (e.g. a python3 without
+        # torch: Debian's python3-torch is /usr/bin/python3's).
+        sys.exit(f"learning_speed.py: {' '.join(command)} failed ({done.returncode}):\n{done.stderr.strip()}")
+    out = done.stdout.strip()
     rate = float(out.split(": ")[1].split(" it/s")[0])
     act = float(out.split("act ")[1].split(" ms")[0])
     return rate, act, out
