@@ -19,19 +19,10 @@
 #include <algorithm>
 #include <cmath>
 
+namespace manibench::controllers {
 namespace {
 
-using manibench::controllers::kPi;
-using manibench::controllers::readLowPassAlpha;
-using manibench::controllers::requirePositive;
-using manibench::controllers::setDampingDrive;
-using manibench::sdk::Config;
-using manibench::sdk::ControllerContext;
-using manibench::sdk::ControllerSpec;
-using manibench::sdk::DriveCommand;
-using manibench::sdk::Error;
-using manibench::sdk::Segment;
-using manibench::sdk::SceneView;
+using namespace manibench::sdk;  // Config, ControllerContext, SceneView, ...
 
 // The velocity stage of both joint controllers: per-joint scale, low-pass
 // filter, one damping drive per context joint.
@@ -47,8 +38,8 @@ class JointVelocityStage {
   }
   double getMaxVelocity(std::size_t joint) const { return max_velocity_[joint]; }
   void reset() { filter_.reset(); }
-  void saveState(manibench::sdk::StateWriter& out) const { filter_.saveState(out); }
-  void restoreState(manibench::sdk::StateReader& in) { filter_.restoreState(in); }
+  void saveState(sdk::StateWriter& out) const { filter_.saveState(out); }
+  void restoreState(sdk::StateReader& in) { filter_.restoreState(in); }
   // `velocity` in joint units; writes one damping drive per joint.
   void apply(const Eigen::VectorXd& velocity, std::vector<DriveCommand>& drives) {
     const Eigen::VectorXd& filtered = filter_.filter(velocity);
@@ -58,7 +49,7 @@ class JointVelocityStage {
 
  private:
   double damping_;
-  manibench::controllers::VelocityStage filter_;
+  VelocityStage filter_;
   std::vector<double> max_velocity_;
 };
 
@@ -68,7 +59,7 @@ std::vector<Segment> perJointSegments(const ControllerContext& context, const st
   return segments;
 }
 
-class JointVelocityController : public manibench::sdk::Controller, public manibench::sdk::Stateful {
+class JointVelocityController : public sdk::Controller, public sdk::Stateful {
  public:
   JointVelocityController(const Config& config, const ControllerContext& context)
       : context_(context), stage_(config, context) {}
@@ -85,15 +76,15 @@ class JointVelocityController : public manibench::sdk::Controller, public manibe
       velocity[j] = action[j] * stage_.getMaxVelocity(std::size_t(j));
     stage_.apply(velocity, drives);
   }
-  void saveState(manibench::sdk::StateWriter& out) const override { stage_.saveState(out); }
-  void restoreState(manibench::sdk::StateReader& in) override { stage_.restoreState(in); }
+  void saveState(sdk::StateWriter& out) const override { stage_.saveState(out); }
+  void restoreState(sdk::StateReader& in) override { stage_.restoreState(in); }
 
  private:
   ControllerContext context_;
   JointVelocityStage stage_;
 };
 
-class JointPositionController : public manibench::sdk::Controller, public manibench::sdk::Stateful {
+class JointPositionController : public sdk::Controller, public sdk::Stateful {
  public:
   JointPositionController(const Config& config, const ControllerContext& context)
       : context_(context),
@@ -137,20 +128,20 @@ class JointPositionController : public manibench::sdk::Controller, public manibe
     first_step_ = false;
     stage_.apply(velocity, drives);
   }
-  void saveState(manibench::sdk::StateWriter& out) const override {
+  void saveState(sdk::StateWriter& out) const override {
     stage_.saveState(out);
     out.writeMatrix(integral_);
     out.writeMatrix(previous_error_);
     out.write<uint8_t>(first_step_);
   }
-  void restoreState(manibench::sdk::StateReader& in) override {
+  void restoreState(sdk::StateReader& in) override {
     stage_.restoreState(in);
     const Eigen::Index joints = integral_.size();
     in.readMatrix(integral_);
     in.readMatrix(previous_error_);
     first_step_ = in.read<uint8_t>() != 0;
     if (integral_.size() != joints || previous_error_.size() != joints)
-      throw manibench::sdk::Error("joint_position state: PID terms for another number of joints",
+      throw sdk::Error("joint_position state: PID terms for another number of joints",
                                   MB_INVALID_ARGUMENT);
   }
 
@@ -164,9 +155,10 @@ class JointPositionController : public manibench::sdk::Controller, public manibe
 };
 
 }  // namespace
+}  // namespace manibench::controllers
 
-MANIBENCH_REGISTER_CONTROLLER(JointVelocityController, "joint_velocity",
+MANIBENCH_REGISTER_CONTROLLER(manibench::controllers::JointVelocityController, "joint_velocity",
                               "joint velocity targets, low-pass filtered, damping drive, gravity balanced (B.7)");
-MANIBENCH_REGISTER_CONTROLLER(JointPositionController, "joint_position",
+MANIBENCH_REGISTER_CONTROLLER(manibench::controllers::JointPositionController, "joint_position",
                               "joint position targets through a PID onto joint_velocity (B.7)");
 MANIBENCH_PLUGIN_LIBRARY("manibench_controllers", "0.1.0");

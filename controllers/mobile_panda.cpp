@@ -15,36 +15,16 @@
 
 #include <memory>
 
+namespace manibench::controllers {
 namespace {
 
-using manibench::controllers::calcBaseVelocity;
-using manibench::controllers::calcFingerTarget;
-using manibench::controllers::describeBaseActions;
-using manibench::controllers::describeGripperAction;
-using manibench::controllers::formatNumber;
-using manibench::controllers::kPandaArmJoints;
-using manibench::controllers::MobilePandaJoints;
-using manibench::controllers::MobilePandaSettings;
-using manibench::controllers::PandaArm;
-using manibench::controllers::readLowPassAlpha;
-using manibench::controllers::setBaseDrives;
-using manibench::controllers::setDampingDrive;
-using manibench::controllers::setGripperDrives;
-using manibench::controllers::VelocityStage;
-using manibench::sdk::Config;
-using manibench::sdk::ControllerContext;
-using manibench::sdk::ControllerSpec;
-using manibench::sdk::DriveCommand;
-using manibench::sdk::SceneView;
+using namespace manibench::sdk;  // Config, ControllerContext, SceneView, ...
 
-class MobilePandaController : public manibench::sdk::Controller, public manibench::sdk::Stateful {
+class MobilePandaController : public sdk::Controller, public sdk::Stateful {
  public:
   MobilePandaController(const Config& config, const ControllerContext& context)
       : context_(context), settings_(config, "mobile_panda"), joints_(context, "mobile_panda") {
-    // The filtered quantities are the velocity actions (base x/y still
-    // egocentric), so that a yawing base keeps a steady command.
-    stage_ = std::make_unique<VelocityStage>(4 + kPandaArmJoints * joints_.arms.size(),
-                                             readLowPassAlpha(config, context.control_frequency));
+    stage_ = makeVelocityStage(config, context, joints_);
   }
 
   ControllerSpec describe() const override {
@@ -84,8 +64,8 @@ class MobilePandaController : public manibench::sdk::Controller, public manibenc
       setGripperDrives(arms[i], settings_, finger_targets[i], drives);
     }
   }
-  void saveState(manibench::sdk::StateWriter& out) const override { stage_->saveState(out); }
-  void restoreState(manibench::sdk::StateReader& in) override { stage_->restoreState(in); }
+  void saveState(sdk::StateWriter& out) const override { stage_->saveState(out); }
+  void restoreState(sdk::StateReader& in) override { stage_->restoreState(in); }
 
  private:
   ControllerContext context_;
@@ -95,7 +75,8 @@ class MobilePandaController : public manibench::sdk::Controller, public manibenc
 };
 
 }  // namespace
+}  // namespace manibench::controllers
 
-MANIBENCH_REGISTER_CONTROLLER(MobilePandaController, "mobile_panda",
+MANIBENCH_REGISTER_CONTROLLER(manibench::controllers::MobilePandaController, "mobile_panda",
                               "mobile Panda robots: egocentric base, lift, arm joint velocities, one "
                               "gripper action per arm (B.7)");

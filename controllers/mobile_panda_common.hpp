@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -148,6 +149,16 @@ struct MobilePandaJoints {
     yaw_index = Eigen::Index(context.joints[root_yaw].index);
   }
 };
+
+// Both mobile Panda controllers filter their velocity actions (base x/y
+// still egocentric, so that a yawing base keeps a steady command): the
+// base's and lift's 4 and each arm's 7.
+inline std::unique_ptr<VelocityStage> makeVelocityStage(const sdk::Config& config,
+                                                        const sdk::ControllerContext& context,
+                                                        const MobilePandaJoints& joints) {
+  return std::make_unique<VelocityStage>(4 + kPandaArmJoints * joints.arms.size(),
+                                         readLowPassAlpha(config, context.control_frequency));
+}
 
 // Action segments 0-3: base_forward, base_left, base_yaw, lift.
 inline std::vector<sdk::Segment> describeBaseActions(const MobilePandaSettings& s) {

@@ -36,29 +36,10 @@
 #include <Eigen/Geometry>
 #include <memory>
 
+namespace manibench::controllers {
 namespace {
 
-using manibench::controllers::calcBaseVelocity;
-using manibench::controllers::calcFingerTarget;
-using manibench::controllers::describeBaseActions;
-using manibench::controllers::describeGripperAction;
-using manibench::controllers::formatNumber;
-using manibench::controllers::kPandaArmJoints;
-using manibench::controllers::MobilePandaJoints;
-using manibench::controllers::MobilePandaSettings;
-using manibench::controllers::PandaArm;
-using manibench::controllers::readLowPassAlpha;
-using manibench::controllers::requirePositive;
-using manibench::controllers::setBaseDrives;
-using manibench::controllers::setDampingDrive;
-using manibench::controllers::setGripperDrives;
-using manibench::controllers::VelocityStage;
-using manibench::sdk::Config;
-using manibench::sdk::ControllerContext;
-using manibench::sdk::ControllerSpec;
-using manibench::sdk::DriveCommand;
-using manibench::sdk::Error;
-using manibench::sdk::SceneView;
+using namespace manibench::sdk;  // Config, ControllerContext, SceneView, ...
 
 constexpr int kActionsPerArm = 7;  // linear 3, angular 3, gripper 1
 
@@ -83,7 +64,7 @@ Eigen::Matrix3d fromRotationVector(const Eigen::Vector3d& v) {
   return Eigen::AngleAxisd(angle, v / angle).toRotationMatrix();
 }
 
-class MobilePandaEeController : public manibench::sdk::Controller, public manibench::sdk::Stateful {
+class MobilePandaEeController : public sdk::Controller, public sdk::Stateful {
  public:
   MobilePandaEeController(const Config& config, const ControllerContext& context)
       : context_(context),
@@ -96,8 +77,7 @@ class MobilePandaEeController : public manibench::sdk::Controller, public manibe
         max_position_error_(requirePositive(config, "ee_max_position_error", 0.02)),
         max_orientation_error_(requirePositive(config, "ee_max_orientation_error", 0.1)),
         targets_(joints_.arms.size(), Eigen::Isometry3d::Identity()) {
-    stage_ = std::make_unique<VelocityStage>(4 + kPandaArmJoints * joints_.arms.size(),
-                                             readLowPassAlpha(config, context.control_frequency));
+    stage_ = makeVelocityStage(config, context, joints_);
   }
 
   ControllerSpec describe() const override {
@@ -158,12 +138,12 @@ class MobilePandaEeController : public manibench::sdk::Controller, public manibe
   }
 
   // The filter and the integrated TCP targets (the links come from reset).
-  void saveState(manibench::sdk::StateWriter& out) const override {
+  void saveState(sdk::StateWriter& out) const override {
     stage_->saveState(out);
     out.write<uint64_t>(targets_.size());
     for (const Eigen::Isometry3d& target : targets_) out.writeMatrix(target.matrix());
   }
-  void restoreState(manibench::sdk::StateReader& in) override {
+  void restoreState(sdk::StateReader& in) override {
     stage_->restoreState(in);
     if (in.read<uint64_t>() != targets_.size())
       throw Error("mobile_panda_ee state: TCP targets for another number of arms",
@@ -244,7 +224,8 @@ class MobilePandaEeController : public manibench::sdk::Controller, public manibe
 };
 
 }  // namespace
+}  // namespace manibench::controllers
 
-MANIBENCH_REGISTER_CONTROLLER(MobilePandaEeController, "mobile_panda_ee",
+MANIBENCH_REGISTER_CONTROLLER(manibench::controllers::MobilePandaEeController, "mobile_panda_ee",
                               "mobile Panda robots: egocentric base, lift, TCP linear and angular "
                               "velocity per arm in the base frame, one gripper action per arm (B.7)");

@@ -15,6 +15,18 @@
 
 namespace manibench::cli {
 
+int runMain(const std::string& program, const std::function<int()>& body, bool break_line_first) {
+  try {
+    return body();
+  } catch (const UsageError& e) {
+    std::cerr << program << ": " << e.what() << "\n\n" << e.usage();
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << (break_line_first ? "\n" : "") << program << ": error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
 Arguments parseArguments(int argc, char** argv, int first, const std::vector<std::string>& valued,
                          const std::vector<std::string>& flags, const char* usage,
                          const std::vector<std::string>& repeatable) {
@@ -55,7 +67,7 @@ uint64_t parseSeed(const std::string& text, const char* usage, const std::string
   try {
     std::size_t used = 0;
     const unsigned long long value = std::stoull(text, &used);
-    if (used != text.size() || text.find('-') != std::string::npos) throw std::invalid_argument(text);
+    if (used != text.size() || text.find('-') != std::string::npos) throw InvalidArgument(text);
     return value;
   } catch (const std::exception&) {
     throw UsageError(option + " needs a non-negative integer, got '" + text + "'", usage);

@@ -13,6 +13,7 @@
 #include <signal.h>
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -37,15 +38,21 @@ int commandDemo(int argc, char** argv);     // command_demo.cpp
 int commandDemos(int argc, char** argv);    // command_demos.cpp
 
 // A usage error carries the usage text of the command it concerns.
-class UsageError : public std::runtime_error {
+class UsageError : public Error {
  public:
   UsageError(const std::string& message, const char* usage)
-      : std::runtime_error(message), usage_(usage) {}
+      : Error(message), usage_(usage) {}
   const char* usage() const { return usage_; }
 
  private:
   const char* usage_;
 };
+
+// A program's main around `body`: a UsageError prints "<program>: message"
+// and the usage (exit 2), any other exception "<program>: error: message"
+// (exit 1, after a line break when `break_line_first`: a progress line may
+// still be open). Shared by manibench, manibench-view and manibench-train.
+int runMain(const std::string& program, const std::function<int()>& body, bool break_line_first = false);
 
 // Minimal argument reader: positional words and --key value / --flag.
 // Repeatable options (--config, --set) keep every value in order.

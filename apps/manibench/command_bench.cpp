@@ -106,7 +106,7 @@ int commandBench(int argc, char** argv) {
     stages.render += observer_now.render - observer_before.render;
     stages.assembly += observer_now.assembly - observer_before.assembly;
     ++steps;
-    if (result.done && result.success) ++successes;
+    if (result.isDone() && result.success) ++successes;
     return steps < target_steps;
   };
   while (steps < target_steps) {

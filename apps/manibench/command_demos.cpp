@@ -71,7 +71,7 @@ std::vector<std::string> parseTrajectoryList(const Arguments& args) {
   if (!args.options.count("trajectories")) return {};
   try {
     return parseIdList(args.options.at("trajectories"));
-  } catch (const std::invalid_argument& e) {
+  } catch (const InvalidArgument& e) {
     throw UsageError(e.what(), kDemosUsage);
   }
 }
@@ -121,7 +121,7 @@ int generate(int argc, char** argv) {
   if (args.options.count("objects")) {
     try {
       evaluation.objects = parseIdList(args.options.at("objects"));
-    } catch (const std::invalid_argument& e) {
+    } catch (const InvalidArgument& e) {
       throw UsageError(e.what(), kDemosUsage);
     }
   }

@@ -140,7 +140,7 @@ int commandEval(int argc, char** argv) {
       for (uint64_t level = 0; level < n; ++level) options.levels.push_back(level);
     }
     if (args.options.count("objects")) options.objects = parseIdList(args.options.at("objects"));
-  } catch (const std::invalid_argument& e) {
+  } catch (const InvalidArgument& e) {
     throw UsageError(e.what(), kEvalUsage);
   }
 

@@ -69,7 +69,7 @@ class TraceWriter {
     for (Eigen::Index i = 0; i < action.size(); ++i) put(action[i]);
     put(result.reward);
     for (uint8_t flag : result.flags) out_ << "," << int(flag);
-    out_ << "," << (result.done ? 1 : 0) << "\n";
+    out_ << "," << (result.isDone() ? 1 : 0) << "\n";
     observation_ = next_observation;
   }
   void close(const std::string& path) {

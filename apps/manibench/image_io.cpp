@@ -1,5 +1,7 @@
 #include "image_io.hpp"
 
+#include <manibench/error.hpp>
+
 #include <png.h>
 
 #include <algorithm>
@@ -61,16 +63,16 @@ void writePng8(const std::string& path, int width, int height, int channels,
                    : channels == 3 ? PNG_COLOR_TYPE_RGB
                    : channels == 4 ? PNG_COLOR_TYPE_RGBA
                                    : -1;
-  if (type < 0) throw std::invalid_argument("writePng8: channels must be 1, 3 or 4");
+  if (type < 0) throw InvalidArgument("writePng8: channels must be 1, 3 or 4");
   if (pixels.size() != std::size_t(width) * height * channels)
-    throw std::invalid_argument("writePng8: " + path + ": pixel count does not match the size");
+    throw InvalidArgument("writePng8: " + path + ": pixel count does not match the size");
   writePng(path, width, height, type, 8, pixels.data(), std::size_t(width) * channels);
 }
 
 void writePng16(const std::string& path, int width, int height,
                 const std::vector<std::uint16_t>& pixels) {
   if (pixels.size() != std::size_t(width) * height)
-    throw std::invalid_argument("writePng16: " + path + ": pixel count does not match the size");
+    throw InvalidArgument("writePng16: " + path + ": pixel count does not match the size");
   writePng(path, width, height, PNG_COLOR_TYPE_GRAY, 16,
            reinterpret_cast<const std::uint8_t*>(pixels.data()), std::size_t(width) * 2);
 }
@@ -78,7 +80,7 @@ void writePng16(const std::string& path, int width, int height,
 void writePly(const std::string& path, const PointCloud& cloud,
               const std::vector<std::string>& mask_names) {
   if (mask_names.size() != cloud.mask_count)
-    throw std::invalid_argument("writePly: " + path + ": mask names do not match the cloud");
+    throw InvalidArgument("writePly: " + path + ": mask names do not match the cloud");
   std::ofstream out(path, std::ios::binary);
   if (!out) throw std::runtime_error("cannot write " + path + ": " + std::strerror(errno));
   out << "ply\nformat binary_little_endian 1.0\ncomment manibench point cloud, world frame, m\n"

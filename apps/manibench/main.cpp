@@ -71,41 +71,38 @@ int runExternalCommand(const std::string& command, int argc, char** argv, const 
   throw std::runtime_error("cannot run " + program + ": " + std::strerror(errno));
 }
 
+// The command named by argv[1].
+int dispatch(int argc, char** argv) {
+  const std::string command = argc > 1 ? argv[1] : "";
+  if (command == "--help" || command == "-h" || command == "help") {
+    std::cout << kMainUsage;
+    return 0;
+  }
+  if (command == "list") return commandList(argc, argv);
+  if (command == "info") return commandInfo(argc, argv);
+  if (command == "run") return commandRun(argc, argv);
+  if (command == "config") return commandConfig(argc, argv);
+  if (command == "demo") return commandDemo(argc, argv);
+  if (command == "bench") return commandBench(argc, argv);
+  if (command == "render") return commandRender(argc, argv);
+  if (command == "eval") return commandEval(argc, argv);
+  if (command == "objects") return commandObjects(argc, argv);
+  if (command == "demos") return commandDemos(argc, argv);
+  if (command == "train")
+    return runExternalCommand(command, argc, argv,
+                              "the learning module, built where libtorch is installed (Debian's "
+                              "libtorch-dev; scripts/install-deps installs it), docs/learning.md");
+  if (command == "view")
+    return runExternalCommand(command, argc, argv,
+                              "the viewer, built where GLFW and Dear ImGui are installed (Debian's "
+                              "libglfw3-dev and libimgui-dev; scripts/install-deps installs them), "
+                              "docs/viewer.md");
+  throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'",
+                   kMainUsage);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string command = argc > 1 ? argv[1] : "";
-  try {
-    if (command == "--help" || command == "-h" || command == "help") {
-      std::cout << kMainUsage;
-      return 0;
-    }
-    if (command == "list") return commandList(argc, argv);
-    if (command == "info") return commandInfo(argc, argv);
-    if (command == "run") return commandRun(argc, argv);
-    if (command == "config") return commandConfig(argc, argv);
-    if (command == "demo") return commandDemo(argc, argv);
-    if (command == "bench") return commandBench(argc, argv);
-    if (command == "render") return commandRender(argc, argv);
-    if (command == "eval") return commandEval(argc, argv);
-    if (command == "objects") return commandObjects(argc, argv);
-    if (command == "demos") return commandDemos(argc, argv);
-    if (command == "train")
-      return runExternalCommand(command, argc, argv,
-                                "the learning module, built where libtorch is installed (Debian's "
-                                "libtorch-dev; scripts/install-deps installs it), docs/learning.md");
-    if (command == "view")
-      return runExternalCommand(command, argc, argv,
-                                "the viewer, built where GLFW and Dear ImGui are installed (Debian's "
-                                "libglfw3-dev and libimgui-dev; scripts/install-deps installs them), "
-                                "docs/viewer.md");
-    throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'",
-                     kMainUsage);
-  } catch (const UsageError& e) {
-    std::cerr << "manibench: " << e.what() << "\n\n" << e.usage();
-    return 2;
-  } catch (const std::exception& e) {
-    std::cerr << "manibench: error: " << e.what() << "\n";
-    return 1;
-  }
+  return runMain("manibench", [&] { return dispatch(argc, argv); });
 }

@@ -53,34 +53,21 @@ void VideoWriter::close() {
                              ")");
 }
 
-namespace {
-CameraSpec makeThirdPersonCamera(int width, int height) {
-  CameraSpec camera;
-  camera.name = "third_person";
-  camera.width = width;
-  camera.height = height;
-  camera.fovy = 1.0;
-  camera.far = 20;
-  return camera;
-}
-}  // namespace
 
 EpisodeVideo::EpisodeVideo(Environment& env, const std::string& path, int width, int height)
     : env_(env),
-      camera_(makeThirdPersonCamera(width, height)),
+      width_(width),
+      height_(height),
+      view_(calcThirdPersonView(env.getScene(), env.getTaskDescription().robot_articulation, width, height)),
       writer_(path, width, height,
               env.getTaskDescription().control_frequency / env.getTaskDescription().frame_skip) {}
 
 void EpisodeVideo::aimAtRobot() {
-  const Scene& scene = env_.getScene();
-  const int robot = scene.findArticulation(env_.getTaskDescription().robot_articulation);
-  const Eigen::Vector3d target =
-      (robot >= 0 ? scene.getRootPose(robot).position : Eigen::Vector3d::Zero()) + Eigen::Vector3d(0, 0, 0.6);
-  pose_ = calcLookAtPose(target + Eigen::Vector3d(2.5, -2.5, 1.6), target);
+  view_ = calcThirdPersonView(env_.getScene(), env_.getTaskDescription().robot_articulation, width_, height_);
 }
 
 void EpisodeVideo::record() {
-  env_.updObserver().updRenderer().render(camera_, pose_, frame_);
+  env_.updObserver().updRenderer().render(view_.camera, view_.pose, frame_);
   writer_.write(frame_);
 }
 

@@ -36,7 +36,7 @@ class EpisodeVideo {
  public:
   EpisodeVideo(Environment& env, const std::string& path, int width, int height);
   // From the front-right, above, looking at the robot's root where the
-  // reset put it.
+  // reset put it (calcThirdPersonView).
   void aimAtRobot();
   // A frame of the current state.
   void record();
@@ -45,8 +45,8 @@ class EpisodeVideo {
 
  private:
   Environment& env_;
-  CameraSpec camera_;
-  Pose pose_;
+  int width_, height_;
+  ThirdPersonView view_;  // the one third-person view (visual_observer.hpp)
   CameraImages frame_;
   VideoWriter writer_;
 };

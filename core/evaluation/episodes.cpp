@@ -35,12 +35,12 @@ uint64_t hashString(const std::string& text) {
 uint64_t parseLevel(const std::string& text, const std::string& whole) {
   if (text.empty() ||
       !std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c); }))
-    throw std::invalid_argument("levels '" + whole + "': '" + text +
+    throw InvalidArgument("levels '" + whole + "': '" + text +
                                 "' is not a non-negative integer");
   try {
     return std::stoull(text);
   } catch (const std::exception&) {
-    throw std::invalid_argument("levels '" + whole + "': '" + text + "' is too large");
+    throw InvalidArgument("levels '" + whole + "': '" + text + "' is too large");
   }
 }
 
@@ -87,7 +87,7 @@ std::vector<EpisodeSpec> makeEpisodeList(const std::vector<std::string>& objects
 std::vector<uint64_t> parseLevels(const std::string& text) {
   std::vector<uint64_t> levels;
   for (const std::string& part : splitCommas(text)) {
-    if (part.empty()) throw std::invalid_argument("levels '" + text + "': empty entry");
+    if (part.empty()) throw InvalidArgument("levels '" + text + "': empty entry");
     const std::size_t dash = part.find('-');
     if (dash == std::string::npos) {
       levels.push_back(parseLevel(part, text));
@@ -96,9 +96,9 @@ std::vector<uint64_t> parseLevels(const std::string& text) {
     const uint64_t first = parseLevel(part.substr(0, dash), text);
     const uint64_t last = parseLevel(part.substr(dash + 1), text);
     if (last < first)
-      throw std::invalid_argument("levels '" + text + "': range '" + part + "' is backwards");
+      throw InvalidArgument("levels '" + text + "': range '" + part + "' is backwards");
     if (last - first >= 1000000)
-      throw std::invalid_argument("levels '" + text + "': range '" + part + "' is too long");
+      throw InvalidArgument("levels '" + text + "': range '" + part + "' is too long");
     for (uint64_t level = first; level <= last; ++level) levels.push_back(level);
   }
   std::sort(levels.begin(), levels.end());
@@ -109,7 +109,7 @@ std::vector<uint64_t> parseLevels(const std::string& text) {
 std::vector<std::string> parseIdList(const std::string& text) {
   std::vector<std::string> ids;
   for (const std::string& part : splitCommas(text)) {
-    if (part.empty()) throw std::invalid_argument("object list '" + text + "': empty entry");
+    if (part.empty()) throw InvalidArgument("object list '" + text + "': empty entry");
     if (std::find(ids.begin(), ids.end(), part) == ids.end()) ids.push_back(part);
   }
   return ids;

@@ -10,6 +10,21 @@ std::string describeArticulations(const Scene& scene) {
   return names.empty() ? "none" : names;
 }
 
+ThirdPersonView calcThirdPersonView(const Scene& scene, const std::string& articulation, int width,
+                                    int height) {
+  ThirdPersonView view;
+  view.camera.name = "third_person";
+  view.camera.width = width;
+  view.camera.height = height;
+  view.camera.fovy = 1.0;
+  view.camera.far = 20;
+  const int robot = scene.findArticulation(articulation);
+  const Eigen::Vector3d target =
+      (robot >= 0 ? scene.getRootPose(robot).position : Eigen::Vector3d::Zero()) + Eigen::Vector3d(0, 0, 0.6);
+  view.pose = calcLookAtPose(target + Eigen::Vector3d(2.5, -2.5, 1.6), target);
+  return view;
+}
+
 CameraRig::CameraRig(const Scene& scene, const std::vector<CameraMount>& cameras,
                      const std::string& task_name)
     : scene_(scene), cameras_(cameras) {

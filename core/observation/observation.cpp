@@ -47,32 +47,32 @@ const std::vector<std::string>& getRgbDtypeNames() {
 
 void validateObservationOptions(const ObservationOptions& options) {
   if (isVisualMode(options.mode) && options.cameras.empty())
-    throw std::invalid_argument(std::string("observation mode '") + toString(options.mode) +
+    throw InvalidArgument(std::string("observation mode '") + toString(options.mode) +
                                 "' needs at least one camera, and the configuration's `cameras` "
                                 "list is empty");
   std::set<std::string> camera_names;
   for (const CameraMount& camera : options.cameras) {
     const std::string where = camera.source.empty() ? "camera '" + camera.spec.name + "'" : camera.source;
     if (!camera_names.insert(camera.spec.name).second)
-      throw std::invalid_argument(where + ": duplicate camera name '" + camera.spec.name + "'");
+      throw InvalidArgument(where + ": duplicate camera name '" + camera.spec.name + "'");
     if (!camera.link.empty() && camera.articulation.empty())
-      throw std::invalid_argument(where + ": camera '" + camera.spec.name + "' names link '" +
+      throw InvalidArgument(where + ": camera '" + camera.spec.name + "' names link '" +
                                   camera.link + "' but no articulation");
     if (camera.spec.width < 1 || camera.spec.height < 1)
-      throw std::invalid_argument(where + ": camera '" + camera.spec.name + "' has an empty image");
+      throw InvalidArgument(where + ": camera '" + camera.spec.name + "' has an empty image");
   }
   if (options.mode == ObservationMode::Rgbd)
     for (const CameraMount& camera : options.cameras) {
       const CameraSpec& first = options.cameras.front().spec;
       if (camera.spec.width != first.width || camera.spec.height != first.height)
-        throw std::invalid_argument(
+        throw InvalidArgument(
             "observation mode 'rgbd' stacks the cameras' images, so they must be of one size: "
             "camera '" + first.name + "' is " + std::to_string(first.width) + "x" +
             std::to_string(first.height) + ", camera '" + camera.spec.name + "' is " +
             std::to_string(camera.spec.width) + "x" + std::to_string(camera.spec.height));
     }
   if (options.pointcloud.masked_total > options.pointcloud.total)
-    throw std::invalid_argument("point cloud sampling: masked_total exceeds total");
+    throw InvalidArgument("point cloud sampling: masked_total exceeds total");
 }
 
 }  // namespace manibench

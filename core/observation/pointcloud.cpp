@@ -1,4 +1,6 @@
+#include <manibench/error.hpp>
 #include <manibench/pointcloud.hpp>
+#include <manibench/sdk/random.hpp>
 
 #include <algorithm>
 #include <stdexcept>
@@ -7,30 +9,9 @@
 namespace manibench {
 namespace {
 
-// SplitMix64: small, fast and the same on every platform and standard
-// library (std::uniform_int_distribution is not), so that a seed gives
-// the same cloud everywhere.
-class SplitMix64 {
- public:
-  explicit SplitMix64(uint64_t seed) : state_(seed) {}
-  uint64_t next() {
-    uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-  // In [0, bound): multiply-shift; the bias (bound / 2^64) is negligible.
-  uint64_t below(uint64_t bound) {
-    return static_cast<uint64_t>((static_cast<unsigned __int128>(next()) * bound) >> 64);
-  }
-
- private:
-  uint64_t state_;
-};
-
 // Marks `count` of `candidates` (all when it has no more) as chosen, at
 // random without replacement (a partial Fisher-Yates shuffle).
-void chooseSome(std::vector<uint32_t>& candidates, std::size_t count, SplitMix64& rng,
+void chooseSome(std::vector<uint32_t>& candidates, std::size_t count, sdk::Random& rng,
                 std::vector<std::uint8_t>& chosen) {
   const std::size_t n = candidates.size();
   if (count >= n) {
@@ -75,10 +56,13 @@ const std::vector<uint32_t>& PointCloudSampler::select(
     const PointCloudSampling& sampling, uint64_t seed,
     const std::function<bool(uint32_t)>& is_above_ground) {
   if (sampling.masked_total > sampling.total)
-    throw std::invalid_argument("point cloud sampling: masked_total (" +
+    throw InvalidArgument("point cloud sampling: masked_total (" +
                                 std::to_string(sampling.masked_total) + ") exceeds total (" +
                                 std::to_string(sampling.total) + ")");
-  SplitMix64 rng(seed);
+  // The SDK's SplitMix64: the same numbers on every platform and standard
+  // library (std::uniform_int_distribution's are not), so a seed gives the
+  // same cloud everywhere.
+  sdk::Random rng(seed);
   const std::size_t masked = masked_.size();
   chosen_.assign(masked, 0);
   // 1. Every mask gets up to per_mask points of its own (a point already
@@ -127,12 +111,12 @@ std::vector<uint32_t> selectPointCloudSample(const PointCloud& raw,
   const std::size_t n = raw.size();
   const std::size_t k = raw.mask_count;
   if (raw.xyz.size() != 3 * n || raw.rgb.size() != 3 * n || raw.masks.size() != k * n)
-    throw std::invalid_argument(
+    throw InvalidArgument(
         "point cloud arrays disagree: " + std::to_string(raw.xyz.size()) + " xyz values, " +
         std::to_string(raw.rgb.size()) + " rgb values and " + std::to_string(raw.masks.size()) +
         " mask values for " + std::to_string(k) + " masks");
-  if (n > UINT32_MAX) throw std::invalid_argument("point cloud has more than 2^32 points");
-  if (k > 64) throw std::invalid_argument("point cloud has more than 64 masks");
+  if (n > UINT32_MAX) throw InvalidArgument("point cloud has more than 2^32 points");
+  if (k > 64) throw InvalidArgument("point cloud has more than 64 masks");
   PointCloudSampler sampler;
   for (std::size_t i = 0; i < n; ++i) {
     std::uint64_t bits = 0;

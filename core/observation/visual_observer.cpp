@@ -1,6 +1,7 @@
 // The pointcloud and rgbd observations: render every camera, then turn the
 // pixels into one world-frame cloud (subsampled as supplement D.1) or stack
 // them along the channel axis as ManiSkill does.
+#include <manibench/stopwatch.hpp>
 #include <manibench/visual_observer.hpp>
 
 #include "image_rows.hpp"
@@ -12,14 +13,6 @@
 #include <cstring>
 
 namespace manibench {
-
-namespace {
-using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
-}  // namespace
 
 VisualObserver::VisualObserver(const Scene& scene, const ObservationOptions& options,
                                const SegmentationMasks& masks, const std::string& task_name)

@@ -1,8 +1,12 @@
 // SceneRenderer: all visual geometry of a scene in one vertex and one index
 // buffer (uploaded once), one draw per visual part with a model-view matrix
 // from the current link pose; per camera an FBO with RGBA8 color, R32UI
-// segmentation (visual index + 1) and 32-bit float depth.
+// segmentation (visual index + 1) and 32-bit float depth. Past 600 lines
+// because it is one class whose parts (upload, camera targets, draw,
+// read-back) share its GL state; the shader program and the context-free
+// camera geometry are shader_program.cpp and camera_geometry.cpp.
 #include "render_context_impl.hpp"
+#include "shader_program.hpp"
 #include "tessellation.hpp"
 
 #define GL_GLEXT_PROTOTYPES 1
@@ -18,119 +22,6 @@
 
 namespace manibench {
 namespace {
-
-const char* const kVertexShader = R"(#version 330 core
-layout(location = 0) in vec3 a_position;
-layout(location = 1) in vec3 a_normal;
-uniform mat4 u_model_view;
-uniform mat4 u_projection;
-uniform mat3 u_normal_matrix;
-out vec3 v_position;
-out vec3 v_normal;
-void main() {
-  vec4 p = u_model_view * vec4(a_position, 1.0);
-  v_position = p.xyz;
-  v_normal = u_normal_matrix * a_normal;
-  gl_Position = u_projection * p;
-}
-)";
-
-// Lights arrive in the camera (view) frame. The light counts are compile-
-// time constants (one program per count pair): llvmpipe runs loops with
-// uniform bounds about five times slower than unrolled ones. Specular
-// exponent 32 by repeated squaring (pow() is slow there too).
-const char* const kFragmentShaderBody = R"(
-in vec3 v_position;
-in vec3 v_normal;
-uniform vec4 u_color;
-uniform uint u_segment;
-uniform vec3 u_ambient;
-uniform vec3 u_directional_to_light[DIRECTIONAL_SIZE];
-uniform vec3 u_directional_color[DIRECTIONAL_SIZE];
-uniform vec3 u_point_position[POINT_SIZE];
-uniform vec3 u_point_color[POINT_SIZE];
-layout(location = 0) out vec4 o_color;
-layout(location = 1) out uint o_segment;
-float specular(vec3 n, vec3 l, vec3 v) {
-  float s = max(dot(n, normalize(l + v)), 0.0);
-  s *= s; s *= s; s *= s; s *= s; s *= s;
-  return s;
-}
-void main() {
-  vec3 n = normalize(v_normal);
-  if (!gl_FrontFacing) n = -n;
-  vec3 v = normalize(-v_position);
-  vec3 diffuse = u_ambient;
-  vec3 shine = vec3(0.0);
-  for (int i = 0; i < DIRECTIONAL_COUNT; ++i) {
-    vec3 l = u_directional_to_light[i];
-    float lambert = max(dot(n, l), 0.0);
-    diffuse += u_directional_color[i] * lambert;
-    if (lambert > 0.0) shine += u_directional_color[i] * specular(n, l, v);
-  }
-  for (int i = 0; i < POINT_COUNT; ++i) {
-    vec3 d = u_point_position[i] - v_position;
-    float r2 = max(dot(d, d), 1e-6);
-    vec3 l = d * inversesqrt(r2);
-    float lambert = max(dot(n, l), 0.0);
-    diffuse += u_point_color[i] * (lambert / r2);
-    if (lambert > 0.0) shine += u_point_color[i] * (specular(n, l, v) / r2);
-  }
-  o_color = vec4(clamp(u_color.rgb * diffuse + 0.1 * shine, 0.0, 1.0), 1.0);
-  o_segment = u_segment;
-}
-)";
-
-std::string getFragmentShader(int directional_count, int point_count) {
-  return "#version 330 core\n#define DIRECTIONAL_COUNT " + std::to_string(directional_count) +
-         "\n#define DIRECTIONAL_SIZE " + std::to_string(std::max(directional_count, 1)) +
-         "\n#define POINT_COUNT " + std::to_string(point_count) + "\n#define POINT_SIZE " +
-         std::to_string(std::max(point_count, 1)) + "\n" + kFragmentShaderBody;
-}
-
-GLuint compileShader(GLenum type, const char* source) {
-  GLuint shader = glCreateShader(type);
-  glShaderSource(shader, 1, &source, nullptr);
-  glCompileShader(shader);
-  return shader;  // checked at link: Mesa's shader cache may skip the compile
-}
-
-std::string getShaderLog(GLuint shader) {
-  GLint length = 0;
-  glGetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
-  std::string log(static_cast<std::size_t>(std::max(length, 1)), '\0');
-  glGetShaderInfoLog(shader, length, nullptr, log.data());
-  return log.c_str();
-}
-
-GLuint linkProgram(int directional_count, int point_count) {
-  const std::string fragment_source = getFragmentShader(directional_count, point_count);
-  GLuint vertex = compileShader(GL_VERTEX_SHADER, kVertexShader);
-  GLuint fragment = compileShader(GL_FRAGMENT_SHADER, fragment_source.c_str());
-  GLuint program = glCreateProgram();
-  glAttachShader(program, vertex);
-  glAttachShader(program, fragment);
-  glLinkProgram(program);
-  GLint ok = GL_FALSE;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  std::string error;
-  if (ok != GL_TRUE) {
-    GLint length = 0;
-    glGetProgramiv(program, GL_INFO_LOG_LENGTH, &length);
-    std::string log(static_cast<std::size_t>(std::max(length, 1)), '\0');
-    glGetProgramInfoLog(program, length, nullptr, log.data());
-    error = "renderer shader program does not link: " + std::string(log.c_str()) +
-            " vertex shader: " + getShaderLog(vertex) +
-            " fragment shader: " + getShaderLog(fragment);
-  }
-  glDeleteShader(vertex);
-  glDeleteShader(fragment);
-  if (!error.empty()) {
-    glDeleteProgram(program);
-    throw RenderError(error);
-  }
-  return program;
-}
 
 void checkGlError(const char* what) {
   const GLenum error = glGetError();
@@ -459,7 +350,7 @@ const ShaderProgram& SceneRenderer::Impl::getProgram() {
   auto found = programs.find(counts);
   if (found != programs.end()) return found->second;
   ShaderProgram program;
-  program.id = linkProgram(counts.first, counts.second);
+  program.id = linkSceneProgram(counts.first, counts.second);
   const auto location = [&](const char* name) { return glGetUniformLocation(program.id, name); };
   program.model_view = location("u_model_view");
   program.projection = location("u_projection");
@@ -741,57 +632,5 @@ void SceneRenderer::setVisualColor(int visual, const Eigen::Vector4f& rgba) {
 std::size_t SceneRenderer::getTriangleCount() const { return impl_->triangle_count; }
 
 const RenderDeviceInfo& SceneRenderer::getDeviceInfo() const { return impl_->context.info; }
-
-Eigen::Matrix3Xf calcCameraPoints(const CameraImages& images, bool world,
-                                  std::vector<int>* pixels) {
-  const std::size_t count = static_cast<std::size_t>(images.width) * images.height;
-  if (images.depth.size() != count) {
-    throw RenderError("calcCameraPoints: " + std::to_string(images.depth.size()) +
-                      " depth values for a " + std::to_string(images.width) + "x" +
-                      std::to_string(images.height) + " image");
-  }
-  std::size_t valid = 0;
-  for (float z : images.depth) valid += z > 0 ? 1 : 0;
-  Eigen::Matrix3Xf points(3, static_cast<Eigen::Index>(valid));
-  if (pixels != nullptr) pixels->resize(valid);
-  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
-  if (world) {
-    rotation = images.camera_to_world.linear();
-    translation = images.camera_to_world.translation();
-  }
-  Eigen::Index k = 0;
-  for (int row = 0; row < images.height; ++row) {
-    for (int col = 0; col < images.width; ++col) {
-      const std::size_t i = static_cast<std::size_t>(row) * images.width + col;
-      const float z = images.depth[i];
-      if (!(z > 0)) continue;
-      points.col(k) = calcPixelPoint(images.intrinsic, rotation, translation, row, col, z);
-      if (pixels != nullptr) (*pixels)[static_cast<std::size_t>(k)] = static_cast<int>(i);
-      ++k;
-    }
-  }
-  return points;
-}
-
-Pose calcLookAtPose(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
-                    const Eigen::Vector3d& up) {
-  const Eigen::Vector3d forward = target - eye;
-  if (!(forward.norm() > 1e-12)) throw RenderError("calcLookAtPose: eye and target coincide");
-  const Eigen::Vector3d x = forward.normalized();
-  Eigen::Vector3d y = up.cross(x);
-  if (y.norm() < 1e-9) y = Eigen::Vector3d::UnitX().cross(x);  // looking along `up`
-  if (y.norm() < 1e-9) y = Eigen::Vector3d::UnitY().cross(x);
-  y.normalize();
-  const Eigen::Vector3d z = x.cross(y);
-  Eigen::Matrix3d rotation;
-  rotation.col(0) = x;
-  rotation.col(1) = y;
-  rotation.col(2) = z;
-  Pose pose;
-  pose.position = eye;
-  pose.orientation = Eigen::Quaterniond(rotation).normalized();
-  return pose;
-}
 
 }  // namespace manibench

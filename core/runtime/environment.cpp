@@ -1,5 +1,6 @@
 #include <manibench/environment.hpp>
 #include <manibench/sdk/state.hpp>
+#include <manibench/stopwatch.hpp>
 #include <manibench/task_name.hpp>
 
 #include <algorithm>
@@ -10,13 +11,6 @@
 #include <string>
 
 namespace manibench {
-
-namespace {
-using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-}  // namespace
 
 Environment::Environment(const PluginRegistry& registry, const std::string& environment_id,
                          EnvironmentOptions options)
@@ -199,12 +193,10 @@ void Environment::observe() {
   stage_times_.task += secondsSince(start);
   if (isVisualMode(options_.observation.mode))
     observation_.conservativeResize(description_.agent_state_dim);
-  // Each step samples anew, yet (seed, step) fixes the sample.
-  const uint64_t sample_seed = seed_ * 0x9E3779B97F4A7C15ull + elapsed_steps_;
   // A renderer failure (EGL, a camera it refuses) ends the episode like a
   // diverged simulation, naming task, object, seed and step.
   try {
-    observer_->observe(sample_seed, visual_);
+    observer_->observe(calcSampleSeed(), visual_);
   } catch (const RenderError& e) {
     throw EpisodeFailure(describeEpisode() + ": rendering the '" +
                          toString(options_.observation.mode) + "' observation failed: " + e.what());
@@ -222,7 +214,7 @@ void Environment::startEpisode(const std::string& object_id, uint64_t seed) {
       std::find(fixed_objects_.begin(), fixed_objects_.end(), object_id) == fixed_objects_.end()) {
     std::string objects;
     for (const std::string& o : fixed_objects_) objects += (objects.empty() ? "" : ", ") + o;
-    throw std::invalid_argument("environment " + environment_id_ + " is fixed to object(s) " +
+    throw InvalidArgument("environment " + environment_id_ + " is fixed to object(s) " +
                                 objects + "; it cannot reset on object '" + object_id +
                                 "' (use " + getTaskDescription().name + " for any object)");
   }
@@ -282,8 +274,8 @@ StepResult Environment::step(const Eigen::VectorXd& action) {
     throw EpisodeFailure(describeEpisode() + ": task reward is not finite");
   task_->evaluateSuccess(*bridge_, result.flags, result.values);
   result.success = result.flags.back() != 0;
-  result.done = elapsed_steps_ >= task.max_episode_steps ||
-                (options_.stop_on_success && result.success);
+  result.terminated = options_.stop_on_success && result.success;
+  result.truncated = elapsed_steps_ >= task.max_episode_steps;
   stage_times_.task += secondsSince(start);
   observe();
   return result;
@@ -307,7 +299,7 @@ void writeBlob(sdk::StateWriter& out, const std::vector<uint8_t>& bytes) {
 std::vector<uint8_t> readBlob(sdk::StateReader& in) {
   const uint64_t size = in.read<uint64_t>();
   if (size > in.getRemaining())
-    throw std::invalid_argument("a part of " + std::to_string(size) + " bytes where " +
+    throw InvalidArgument("a part of " + std::to_string(size) + " bytes where " +
                                 std::to_string(in.getRemaining()) + " are left");
   std::vector<uint8_t> bytes(size);
   in.readBytes(bytes.data(), bytes.size());
@@ -318,11 +310,11 @@ Environment::StateHeader readHeader(sdk::StateReader& in) {
   char magic[4];
   in.readBytes(magic, sizeof magic);
   if (std::memcmp(magic, kStateMagic, sizeof magic) != 0)
-    throw std::invalid_argument("not a manibench environment state (no MBEN header)");
+    throw InvalidArgument("not a manibench environment state (no MBEN header)");
   Environment::StateHeader header;
   header.version = in.read<uint32_t>();
   if (header.version != kStateVersion)
-    throw std::invalid_argument("environment state version " + std::to_string(header.version) +
+    throw InvalidArgument("environment state version " + std::to_string(header.version) +
                                 ", this build reads version " + std::to_string(kStateVersion));
   in.read(header.task);
   in.read(header.object_id);
@@ -344,16 +336,16 @@ StateParts splitState(const std::vector<uint8_t>& blob, const std::string& task)
     sdk::StateReader in(blob.data(), blob.size());
     parts.header = readHeader(in);
     if (parts.header.task != task)
-      throw std::invalid_argument("a state of task '" + parts.header.task +
+      throw InvalidArgument("a state of task '" + parts.header.task +
                                   "', this environment is '" + task + "'");
     parts.scene = readBlob(in);
     in.read(parts.controller);
     parts.controller_state = readBlob(in);
     parts.task = readBlob(in);
     if (!in.atEnd())
-      throw std::invalid_argument(std::to_string(in.getRemaining()) + " bytes left over");
+      throw InvalidArgument(std::to_string(in.getRemaining()) + " bytes left over");
   } catch (const sdk::Error& e) {
-    throw std::invalid_argument(std::string("environment state cut short: ") + e.what());
+    throw InvalidArgument(std::string("environment state cut short: ") + e.what());
   }
   return parts;
 }
@@ -392,7 +384,7 @@ Environment::StateHeader Environment::readStateHeader(const std::vector<uint8_t>
     sdk::StateReader in(blob.data(), blob.size());
     return readHeader(in);
   } catch (const sdk::Error& e) {
-    throw std::invalid_argument(std::string("environment state cut short: ") + e.what());
+    throw InvalidArgument(std::string("environment state cut short: ") + e.what());
   }
 }
 
@@ -422,7 +414,7 @@ void Environment::restoreState(const std::vector<uint8_t>& blob) {
   const std::vector<uint8_t>& task_bytes = parts.task;
   const std::string& controller = parts.controller;
   if (controller != controller_->getDescription().name)
-    throw std::invalid_argument("a state of controller '" + controller +
+    throw InvalidArgument("a state of controller '" + controller +
                                 "', this environment drives '" +
                                 controller_->getDescription().name + "'");
   // A reset from the blob's seed makes every choice the episode's reset
@@ -432,7 +424,7 @@ void Environment::restoreState(const std::vector<uint8_t>& blob) {
   try {
     scene_->restoreState(scene_->decodeState(scene_bytes.data(), scene_bytes.size()));
   } catch (const SceneError& e) {
-    throw std::invalid_argument(e.what());
+    throw InvalidArgument(e.what());
   }
   controller_->restoreState(controller_bytes);
   task_->restoreState(task_bytes);

@@ -8,12 +8,12 @@ namespace manibench {
 void validateEnvironmentOptions(const EnvironmentOptions& options) {
   if (options.control_frequency &&
       !(std::isfinite(*options.control_frequency) && *options.control_frequency > 0))
-    throw std::invalid_argument("control frequency override must be a positive number of Hz, got " +
+    throw InvalidArgument("control frequency override must be a positive number of Hz, got " +
                                 std::to_string(*options.control_frequency));
   if (options.frame_skip && *options.frame_skip == 0)
-    throw std::invalid_argument("frame skip override must be at least 1");
+    throw InvalidArgument("frame skip override must be at least 1");
   if (options.max_episode_steps && *options.max_episode_steps == 0)
-    throw std::invalid_argument("episode length override must be at least 1 step");
+    throw InvalidArgument("episode length override must be at least 1 step");
   validateObservationOptions(options.observation);
 }
 

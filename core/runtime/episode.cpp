@@ -30,7 +30,7 @@ EpisodeResult runEpisode(Environment& env, PolicyInstance& policy, const std::st
     result.success = step.success;
     result.steps = env.getElapsedSteps();
     const bool go_on = !hooks.on_step || hooks.on_step(step, result);
-    if (step.done || !go_on) break;
+    if (step.isDone() || !go_on) break;
   }
   return result;
 }

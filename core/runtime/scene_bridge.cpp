@@ -1,6 +1,7 @@
 // The host's mb_scene_api: C trampolines over Scene. Nothing thrown here may
 // reach the plugin; every exception becomes a status and a message.
 #include <manibench/scene_bridge.hpp>
+#include <manibench/sdk/guard.hpp>
 #include <manibench/visual_observer.hpp>
 
 #include <cstdint>
@@ -23,35 +24,20 @@ struct mb_scene {
 namespace manibench {
 namespace {
 
-void writeError(mb_error* err, const std::string& message) {
-  if (err == nullptr || err->message == nullptr || err->capacity == 0) return;
-  const std::size_t n = std::min(message.size(), err->capacity - 1);
-  std::memcpy(err->message, message.data(), n);
-  err->message[n] = '\0';
-}
-
+// The SDK's guard (the one at every C boundary), with the scene's errors
+// as their statuses.
 template <class Body>
 mb_status guarded(mb_scene* s, mb_error* err, Body&& body) noexcept {
-  try {
-    if (s == nullptr || s->scene == nullptr) {
-      writeError(err, "no scene");
-      return MB_INVALID_ARGUMENT;
+  return sdk::detail::guardBoundary(err, [&] {
+    if (s == nullptr || s->scene == nullptr) throw sdk::Error("no scene", MB_INVALID_ARGUMENT);
+    try {
+      body(*s);
+    } catch (const SimulationDiverged& e) {
+      throw sdk::Error(e.what(), MB_DIVERGED);
+    } catch (const SceneError& e) {
+      throw sdk::Error(e.what(), MB_INVALID_ARGUMENT);
     }
-    body(*s);
-    return MB_OK;
-  } catch (const SimulationDiverged& e) {
-    writeError(err, e.what());
-    return MB_DIVERGED;
-  } catch (const SceneError& e) {
-    writeError(err, e.what());
-    return MB_INVALID_ARGUMENT;
-  } catch (const std::exception& e) {
-    writeError(err, e.what());
-    return MB_ERROR;
-  } catch (...) {
-    writeError(err, "unknown error in the host scene");
-    return MB_ERROR;
-  }
+  });
 }
 
 void requireBuilding(const mb_scene& s, const char* call) {

@@ -1,5 +1,8 @@
 #include "urdf_model.hpp"
 
+#include "mass_properties.hpp"
+#include "urdf_xml_checks.hpp"
+
 #include <manibench/sdk/numbers.hpp>
 
 #include <console_bridge/console.h>
@@ -69,10 +72,6 @@ class UrdfErrorCapture : public console_bridge::OutputHandler {
   std::string errors_;
 };
 
-[[noreturn]] void fail(const std::string& source, const std::string& what) {
-  throw SceneError("URDF " + source + ": " + what);
-}
-
 Transform toTransform(const urdf::Pose& pose) {
   double x, y, z, w;
   pose.rotation.getQuaternion(x, y, z, w);
@@ -80,69 +79,9 @@ Transform toTransform(const urdf::Pose& pose) {
                    Vec3(pose.position.x, pose.position.y, pose.position.z));
 }
 
-SymMat33 toSymmetric(const Mat33& m) {
-  return SymMat33().setFromLower(0.5 * (m + ~m));
-}
-
-// Mass, centre of mass and central inertia (shape frame) of a solid shape.
-void calcShapeMass(const ShapeGeometry& g, double density, double& m, Vec3& com, Mat33& Ic) {
-  com = Vec3(0);
-  Vec3 moments(0);
-  const double r = g.radius, l = 2 * g.half_length;
-  switch (g.kind) {
-    case ShapeKind::Sphere:
-      m = density * 4.0 / 3.0 * kPi * r * r * r;
-      moments = Vec3(0.4 * m * r * r);
-      break;
-    case ShapeKind::Box: {
-      const Vec3 d = 2 * g.half;
-      m = density * d[0] * d[1] * d[2];
-      moments = m / 12 * Vec3(d[1] * d[1] + d[2] * d[2], d[0] * d[0] + d[2] * d[2],
-                              d[0] * d[0] + d[1] * d[1]);
-      break;
-    }
-    case ShapeKind::Cylinder: {
-      m = density * kPi * r * r * l;
-      const double side = m * (3 * r * r + l * l) / 12;
-      moments = Vec3(side, side, 0.5 * m * r * r);
-      break;
-    }
-    case ShapeKind::Capsule: {
-      // A cylinder plus two hemispheres (each with its centroid 3r/8 from
-      // its flat face and central inertia 83/320 m r^2 about a transverse axis).
-      const double m_cylinder = density * kPi * r * r * l;
-      const double m_half = density * 2.0 / 3.0 * kPi * r * r * r;
-      const double offset = g.half_length + 3 * r / 8;
-      const double side = m_cylinder * (3 * r * r + l * l) / 12 +
-                          2 * m_half * (83.0 / 320.0 * r * r + offset * offset);
-      m = m_cylinder + 2 * m_half;
-      moments = Vec3(side, side, 0.5 * m_cylinder * r * r + 0.4 * 2 * m_half * r * r);
-      break;
-    }
-    case ShapeKind::Convex:
-      m = density * g.hull->volume;
-      com = g.hull->centroid;
-      Ic = density * g.hull->unit_inertia;
-      return;
-    case ShapeKind::HalfSpace:
-      m = 0;
-      break;
-  }
-  Ic = Mat33(moments[0], 0, 0, 0, moments[1], 0, 0, 0, moments[2]);
-}
-
 bool isFile(const std::string& path) {
   struct stat info {};
   return ::stat(path.c_str(), &info) == 0 && S_ISREG(info.st_mode);
-}
-
-// Adds a rigid part of mass m, centre of mass com_B and central inertia
-// Ic_B (both in the body frame) to the body's mass properties.
-void addMass(BodyModel& body, double m, const Vec3& com_B, const Mat33& Ic_B) {
-  if (m <= 0) return;
-  body.mass += m;
-  body.first_moment += m * com_B;
-  body.inertia += Inertia(toSymmetric(Ic_B)).shiftFromMassCenter(com_B, m);
 }
 
 struct Builder {
@@ -172,7 +111,7 @@ struct Builder {
     if (link.inertial) {
       const urdf::Inertial& in = *link.inertial;
       if (!std::isfinite(in.mass) || in.mass < 0)
-        fail(source, "link '" + link.name + "' has invalid mass " +
+        failUrdf(source, "link '" + link.name + "' has invalid mass " +
                          std::to_string(in.mass));
       if (in.mass == 0) return;
       const Mat33 Ic_I(in.ixx, in.ixy, in.ixz,  //
@@ -184,7 +123,7 @@ struct Builder {
           << " iyy " << in.iyy << " izz " << in.izz << " ixy " << in.ixy
           << " ixz " << in.ixz << " iyz " << in.iyz
           << "): moments must be non-negative and obey the triangle inequality";
-        fail(source, s.str());
+        failUrdf(source, s.str());
       }
       const Transform X_BI = X_BL * toTransform(in.origin);
       const Mat33 R = X_BI.R().asMat33();
@@ -207,19 +146,19 @@ struct Builder {
                                                  const std::string& what) {
     const Vec3 scale(mesh.scale.x, mesh.scale.y, mesh.scale.z);
     if (!scale.isFinite() || scale[0] == 0 || scale[1] == 0 || scale[2] == 0)
-      fail(source, "link '" + link.name + "': mesh '" + mesh.filename + "' has scale " +
+      failUrdf(source, "link '" + link.name + "': mesh '" + mesh.filename + "' has scale " +
                        std::to_string(scale[0]) + " " + std::to_string(scale[1]) + " " +
                        std::to_string(scale[2]) + "; every factor must be finite and non-zero");
     const std::string path = findMeshFile(mesh.filename, base_dir);
     if (path.empty())
-      fail(source, "link '" + link.name + "': collision mesh " + describeMissingMesh(mesh.filename, base_dir));
+      failUrdf(source, "link '" + link.name + "': collision mesh " + describeMissingMesh(mesh.filename, base_dir));
     try {
       return loadConvexHull(path, scale);
     } catch (const FlatHullError& e) {
       model.unsimulated.push_back(what + " ('" + path + "': " + e.what() + ")");
       return nullptr;
     } catch (const std::exception& e) {
-      fail(source, "link '" + link.name + "': collision mesh '" + path + "': " + e.what());
+      failUrdf(source, "link '" + link.name + "': collision mesh '" + path + "': " + e.what());
     }
   }
 
@@ -240,12 +179,12 @@ struct Builder {
       if (g.type == urdf::Geometry::SPHERE) {
         const double r = static_cast<const urdf::Sphere&>(g).radius;
         if (!(r > 0) || !std::isfinite(r))
-          fail(source, what + " is a sphere of radius " + std::to_string(r));
+          failUrdf(source, what + " is a sphere of radius " + std::to_string(r));
         shape.geometry = ShapeGeometry::makeSphere(r);
       } else if (g.type == urdf::Geometry::BOX) {
         const urdf::Vector3& d = static_cast<const urdf::Box&>(g).dim;
         if (!(d.x > 0 && d.y > 0 && d.z > 0) || !std::isfinite(d.x + d.y + d.z))
-          fail(source, what + " is a box of size " + std::to_string(d.x) + " " +
+          failUrdf(source, what + " is a box of size " + std::to_string(d.x) + " " +
                            std::to_string(d.y) + " " + std::to_string(d.z));
         shape.geometry = ShapeGeometry::makeBox(Vec3(d.x / 2, d.y / 2, d.z / 2));
       } else if (g.type == urdf::Geometry::CYLINDER) {
@@ -253,7 +192,7 @@ struct Builder {
         const bool capsule = capsules.count({link.name, ordinal}) > 0;
         if (!(c.radius > 0) || !std::isfinite(c.radius) || !std::isfinite(c.length) ||
             (capsule ? !(c.length >= 0) : !(c.length > 0)))
-          fail(source, what + " is a " + (capsule ? "capsule" : "cylinder") + " of radius " +
+          failUrdf(source, what + " is a " + (capsule ? "capsule" : "cylinder") + " of radius " +
                            std::to_string(c.radius) + " and length " + std::to_string(c.length));
         shape.geometry = capsule ? ShapeGeometry::makeCapsule(c.radius, c.length / 2)
                                  : ShapeGeometry::makeCylinder(c.radius, c.length / 2);
@@ -276,16 +215,16 @@ struct Builder {
                                                                 std::string& path) {
     const Vec3 scale(mesh.scale.x, mesh.scale.y, mesh.scale.z);
     if (!scale.isFinite() || scale[0] == 0 || scale[1] == 0 || scale[2] == 0)
-      fail(source, what + ": mesh '" + mesh.filename + "' has scale " +
+      failUrdf(source, what + ": mesh '" + mesh.filename + "' has scale " +
                        std::to_string(scale[0]) + " " + std::to_string(scale[1]) + " " +
                        std::to_string(scale[2]) + "; every factor must be finite and non-zero");
     path = findMeshFile(mesh.filename, base_dir);
     if (path.empty())
-      fail(source, what + ": visual mesh " + describeMissingMesh(mesh.filename, base_dir));
+      failUrdf(source, what + ": visual mesh " + describeMissingMesh(mesh.filename, base_dir));
     try {
       return loadVisualMeshes(path, scale);
     } catch (const std::exception& e) {
-      fail(source, what + ": visual mesh '" + path + "': " + e.what());
+      failUrdf(source, what + ": visual mesh '" + path + "': " + e.what());
     }
   }
 
@@ -332,13 +271,13 @@ struct Builder {
       if (g.type == urdf::Geometry::SPHERE) {
         const double r = static_cast<const urdf::Sphere&>(g).radius;
         if (!(r > 0) || !std::isfinite(r))
-          fail(source, what + " is a sphere of radius " + std::to_string(r));
+          failUrdf(source, what + " is a sphere of radius " + std::to_string(r));
         shape.kind = VisualShape::Kind::Sphere;
         shape.size = Eigen::Vector3d(r, 0, 0);
       } else if (g.type == urdf::Geometry::BOX) {
         const urdf::Vector3& d = static_cast<const urdf::Box&>(g).dim;
         if (!(d.x > 0 && d.y > 0 && d.z > 0) || !std::isfinite(d.x + d.y + d.z))
-          fail(source, what + " is a box of size " + std::to_string(d.x) + " " +
+          failUrdf(source, what + " is a box of size " + std::to_string(d.x) + " " +
                            std::to_string(d.y) + " " + std::to_string(d.z));
         shape.kind = VisualShape::Kind::Box;
         shape.size = Eigen::Vector3d(d.x, d.y, d.z);
@@ -347,7 +286,7 @@ struct Builder {
         const bool capsule = visual_capsules.count({link.name, ordinal}) > 0;
         if (!(c.radius > 0) || !std::isfinite(c.radius) || !std::isfinite(c.length) ||
             (capsule ? !(c.length >= 0) : !(c.length > 0)))
-          fail(source, what + " is a " + (capsule ? "capsule" : "cylinder") + " of radius " +
+          failUrdf(source, what + " is a " + (capsule ? "capsule" : "cylinder") + " of radius " +
                            std::to_string(c.radius) + " and length " + std::to_string(c.length));
         shape.kind = capsule ? VisualShape::Kind::Capsule : VisualShape::Kind::Cylinder;
         shape.size = Eigen::Vector3d(c.radius, c.length, 0);
@@ -441,11 +380,11 @@ struct Builder {
         if (other.name == leader_name) leader = other.index;
       if (leader < 0) {
         const urdf::JointConstSharedPtr urdf_leader = urdf.getJoint(leader_name);
-        fail(source, "joint '" + joint.name + "' mimics joint '" + leader_name + "', " +
+        failUrdf(source, "joint '" + joint.name + "' mimics joint '" + leader_name + "', " +
                          (urdf_leader ? "which is not a movable one-dof joint"
                                       : "which does not exist"));
       }
-      if (leader == follower) fail(source, "joint '" + joint.name + "' mimics itself");
+      if (leader == follower) failUrdf(source, "joint '" + joint.name + "' mimics itself");
       joint.mimic = leader;
     }
   }
@@ -454,7 +393,7 @@ struct Builder {
                 const Transform& X_PL) {
     const urdf::LinkConstSharedPtr child = urdf.getLink(joint.child_link_name);
     if (!child)
-      fail(source, "joint '" + joint.name + "' has unknown child link '" +
+      failUrdf(source, "joint '" + joint.name + "' has unknown child link '" +
                        joint.child_link_name + "'");
     const Transform X_PJ = X_PL * toTransform(joint.parent_to_joint_origin_transform);
     if (joint.type == urdf::Joint::FIXED) {
@@ -470,20 +409,20 @@ struct Builder {
       case urdf::Joint::CONTINUOUS: description.type = JointType::Continuous; break;
       case urdf::Joint::PRISMATIC: description.type = JointType::Prismatic; break;
       case urdf::Joint::FLOATING:
-        fail(source, "joint '" + joint.name +
+        failUrdf(source, "joint '" + joint.name +
                          "' is floating; only the root may float (fixed_base = "
                          "false), not a link inside the tree");
       case urdf::Joint::PLANAR: description.type = JointType::Prismatic; break;
       default:
-        fail(source, "joint '" + joint.name + "' has an unsupported type");
+        failUrdf(source, "joint '" + joint.name + "' has an unsupported type");
     }
     const Vec3 axis(joint.axis.x, joint.axis.y, joint.axis.z);
     if (!(axis.norm() > 1e-12) || !axis.isFinite())
-      fail(source, "joint '" + joint.name + "' has a zero or invalid axis");
+      failUrdf(source, "joint '" + joint.name + "' has a zero or invalid axis");
     if (joint.limits) {
       const urdf::JointLimits& limits = *joint.limits;
       if (limits.effort < 0 || limits.velocity < 0)
-        fail(source, "joint '" + joint.name + "' has a negative effort or velocity limit");
+        failUrdf(source, "joint '" + joint.name + "' has a negative effort or velocity limit");
       description.effort_limit = limits.effort;
       description.velocity_limit = limits.velocity;
       // lower == upper (both default to 0 in urdfdom) is read as "no
@@ -491,7 +430,7 @@ struct Builder {
       if (description.type != JointType::Continuous &&
           limits.lower != limits.upper) {
         if (!(limits.lower < limits.upper))
-          fail(source, "joint '" + joint.name + "' has lower limit " +
+          failUrdf(source, "joint '" + joint.name + "' has lower limit " +
                            std::to_string(limits.lower) + " above upper limit " +
                            std::to_string(limits.upper));
         description.lower = limits.lower;
@@ -501,16 +440,16 @@ struct Builder {
     description.damping = default_damping;
     if (joint.dynamics) {
       if (!(joint.dynamics->damping >= 0) || !(joint.dynamics->friction >= 0))
-        fail(source, "joint '" + joint.name + "' has negative damping or friction");
+        failUrdf(source, "joint '" + joint.name + "' has negative damping or friction");
       description.damping = joint.dynamics->damping;
       description.friction = joint.dynamics->friction;
     }
     if (joint.mimic) {
       const urdf::JointMimic& mimic = *joint.mimic;
       if (joint.type == urdf::Joint::PLANAR)
-        fail(source, "joint '" + joint.name + "' is planar and cannot mimic another joint");
+        failUrdf(source, "joint '" + joint.name + "' is planar and cannot mimic another joint");
       if (!std::isfinite(mimic.multiplier) || !std::isfinite(mimic.offset))
-        fail(source, "joint '" + joint.name + "' has a non-finite mimic multiplier or offset");
+        failUrdf(source, "joint '" + joint.name + "' has a non-finite mimic multiplier or offset");
       description.mimic_multiplier = mimic.multiplier;
       description.mimic_offset = mimic.offset;
       mimics.emplace_back(description.index, mimic.joint_name);  // resolved at the end
@@ -532,137 +471,6 @@ struct Builder {
     addLink(*child, static_cast<int>(model.bodies.size()) - 1, Transform());
   }
 };
-
-// urdfdom rejects <capsule> (and then drops every collision of the link):
-// turn each into a <cylinder> with the same attributes and remember which
-// collisions they were. Returns true if anything changed.
-bool rewriteCapsules(TiXmlDocument& doc, std::set<std::pair<std::string, int>>& capsules,
-                     std::set<std::pair<std::string, int>>& visual_capsules) {
-  bool changed = false;
-  TiXmlElement* robot = doc.FirstChildElement("robot");
-  if (robot == nullptr) return false;
-  for (TiXmlElement* link = robot->FirstChildElement("link"); link != nullptr;
-       link = link->NextSiblingElement("link")) {
-    const char* name = link->Attribute("name");
-    for (const char* kind : {"collision", "visual"}) {
-      int ordinal = 0;
-      for (TiXmlElement* element = link->FirstChildElement(kind); element != nullptr;
-           element = element->NextSiblingElement(kind), ++ordinal) {
-        TiXmlElement* geometry = element->FirstChildElement("geometry");
-        TiXmlElement* capsule = geometry ? geometry->FirstChildElement("capsule") : nullptr;
-        if (capsule == nullptr) continue;
-        capsule->SetValue("cylinder");
-        changed = true;
-        if (name != nullptr)
-          (std::string(kind) == "collision" ? capsules : visual_capsules).emplace(name, ordinal);
-      }
-    }
-  }
-  return changed;
-}
-
-// "line 12: " for people, from TinyXML's row.
-std::string formatLine(const TiXmlElement& e) {
-  return e.Row() > 0 ? "line " + std::to_string(e.Row()) + ": " : "";
-}
-
-// Where an element sits, for people: "<origin> of <collision> of link 'l'".
-std::string describeElement(const TiXmlElement& e) {
-  std::string text = "<" + std::string(e.Value()) + ">";
-  for (const TiXmlNode* p = e.Parent(); p && p->ToElement(); p = p->Parent()) {
-    const TiXmlElement& parent = *p->ToElement();
-    const char* name = parent.Attribute("name");
-    if (std::string(parent.Value()) == "robot") break;
-    text += " of <" + std::string(parent.Value()) + ">";
-    if (name) {
-      text += " '" + std::string(name) + "'";
-      break;
-    }
-  }
-  return text;
-}
-
-// Numbers urdfdom would take as they are: NaN and infinities make shapes
-// vanish and inertias blow up only later, as a divergence naming another
-// link. Every numeric attribute of the file must be finite.
-void checkNumbersAreFinite(const TiXmlElement& element, const std::string& source) {
-  static const std::set<std::string> numeric = {
-      "xyz", "rpy", "value", "ixx", "ixy", "ixz", "iyy", "iyz", "izz", "radius", "length", "size",
-      "scale", "lower", "upper", "effort", "velocity", "damping", "friction", "multiplier", "offset",
-      "rgba"};
-  for (const TiXmlAttribute* a = element.FirstAttribute(); a; a = a->Next()) {
-    if (!numeric.count(a->Name())) continue;
-    std::istringstream words(a->Value());
-    std::string word;
-    while (words >> word) {
-      char* end = nullptr;
-      const double v = std::strtod(word.c_str(), &end);
-      if (end != word.c_str() && *end == '\0' && !std::isfinite(v))
-        fail(source, formatLine(element) + describeElement(element) + ": " + a->Name() + " = \"" +
-                         a->Value() + "\" is not a finite number");
-    }
-  }
-  for (const TiXmlElement* child = element.FirstChildElement(); child; child = child->NextSiblingElement())
-    checkNumbersAreFinite(*child, source);
-}
-
-// The joint graph must be a tree: urdfdom accepts a link with two parents
-// and a joint from a link to itself, and a cycle below the root sends the
-// builder into endless recursion.
-void checkJointTree(const TiXmlElement& robot, const std::string& source) {
-  struct Edge {
-    std::string joint, parent;
-    int line = 0;
-  };
-  std::map<std::string, Edge> parent_of;  // child link -> its joint
-  for (const TiXmlElement* j = robot.FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
-    const char* name = j->Attribute("name");
-    const TiXmlElement* parent = j->FirstChildElement("parent");
-    const TiXmlElement* child = j->FirstChildElement("child");
-    const char* parent_link = parent ? parent->Attribute("link") : nullptr;
-    const char* child_link = child ? child->Attribute("link") : nullptr;
-    if (!name || !parent_link || !child_link) continue;  // urdfdom says what is missing
-    if (std::string(parent_link) == child_link)
-      fail(source, formatLine(*j) + "joint '" + name + "' connects link '" + child_link + "' to itself");
-    const auto [it, added] = parent_of.emplace(child_link, Edge{name, parent_link, j->Row()});
-    if (!added)
-      fail(source, formatLine(*j) + "link '" + child_link + "' has two parent joints: '" + it->second.joint +
-                       "' (line " + std::to_string(it->second.line) + ") and '" + name + "'");
-  }
-  for (const auto& [link, edge] : parent_of) {
-    // Up the parents: a walk longer than the number of joints is a cycle.
-    std::string at = link;
-    std::vector<std::string> joints;
-    for (std::size_t steps = 0; steps <= parent_of.size(); ++steps) {
-      const auto up = parent_of.find(at);
-      if (up == parent_of.end()) break;
-      joints.push_back(up->second.joint);
-      at = up->second.parent;
-      if (at == link) {
-        std::string cycle;
-        for (const std::string& j : joints) cycle += (cycle.empty() ? "'" : ", '") + j + "'";
-        fail(source, "the joints " + cycle + " form a cycle through link '" + link + "' (a URDF is a tree)");
-      }
-    }
-  }
-}
-
-// <limit> without effort or velocity (PartNet-Mobility and many published
-// files write lower/upper only; urdfdom refuses them): completed with 0,
-// which manibench reads as "not limited" (docs/urdf.md). Returns true if
-// anything changed.
-bool completeLimits(TiXmlElement& robot) {
-  bool changed = false;
-  for (TiXmlElement* j = robot.FirstChildElement("joint"); j; j = j->NextSiblingElement("joint"))
-    if (TiXmlElement* limit = j->FirstChildElement("limit")) {
-      for (const char* attribute : {"effort", "velocity"})
-        if (!limit->Attribute(attribute)) {
-          limit->SetAttribute(attribute, "0");
-          changed = true;
-        }
-    }
-  return changed;
-}
 
 }  // namespace
 
@@ -729,13 +537,13 @@ ArticulationModel buildArticulationModel(const std::string& urdf_xml,
     // TinyXML says "Error document empty" for anything without an element,
     // random bytes included.
     if (urdf_xml.find('<') == std::string::npos || urdf_xml.find('\0') != std::string::npos)
-      fail(source, "not an XML file (no XML elements" +
+      failUrdf(source, "not an XML file (no XML elements" +
                        std::string(urdf_xml.find('\0') != std::string::npos ? ", binary data" : "") + ")");
     std::ostringstream s;
     s << "malformed XML";
     if (doc.ErrorRow() > 0) s << " at line " << doc.ErrorRow() << ", column " << doc.ErrorCol();
     s << ": " << doc.ErrorDesc();
-    fail(source, s.str());
+    failUrdf(source, s.str());
   }
   std::map<std::string, int> joint_file_order;
   bool limits_completed = false;
@@ -765,9 +573,9 @@ ArticulationModel buildArticulationModel(const std::string& urdf_xml,
     errors = capture.getErrors();
   }
   if (!urdf)
-    fail(source, "invalid URDF: " + (errors.empty() ? std::string("rejected by urdfdom") : errors));
+    failUrdf(source, "invalid URDF: " + (errors.empty() ? std::string("rejected by urdfdom") : errors));
   const urdf::LinkConstSharedPtr root = urdf->getRoot();
-  if (!root) fail(source, "the model has no root link");
+  if (!root) failUrdf(source, "the model has no root link");
 
   Builder builder{*urdf,
                   source,

@@ -107,9 +107,11 @@ void Trajectory::addStep(const Eigen::VectorXd& action, const StepResult& result
   rewards.push_back(result.reward);
   // Gymnasium's split: ended by the task (success, when episodes stop
   // there) or by the time limit.
-  const bool terminated_here = result.done && result.success;
+  // The file's convention (docs/demonstrations.md): terminated marks a
+  // last step with success, truncated one without.
+  const bool terminated_here = result.isDone() && result.success;
   terminated.push_back(terminated_here ? 1 : 0);
-  truncated.push_back(result.done && !terminated_here ? 1 : 0);
+  truncated.push_back(result.isDone() && !terminated_here ? 1 : 0);
   success_flags.push_back(result.success ? 1 : 0);
   append(conditions, result.flags);
   success = result.success;

@@ -324,13 +324,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const UsageError& e) {
-    std::cerr << "manibench train: " << e.what() << "\n\n" << e.usage();
-    return 2;
-  } catch (const std::exception& e) {
-    std::cerr << "\nmanibench train: error: " << e.what() << "\n";
-    return 1;
-  }
+  return mb::cli::runMain("manibench train", [&] { return run(argc, argv); }, /*break_line_first=*/true);
 }

@@ -22,24 +22,10 @@
 
 namespace move_bucket {
 
-using manibench::sdk::Error;
-using manibench::sdk::kPi;
-
 namespace {
 
-struct SplitRange {
-  int first, count;
-};
-constexpr SplitRange kTrain{3000, 30}, kTest{3100, 10};
+const NumberedIds kIds{{3000, 30}, {3100, 10}};
 constexpr int kRoundSides = 20;  // facets of round and oval outlines (a multiple of 4)
-
-std::optional<bool> classifyId(const std::string& id) {  // test split?
-  if (id.size() != 4 || !std::all_of(id.begin(), id.end(), ::isdigit)) return std::nullopt;
-  const int n = std::stoi(id);
-  if (n >= kTrain.first && n < kTrain.first + kTrain.count) return false;
-  if (n >= kTest.first && n < kTest.first + kTest.count) return true;
-  return std::nullopt;
-}
 
 std::string fmt(double x) {
   std::ostringstream s;
@@ -149,23 +135,14 @@ std::string toString(BucketShape shape) {
   return "?";
 }
 
-std::vector<std::string> listGeneratedBuckets(const std::string& split) {
-  if (split != "train" && split != "test")
-    throw Error("unknown split '" + split + "' (use train or test)", MB_INVALID_ARGUMENT);
-  const SplitRange r = split == "train" ? kTrain : kTest;
-  std::vector<std::string> ids;
-  for (int i = 0; i < r.count; ++i) ids.push_back(std::to_string(r.first + i));
-  return ids;
-}
+std::vector<std::string> listGeneratedBuckets(const std::string& split) { return kIds.list(split); }
 
 BucketParams getBucketParams(const std::string& bucket_id) {
-  const std::optional<bool> test = classifyId(bucket_id);
-  if (!test)
-    throw Error("no generated bucket '" + bucket_id + "' (train 3000-3029, test 3100-3109)", MB_NOT_FOUND);
+  const bool test = kIds.requireTest(bucket_id, "generated bucket");
   Random rng(hashString("manibench.move_bucket.v1:" + bucket_id));
   BucketParams p;
   const int index = std::stoi(bucket_id) % 100;
-  if (*test) {  // alternate square / oval
+  if (test) {  // alternate square / oval
     if (index % 2 == 0) {
       p.shape = BucketShape::kPolygon;
       p.sides = 4;

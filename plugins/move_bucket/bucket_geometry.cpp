@@ -11,8 +11,6 @@
 
 namespace move_bucket {
 
-using manibench::sdk::Error;
-
 void TriangleMesh::append(const TriangleMesh& other) {
   const auto offset = uint32_t(vertices.size());
   vertices.insert(vertices.end(), other.vertices.begin(), other.vertices.end());

@@ -16,7 +16,6 @@
 
 namespace move_bucket {
 
-using manibench::sdk::Error;
 namespace fs = std::filesystem;
 
 namespace {

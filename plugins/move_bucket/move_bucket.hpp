@@ -5,25 +5,11 @@
 // PartNet-Mobility folder (partnet_loader.cpp).
 #pragma once
 
-#include <manibench/sdk.hpp>
-#include <manibench/kit/mobile_panda.hpp>
-#include <manibench/sdk/random.hpp>
-
-#include <array>
-#include <cmath>
-#include <cstdint>
-#include <map>
-#include <memory>
-#include <string>
-#include <utility>
-#include <vector>
+#include <manibench/kit/family.hpp>
 
 namespace move_bucket {
 
-// The SDK's fully specified generator and id hash (same numbers on every
-// platform, so the same id gives the same bucket).
-using manibench::sdk::hashString;
-using manibench::sdk::Random;
+using namespace manibench::kit;  // kit/family.hpp
 
 // ---- geometry (bucket_geometry.cpp) -----------------------------------------
 
@@ -128,8 +114,6 @@ std::string toString(BucketShape shape);
 
 // ---- PartNet-Mobility buckets (partnet_loader.cpp) --------------------------
 
-// <folder>/<id>/mobility.urdf, the split from <folder>/test.txt (sdk/partnet.hpp).
-std::vector<std::string> listPartNetBuckets(const std::string& folder, const std::string& split);
 // Loads a PartNet-Mobility bucket with every length multiplied by `scale`:
 // body, rim, floor and handle joint measured on its meshes, the URDF given
 // a root link in the bucket frame. Errors name the file and what is wrong.
@@ -145,20 +129,10 @@ std::string getDefaultCacheRoot();
 
 // ---- the state observation, shared with the expert --------------------------
 
+// After the robot's part (the kit's AgentState: ManiSkill's agent vector,
+// then both TCP poses; experts find its segments by name), the objects'.
 struct ObservationLayout {
-  // robot: ManiSkill's agent vector, then both TCP poses
-  static constexpr uint32_t kFingertipPositions = 0;    // 12: right arm's left, right pad, left arm's
-  static constexpr uint32_t kFingertipVelocities = 12;  // 12
-  static constexpr uint32_t kBasePosition = 24;         // 2
-  static constexpr uint32_t kBaseYaw = 26;              // 1
-  static constexpr uint32_t kBaseVelocity = 27;         // 2
-  static constexpr uint32_t kBaseAngularVelocity = 29;  // 1
-  static constexpr uint32_t kJointPositions = 30;       // 22
-  static constexpr uint32_t kJointVelocities = 52;      // 22
-  static constexpr uint32_t kRightTcpPose = 74;         // 7
-  static constexpr uint32_t kLeftTcpPose = 81;          // 7
   static constexpr uint32_t kAgentDim = 88;
-  // objects
   static constexpr uint32_t kBucketPose = 88;             // 7: root, position + quaternion wxyz
   static constexpr uint32_t kBucketVelocity = 95;         // 3
   static constexpr uint32_t kBucketAngularVelocity = 98;  // 3
@@ -212,32 +186,29 @@ double calcStagedReward(const RewardInputs& in);
 
 // ---- the task -------------------------------------------------------------------------
 
-class MoveBucketTask : public manibench::sdk::Task {
+class MoveBucketTask : public sdk::Task {
  public:
-  explicit MoveBucketTask(const manibench::sdk::Config& config);
+  explicit MoveBucketTask(const Config& config);
 
-  manibench::sdk::TaskSpec describe() const override;
+  sdk::TaskSpec describe() const override;
   std::vector<std::string> listObjects(const std::string& split) const override;
-  void buildScene(manibench::sdk::SceneView& scene, const std::string& object_id) override;
-  void reset(manibench::sdk::SceneView& scene, uint64_t seed) override;
-  void observe(const manibench::sdk::SceneView& scene, Eigen::Map<Eigen::VectorXd> out) override;
-  double computeReward(const manibench::sdk::SceneView& scene,
-                       Eigen::Map<const Eigen::VectorXd> action) override;
-  std::vector<manibench::sdk::Condition> evaluateSuccess(
-      const manibench::sdk::SceneView& scene) override;
+  void buildScene(SceneView& scene, const std::string& object_id) override;
+  void reset(SceneView& scene, uint64_t seed) override;
+  void observe(const SceneView& scene, Eigen::Map<Eigen::VectorXd> out) override;
+  double computeReward(const SceneView& scene, Eigen::Map<const Eigen::VectorXd> action) override;
+  std::vector<sdk::Condition> evaluateSuccess(const SceneView& scene) override;
 
  private:
-  const BucketModel& getBucket(const std::string& bucket_id) const;
-  RewardInputs measure(const manibench::sdk::SceneView& scene, double action_norm) const;
+  RewardInputs measure(const SceneView& scene, double action_norm) const;
 
-  std::string partnet_dir_, robot_dir_, cache_dir_;
+  std::string cache_dir_;
   double partnet_scale_;
   uint32_t hold_steps_;
   // the robot's facts (assets/robots/mobile_panda_dual.yaml) and state
-  std::unique_ptr<manibench::kit::mobile_panda::AgentState> robot_state_;
-  mutable std::map<std::string, std::shared_ptr<BucketModel>> buckets_;
+  std::unique_ptr<mobile_panda::AgentState> robot_state_;
+  ObjectCatalog<BucketModel> buckets_;
   // the scene
-  std::shared_ptr<BucketModel> bucket_;
+  std::shared_ptr<const BucketModel> bucket_;
   mb_id robot_ = -1, bucket_id_ = -1, ball_id_ = -1, platform_id_ = -1;
   mb_id body_link_ = -1, ball_link_ = -1;
   int bail_index_ = -1;             // in the bucket's joint vector
@@ -246,21 +217,35 @@ class MoveBucketTask : public manibench::sdk::Task {
   Eigen::Vector3d platform_centre_ = Eigen::Vector3d(0, 0, 0.1);
 };
 
+// The expert's phases, in order (an episode starts in the first).
+enum class ExpertPhase { kApproach, kDescend, kSqueeze, kLift, kCarry, kLower, kRelease, kRetreat };
+
 // Scripted expert over mobile_panda_ee (privileged state): approach, grip the
 // rim from both sides, lift, carry, set down, release.
-class MoveBucketExpert : public manibench::sdk::Policy {
+class MoveBucketExpert : public mobile_panda::Expert<ExpertPhase> {
  public:
-  explicit MoveBucketExpert(const manibench::sdk::PolicyContext& context);
+  explicit MoveBucketExpert(const sdk::PolicyContext& context);
   void reset(uint64_t seed) override;
-  Eigen::VectorXd act(const manibench::sdk::Observation& observation) override;
+  Eigen::VectorXd act(const sdk::Observation& observation) override;
+
+  struct View;     // what one step reads from the state (move_bucket_expert.cpp)
+  struct Command;  // what one step commands
 
  private:
-  enum class Phase { kApproach, kDescend, kSqueeze, kLift, kCarry, kLower, kRelease, kRetreat };
-  Phase phase_ = Phase::kApproach;
-  uint32_t phase_steps_ = 0;
-  Eigen::Index action_dim_ = 18;
-  uint32_t base_ = 0;
-  std::array<uint32_t, 2> ee_linear_{}, ee_angular_{}, gripper_{};  // right, left
+  using Phase = ExpertPhase;
+  View read(const sdk::Observation& observation);
+  // One function per phase: each sets its part of the command and says
+  // when the next phase begins.
+  void approach(const View& v, Command& c);
+  void descend(const View& v, Command& c);
+  void squeeze(const View& v, Command& c);
+  void lift(const View& v, Command& c);
+  void carry(const View& v, Command& c);
+  void lower(const View& v, Command& c);
+  void release(const View& v, Command& c);
+  void retreat(const View& v, Command& c);
+  Eigen::VectorXd calcAction(const View& v, const Command& c) const;
+
   double grip_side_ = 1;        // which way along the bucket's y the base's y points
   std::array<double, 2> finger_sign_{-1, -1};  // per arm: fingers along +-the grip axis
   double grasp_lift_ = 0;       // lift when the grippers closed

@@ -13,15 +13,6 @@
 #endif
 
 namespace move_bucket {
-
-using manibench::sdk::Condition;
-using manibench::sdk::Config;
-using manibench::sdk::Error;
-using manibench::sdk::kPi;
-using manibench::sdk::Pose;
-using manibench::sdk::SceneView;
-using manibench::sdk::TaskSpec;
-
 namespace {
 
 constexpr uint32_t kRobotMask = 0;
@@ -53,41 +44,33 @@ std::string writePlatformUrdf() {
   return x.str();
 }
 
-void putPose(Eigen::Map<Eigen::VectorXd>& out, uint32_t at, const Pose& p) {
-  out.segment<3>(at) = p.position;
-  out.segment<4>(at + 3) << p.orientation.w(), p.orientation.x(), p.orientation.y(), p.orientation.z();
-}
-
 }  // namespace
 
 MoveBucketTask::MoveBucketTask(const Config& config)
-    : partnet_dir_(config.get<std::string>("partnet_dir", "")),
-      robot_dir_(config.get<std::string>("robot_dir", MANIBENCH_ROBOT_DIR)),
-      cache_dir_(config.get<std::string>("cache_dir", "")),
+    : cache_dir_(config.get<std::string>("cache_dir", "")),
       partnet_scale_(config.get<double>("partnet_scale", 0.3)),
-      hold_steps_(config.get<uint32_t>("hold_steps", 10)) {
+      hold_steps_(config.get<uint32_t>("hold_steps", 10)),
+      buckets_(kTaskName, "bucket", readPartNetDir(config, kTaskName),
+               {listGeneratedBuckets, [](const std::string& id) { return generateBucket(id); },
+                [scale = partnet_scale_](const std::string& folder, const std::string& id) {
+                  return loadPartNetBucket(folder, id, scale);
+                },
+                nullptr, [this](BucketModel& model) { writeMeshFiles(model, cache_dir_); }}) {
   config.requireKnownKeys({"partnet_dir", "robot_dir", "cache_dir", "partnet_scale", "hold_steps"},
                          "MoveBucket: task");
   if (hold_steps_ == 0) throw Error("MoveBucket: task.hold_steps must be positive", MB_INVALID_ARGUMENT);
-  if (!partnet_dir_.empty() && !std::filesystem::is_directory(partnet_dir_))
-    throw Error("MoveBucket: task.partnet_dir '" + partnet_dir_ + "' is not a folder", MB_INVALID_ARGUMENT);
   if (!(partnet_scale_ > 0) || !std::isfinite(partnet_scale_))
     throw Error("MoveBucket: task.partnet_scale must be positive", MB_INVALID_ARGUMENT);
   if (cache_dir_.empty()) cache_dir_ = getDefaultCacheRoot();
-  robot_state_ = std::make_unique<manibench::kit::mobile_panda::AgentState>(
-      manibench::kit::mobile_panda::loadFacts(robot_dir_, "mobile_panda_dual", kTaskName));
   // The observation layout (ObservationLayout) and the expert assume the
   // dual-arm robot's 22 joints and 88-value agent vector.
-  if (robot_state_->getFacts().joints.size() != kRobotDof || robot_state_->getDim() != ObservationLayout::kAgentDim)
-    throw Error(robot_dir_ + "/mobile_panda_dual.yaml: expected " + std::to_string(kRobotDof) +
-                    " joints and two arms (the dual-arm robot)",
-                MB_ERROR);
+  robot_state_ = std::make_unique<mobile_panda::AgentState>(config.get<std::string>("robot_dir", MANIBENCH_ROBOT_DIR),
+                                                            "mobile_panda_dual", kTaskName, 2, kRobotDof);
 }
 
-TaskSpec MoveBucketTask::describe() const {
-  TaskSpec spec;
-  spec.observation = robot_state_->describe();
-  const std::vector<manibench::sdk::Segment> objects = {
+sdk::TaskSpec MoveBucketTask::describe() const {
+  sdk::TaskSpec spec = robot_state_->describeTask();
+  const std::vector<Segment> objects = {
       {"bucket_pose", 7, "bucket frame (centre of the bottom's underside, z up): position, quaternion wxyz"},
       {"bucket_velocity", 3, "of the bucket frame's origin, world (m/s)"},
       {"bucket_ang_velocity", 3, "world (rad/s)"},
@@ -100,13 +83,9 @@ TaskSpec MoveBucketTask::describe() const {
                         "width along its x (m)"},
   };
   spec.observation.insert(spec.observation.end(), objects.begin(), objects.end());
-  spec.agent_state_dim = robot_state_->getDim();
   spec.success_conditions = {"on_platform", "upright", "static", "ball_inside", "success"};
   spec.success_hold_steps = hold_steps_;
   spec.masks = {"robot"};
-  spec.robot_articulation = "robot";
-  spec.actuated_joints = robot_state_->getFacts().joints;
-  spec.default_controller = "mobile_panda";
   // The Panda hand squeezes with up to 70 N; the controllers' default
   // finger stiffness (1000 N/m) would press 7-12 N on a 14-24 mm rim,
   // which cannot hold a 3 kg bucket by friction. 5000 N/m: 35-60 N. The
@@ -114,44 +93,21 @@ TaskSpec MoveBucketTask::describe() const {
   // real hand's: at the 3 m/s that 5000 N/m with the default 50 N s/m would
   // reach, a pad moves 6 mm per 2 ms step and passes through a thin rim.
   spec.controller_config = "gripper_stiffness: 5000\ngripper_damping: 800\n";
-  spec.control_frequency = 100;
-  spec.frame_skip = 5;
-  spec.max_episode_steps = 200;
   // ManiSkill v1: bucket, ball and platform friction 0.5 (default 0.5), fingers 2.
   std::ostringstream config;
   config << "physics:\n  contact:\n    ground: {static_friction: 0.5, dynamic_friction: 0.5}\n    bodies:\n";
   for (const char* body : {"bucket", "ball", "platform"})
     config << "      - {articulation: " << body << ", static_friction: 0.5, dynamic_friction: 0.5}\n";
-  for (const char* arm : {"right", "left"})
-    for (const char* finger : {"leftfinger", "rightfinger"})
-      config << "      - {articulation: robot, link: " << arm << "_panda_" << finger
-             << ", static_friction: 2.0, dynamic_friction: 2.0}\n";
-  spec.default_config = config.str() + robot_state_->getFacts().camera_yaml;
+  spec.default_config = config.str() + robot_state_->getFingerFrictionYaml() + robot_state_->getFacts().camera_yaml;
   return spec;
 }
 
-const BucketModel& MoveBucketTask::getBucket(const std::string& bucket_id) const {
-  auto& slot = buckets_[bucket_id];
-  if (!slot) {
-    auto model = std::make_shared<BucketModel>(partnet_dir_.empty()
-                                                   ? generateBucket(bucket_id)
-                                                   : loadPartNetBucket(partnet_dir_, bucket_id, partnet_scale_));
-    writeMeshFiles(*model, cache_dir_);
-    slot = model;
-  }
-  return *slot;
-}
-
-std::vector<std::string> MoveBucketTask::listObjects(const std::string& split) const {
-  return partnet_dir_.empty() ? listGeneratedBuckets(split) : listPartNetBuckets(partnet_dir_, split);
-}
+std::vector<std::string> MoveBucketTask::listObjects(const std::string& split) const { return buckets_.list(split); }
 
 void MoveBucketTask::buildScene(SceneView& scene, const std::string& object_id) {
-  getBucket(object_id);
-  bucket_ = buckets_.at(object_id);
+  bucket_ = buckets_.get(object_id);
   scene.addGround(0.0);
-  robot_ = scene.addUrdfFile(robot_state_->getFacts().urdf, "robot", Pose(), /*fixed_base=*/true);
-  robot_state_->bind(scene, robot_);
+  robot_ = robot_state_->addTo(scene);
   bucket_id_ = scene.addUrdfString(bucket_->urdf, bucket_->base_dir, "bucket", Pose(), /*fixed_base=*/false);
   body_link_ = scene.findLink(bucket_id_, bucket_->body_link);
   bucket_joint_count_ = scene.getJointCount(bucket_id_);
@@ -181,12 +137,7 @@ void MoveBucketTask::reset(SceneView& scene, uint64_t seed) {
   initial_height_ = bucket.position.z();
   const double robot_distance = rng.uniform(0.6, 0.8);
   const double around = theta + rng.uniform(-0.4 * kPi, 0.4 * kPi);
-  Eigen::VectorXd q = robot_state_->getFacts().initial;
-  q[0] = bucket.position.x() + robot_distance * std::cos(around);
-  q[1] = bucket.position.y() + robot_distance * std::sin(around);
-  q[2] = std::remainder(around - kPi + rng.uniform(-0.05 * kPi, 0.05 * kPi), 2 * kPi);
-  scene.setJointPositions(robot_, q);
-  scene.setJointVelocities(robot_, Eigen::VectorXd::Zero(q.size()));
+  robot_state_->placeFacing(scene, rng, bucket.position.head<2>(), robot_distance, around, -kPi);
   // The bail folded down on a random side, its joint friction and damping
   // drawn anew (a loose pivot: the 50 g wire must still fall).
   Eigen::VectorXd joints = Eigen::VectorXd::Zero(bucket_joint_count_);
@@ -210,7 +161,7 @@ void MoveBucketTask::observe(const SceneView& scene, Eigen::Map<Eigen::VectorXd>
   using L = ObservationLayout;
   robot_state_->observe(scene, out.head(L::kAgentDim));
   const Pose bucket = scene.getLinkPose(body_link_);
-  const manibench::sdk::Twist twist = scene.getLinkTwist(body_link_);
+  const Twist twist = scene.getLinkTwist(body_link_);
   putPose(out, L::kBucketPose, bucket);
   out.segment<3>(L::kBucketVelocity) = twist.linear;
   out.segment<3>(L::kBucketAngularVelocity) = twist.angular;
@@ -249,7 +200,7 @@ RewardInputs MoveBucketTask::measure(const SceneView& scene, double action_norm)
   in.opposition = norms > 1e-12 ? 1 - v1.dot(v2) / norms : 0.0;
   in.tilt = std::acos(std::clamp(R(2, 2), -1.0, 1.0));
   in.lift = bucket.position.z() - initial_height_;
-  const manibench::sdk::Twist twist = scene.getLinkTwist(body_link_);
+  const Twist twist = scene.getLinkTwist(body_link_);
   in.speed = twist.linear.norm();
   in.angular_speed = twist.angular.norm();
   in.up_speed = twist.linear.z();
@@ -265,7 +216,7 @@ double MoveBucketTask::computeReward(const SceneView& scene, Eigen::Map<const Ei
   return calcStagedReward(measure(scene, action.norm()));
 }
 
-std::vector<Condition> MoveBucketTask::evaluateSuccess(const SceneView& scene) {
+std::vector<sdk::Condition> MoveBucketTask::evaluateSuccess(const SceneView& scene) {
   const RewardInputs m = measure(scene, 0);
   const Pose bucket = scene.getLinkPose(body_link_);
   const double platform_top = platform_centre_.z() + kPlatformHalfSize.z();

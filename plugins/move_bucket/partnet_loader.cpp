@@ -31,9 +31,6 @@
 
 namespace move_bucket {
 
-using manibench::sdk::Error;
-namespace partnet = manibench::kit::partnet;
-
 namespace {
 
 constexpr const char* kFrameLink = "move_bucket_frame";
@@ -114,10 +111,6 @@ std::optional<double> findInnerCrossing(const std::vector<Eigen::Vector2d>& rim,
 }
 
 }  // namespace
-
-std::vector<std::string> listPartNetBuckets(const std::string& folder, const std::string& split) {
-  return partnet::listObjectIds(folder, split);
-}
 
 BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, double scale) {
   const partnet::Object object = partnet::loadObject(folder, id, scale);

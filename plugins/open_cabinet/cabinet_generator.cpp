@@ -19,16 +19,9 @@
 
 namespace open_cabinet {
 
-using manibench::sdk::Error;
-using manibench::sdk::kPi;
-
 namespace {
 
-struct SplitRange {
-  int first, count;
-};
-constexpr SplitRange kDoorTrain{1000, 42}, kDoorTest{1100, 10};
-constexpr SplitRange kDrawerTrain{2000, 25}, kDrawerTest{2100, 10};
+const NumberedIds kDoorIds{{1000, 42}, {1100, 10}}, kDrawerIds{{2000, 25}, {2100, 10}};
 
 struct IdInfo {
   TargetKind kind;
@@ -36,13 +29,8 @@ struct IdInfo {
 };
 
 std::optional<IdInfo> classifyId(const std::string& id) {
-  if (id.size() != 4 || !std::all_of(id.begin(), id.end(), ::isdigit)) return std::nullopt;
-  const int n = std::stoi(id);
-  auto in = [n](SplitRange r) { return n >= r.first && n < r.first + r.count; };
-  if (in(kDoorTrain)) return IdInfo{TargetKind::kDoor, false};
-  if (in(kDoorTest)) return IdInfo{TargetKind::kDoor, true};
-  if (in(kDrawerTrain)) return IdInfo{TargetKind::kDrawer, false};
-  if (in(kDrawerTest)) return IdInfo{TargetKind::kDrawer, true};
+  if (const std::optional<bool> test = kDoorIds.classify(id)) return IdInfo{TargetKind::kDoor, *test};
+  if (const std::optional<bool> test = kDrawerIds.classify(id)) return IdInfo{TargetKind::kDrawer, *test};
   return std::nullopt;
 }
 
@@ -176,20 +164,14 @@ std::vector<const TargetLink*> CabinetModel::getTargets(TargetKind kind) const {
 }
 
 std::vector<std::string> listGeneratedCabinets(TargetKind kind, const std::string& split) {
-  if (split != "train" && split != "test")
-    throw Error("unknown split '" + split + "' (use train or test)", MB_INVALID_ARGUMENT);
-  const bool door = kind == TargetKind::kDoor;
-  const SplitRange r = split == "train" ? (door ? kDoorTrain : kDrawerTrain) : (door ? kDoorTest : kDrawerTest);
-  std::vector<std::string> ids;
-  for (int i = 0; i < r.count; ++i) ids.push_back(std::to_string(r.first + i));
-  return ids;
+  return (kind == TargetKind::kDoor ? kDoorIds : kDrawerIds).list(split);
 }
 
 CabinetParams getCabinetParams(const std::string& cabinet_id) {
   const std::optional<IdInfo> info = classifyId(cabinet_id);
   if (!info)
-    throw Error("no generated cabinet '" + cabinet_id + "' (door cabinets 1000-1041 train, " +
-                    "1100-1109 test; drawer cabinets 2000-2024 train, 2100-2109 test)",
+    throw Error("no generated cabinet '" + cabinet_id + "' (door cabinets " + kDoorIds.describe() +
+                    "; drawer cabinets " + kDrawerIds.describe() + ")",
                 MB_NOT_FOUND);
   Random rng(hashString("manibench.open_cabinet.v1:" + cabinet_id));
   CabinetParams p;

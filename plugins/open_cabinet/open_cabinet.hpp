@@ -7,28 +7,13 @@
 // target link, robot) are assigned while the scene is built.
 #pragma once
 
-#include <manibench/sdk.hpp>
-#include <manibench/kit/mobile_panda.hpp>
-#include <manibench/sdk/random.hpp>
-
-#include <algorithm>
-#include <array>
-#include <cmath>
-#include <cstdint>
-#include <map>
-#include <memory>
-#include <optional>
-#include <set>
-#include <string>
-#include <vector>
+#include <manibench/kit/family.hpp>
 
 namespace open_cabinet {
 
-enum class TargetKind { kDoor, kDrawer };
+using namespace manibench::kit;  // kit/family.hpp
 
-// The SDK's fully specified generator (splitmix64) and id hash (FNV-1a).
-using manibench::sdk::Random;
-using manibench::sdk::hashString;
+enum class TargetKind { kDoor, kDrawer };
 
 // A door or drawer the robot can be asked to open: a link with a handle
 // and a revolute (door) or prismatic (drawer) joint.
@@ -101,10 +86,6 @@ std::string toString(HandleType type);
 // visuals whose name contains "handle"; targets are links with a handle
 // and a revolute/continuous (door) or prismatic (drawer) joint.
 CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id);
-// Sub-folders of `folder` holding a mobility.urdf, sorted; with a split,
-// those of the split (`folder`/test.txt lists the test ids).
-std::vector<std::string> listPartNetCabinets(const std::string& folder);
-std::vector<std::string> listPartNetCabinets(const std::string& folder, const std::string& split);
 
 // ---- object ids ------------------------------------------------------------
 
@@ -113,18 +94,10 @@ std::pair<std::string, std::string> splitObjectId(const std::string& object_id);
 
 // ---- the state observation, shared with the expert --------------------------
 
+// After the robot's part (the kit's AgentState: ManiSkill's agent vector,
+// then the TCP pose; experts find its segments by name), the cabinet's.
 struct ObservationLayout {
-  // robot (38 as ManiSkill's agent vector, then the TCP pose)
-  static constexpr uint32_t kFingertipPositions = 0;    // 6: left, right pad
-  static constexpr uint32_t kFingertipVelocities = 6;   // 6
-  static constexpr uint32_t kBasePosition = 12;         // 2: x, y
-  static constexpr uint32_t kBaseYaw = 14;              // 1
-  static constexpr uint32_t kBaseVelocity = 15;         // 2: world x, y
-  static constexpr uint32_t kBaseAngularVelocity = 17;  // 1
-  static constexpr uint32_t kJointPositions = 18;       // 13
-  static constexpr uint32_t kJointVelocities = 31;      // 13
-  static constexpr uint32_t kTcpPose = 44;              // 7: position, quaternion wxyz
-  // object
+  static constexpr uint32_t kAgentDim = 51;
   static constexpr uint32_t kTargetLinkPose = 51;       // 7
   static constexpr uint32_t kTargetJoint = 58;          // 4: q, qdot, lower, upper
   static constexpr uint32_t kTargetJointType = 62;      // 1: 0 door (revolute), 1 drawer
@@ -160,19 +133,17 @@ inline double calcStagedReward(double d, double open_fraction, double v, double 
   return -3.0 - 2.0 * d;
 }
 
-class OpenCabinetTask : public manibench::sdk::Task {
+class OpenCabinetTask : public sdk::Task {
  public:
-  OpenCabinetTask(const manibench::sdk::Config& config, TargetKind kind);
+  OpenCabinetTask(const Config& config, TargetKind kind);
 
-  manibench::sdk::TaskSpec describe() const override;
+  sdk::TaskSpec describe() const override;
   std::vector<std::string> listObjects(const std::string& split) const override;
-  void buildScene(manibench::sdk::SceneView& scene, const std::string& object_id) override;
-  void reset(manibench::sdk::SceneView& scene, uint64_t seed) override;
-  void observe(const manibench::sdk::SceneView& scene, Eigen::Map<Eigen::VectorXd> out) override;
-  double computeReward(const manibench::sdk::SceneView& scene,
-                       Eigen::Map<const Eigen::VectorXd> action) override;
-  std::vector<manibench::sdk::Condition> evaluateSuccess(
-      const manibench::sdk::SceneView& scene) override;
+  void buildScene(SceneView& scene, const std::string& object_id) override;
+  void reset(SceneView& scene, uint64_t seed) override;
+  void observe(const SceneView& scene, Eigen::Map<Eigen::VectorXd> out) override;
+  double computeReward(const SceneView& scene, Eigen::Map<const Eigen::VectorXd> action) override;
+  std::vector<sdk::Condition> evaluateSuccess(const SceneView& scene) override;
 
   // The reward as a function of the quantities it reads (C.1.1), for tests:
   // gripper-handle distance (m), opened fraction of the joint range, target
@@ -183,61 +154,65 @@ class OpenCabinetTask : public manibench::sdk::Task {
   }
 
  private:
-  const CabinetModel& getCabinet(const std::string& cabinet_id) const;
   struct Measured {
     double q = 0, qdot = 0, open_fraction = 0;
     double handle_distance = 0;
     double linear_speed = 0, angular_speed = 0;
   };
-  Measured measure(const manibench::sdk::SceneView& scene) const;
-  manibench::sdk::Pose calcHandlePose(const manibench::sdk::SceneView& scene) const;
-  Eigen::Vector3d calcGripperPoint(const manibench::sdk::SceneView& scene) const;
+  Measured measure(const SceneView& scene) const;
+  Pose calcHandlePose(const SceneView& scene) const;
+  Eigen::Vector3d calcGripperPoint(const SceneView& scene) const;
 
   TargetKind kind_;
-  std::string partnet_dir_;
-  std::string robot_dir_;
   double static_speed_, static_angular_speed_;
   uint32_t hold_steps_;
   // the robot's facts (assets/robots/mobile_panda_single.yaml) and state
-  std::unique_ptr<manibench::kit::mobile_panda::AgentState> robot_;
-  mutable std::map<std::string, std::shared_ptr<CabinetModel>> cabinets_;
-  // PartNet cabinets listObjects skipped (and warned about once).
-  mutable std::set<std::string> skipped_;
+  std::unique_ptr<mobile_panda::AgentState> robot_;
+  ObjectCatalog<CabinetModel> cabinets_;
   // the scene
-  std::shared_ptr<CabinetModel> cabinet_;
+  std::shared_ptr<const CabinetModel> cabinet_;
   const TargetLink* target_ = nullptr;
   mb_id robot_id_ = -1, cabinet_id_ = -1, target_link_ = -1, tcp_ = -1;
   uint32_t target_joint_ = 0;
   double lower_ = 0, upper_ = 1;
-  Eigen::Vector3d joint_axis_local_ = Eigen::Vector3d::UnitZ();
   uint32_t cabinet_joint_count_ = 0;
 };
 
 class OpenCabinetDoorTask : public OpenCabinetTask {
  public:
-  explicit OpenCabinetDoorTask(const manibench::sdk::Config& config)
-      : OpenCabinetTask(config, TargetKind::kDoor) {}
+  explicit OpenCabinetDoorTask(const Config& config) : OpenCabinetTask(config, TargetKind::kDoor) {}
 };
 class OpenCabinetDrawerTask : public OpenCabinetTask {
  public:
-  explicit OpenCabinetDrawerTask(const manibench::sdk::Config& config)
-      : OpenCabinetTask(config, TargetKind::kDrawer) {}
+  explicit OpenCabinetDrawerTask(const Config& config) : OpenCabinetTask(config, TargetKind::kDrawer) {}
 };
+
+// The expert's phases, in order (an episode starts in the first).
+enum class ExpertPhase { kApproach, kPreGrasp, kGrasp, kClose, kPull, kHold };
 
 // Scripted expert over the mobile_panda_ee controller; reads the
 // privileged state observation.
-class OpenCabinetExpert : public manibench::sdk::Policy {
+class OpenCabinetExpert : public mobile_panda::Expert<ExpertPhase> {
  public:
-  explicit OpenCabinetExpert(const manibench::sdk::PolicyContext& context);
+  explicit OpenCabinetExpert(const sdk::PolicyContext& context);
   void reset(uint64_t seed) override;
-  Eigen::VectorXd act(const manibench::sdk::Observation& observation) override;
+  Eigen::VectorXd act(const sdk::Observation& observation) override;
+
+  struct View;     // what one step reads from the state (open_cabinet_expert.cpp)
+  struct Command;  // the phase's TCP goal and gripper
 
  private:
-  enum class Phase { kApproach, kPreGrasp, kGrasp, kClose, kPull, kHold };
-  Phase phase_ = Phase::kApproach;
-  uint32_t phase_steps_ = 0;
-  Eigen::Index action_dim_ = 11;
-  uint32_t base_ = 0, ee_linear_ = 4, ee_angular_ = 7, gripper_ = 10;
+  using Phase = ExpertPhase;
+  View read(const sdk::Observation& observation) const;
+  // One function per phase: each sets the TCP goal and gripper and says
+  // when the next phase begins.
+  void approach(const View& v, Command& c);  // kApproach and kPreGrasp
+  void grasp(const View& v, Command& c);
+  void closeFingers(const View& v, Command& c);
+  void pull(const View& v, Command& c);
+  // The whole robot servos the TCP to the goal.
+  Eigen::VectorXd calcAction(const View& v, const Command& c) const;
+
   bool nominal_ready_ = false;
   Eigen::Vector2d nominal_offset_ = Eigen::Vector2d::Zero();  // TCP from the base, base frame
   double nominal_height_ = 0;  // TCP height minus lift at the start

@@ -2,32 +2,15 @@
 // staged reward and success.
 #include "open_cabinet.hpp"
 
-#include <manibench/kit/mobile_panda.hpp>
-
-
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
-#include <iostream>
-#include <sstream>
 
 #ifndef MANIBENCH_ROBOT_DIR
 #define MANIBENCH_ROBOT_DIR ""
 #endif
 
 namespace open_cabinet {
-
-using manibench::sdk::Condition;
-using manibench::sdk::Config;
-using manibench::sdk::Error;
-using manibench::sdk::Pose;
-using manibench::sdk::SceneView;
-using manibench::sdk::TaskSpec;
-using manibench::sdk::kPi;
-namespace mobile_panda = manibench::kit::mobile_panda;
-
 namespace {
-
 
 enum Mask : uint32_t { kHandleMask = 0, kTargetLinkMask = 1, kRobotMask = 2 };
 
@@ -46,34 +29,31 @@ double distanceToSegment(const Eigen::Vector3d& p, const Eigen::Vector3d& centre
 
 OpenCabinetTask::OpenCabinetTask(const Config& config, TargetKind kind)
     : kind_(kind),
-      partnet_dir_(config.get<std::string>("partnet_dir", "")),
-      robot_dir_(config.get<std::string>("robot_dir", MANIBENCH_ROBOT_DIR)),
       static_speed_(config.get<double>("static_speed", 0.1)),
       static_angular_speed_(config.get<double>("static_angular_speed", 1.0)),
-      hold_steps_(config.get<uint32_t>("hold_steps", 10)) {
+      hold_steps_(config.get<uint32_t>("hold_steps", 10)),
+      cabinets_(taskName(kind), "cabinet", readPartNetDir(config, taskName(kind)),
+                {[kind](const std::string& split) { return listGeneratedCabinets(kind, split); }, generateCabinet,
+                 loadPartNetCabinet, [](const CabinetModel& cabinet) {
+                   return cabinet.getTargets(TargetKind::kDoor).empty() && cabinet.getTargets(TargetKind::kDrawer).empty()
+                              ? "no door or drawer with a handle part (a visual or semantics.txt label naming 'handle')"
+                              : "";
+                 }, nullptr}) {
   config.requireKnownKeys({"partnet_dir", "robot_dir", "static_speed", "static_angular_speed", "hold_steps"},
                          taskName(kind) + ": task");
   if (!(static_speed_ > 0) || !(static_angular_speed_ > 0) || hold_steps_ == 0)
     throw Error(taskName(kind) + ": static_speed, static_angular_speed and hold_steps must be positive",
                 MB_INVALID_ARGUMENT);
-  if (!partnet_dir_.empty() && !std::filesystem::is_directory(partnet_dir_))
-    throw Error(taskName(kind) + ": task.partnet_dir '" + partnet_dir_ + "' is not a folder", MB_INVALID_ARGUMENT);
-  robot_ = std::make_unique<mobile_panda::AgentState>(
-      mobile_panda::loadFacts(robot_dir_, "mobile_panda_single", taskName(kind)));
-  if (robot_->getFacts().joints.size() != kRobotDof)
-    throw Error(taskName(kind) + ": expected " + std::to_string(kRobotDof) + " robot joints in " +
-                    robot_->getFacts().urdf,
-                MB_ERROR);
+  robot_ = std::make_unique<mobile_panda::AgentState>(config.get<std::string>("robot_dir", MANIBENCH_ROBOT_DIR),
+                                                      "mobile_panda_single", taskName(kind), 1, kRobotDof);
 }
 
-TaskSpec OpenCabinetTask::describe() const {
-  TaskSpec spec;
+sdk::TaskSpec OpenCabinetTask::describe() const {
   const char* what = kind_ == TargetKind::kDoor ? "door" : "drawer";
   // The robot's own state (what the pointcloud and rgbd modes pass on),
   // then the privileged object state.
-  spec.observation = robot_->describe();
-  spec.agent_state_dim = robot_->getDim();
-  const std::vector<manibench::sdk::Segment> object = {
+  sdk::TaskSpec spec = robot_->describeTask();
+  const std::vector<Segment> object = {
       {"target_link_pose", 7, std::string("the target ") + what + ": position, quaternion wxyz, world"},
       {"target_joint", 4, "its joint: q, qdot, lower, upper (rad or m)"},
       {"target_joint_type", 1, "0 revolute (door), 1 prismatic (drawer)"},
@@ -87,64 +67,23 @@ TaskSpec OpenCabinetTask::describe() const {
   spec.success_conditions = {"open_enough", "static", "success"};
   spec.success_hold_steps = hold_steps_;
   spec.masks = {"handle", "target_link", "robot"};
-  spec.robot_articulation = "robot";
-  spec.actuated_joints = robot_->getFacts().joints;
-  spec.default_controller = "mobile_panda";
-  spec.control_frequency = 100;
-  spec.frame_skip = 5;
-  spec.max_episode_steps = 200;
   // ManiSkill v1 friction: cabinet 1, finger pads 2; the robot's head cameras.
-  spec.default_config = std::string(R"(physics:
-  contact:
-    bodies:
-      - {articulation: cabinet, static_friction: 1.0, dynamic_friction: 1.0}
-      - {articulation: robot, link: right_panda_leftfinger, static_friction: 2.0, dynamic_friction: 2.0}
-      - {articulation: robot, link: right_panda_rightfinger, static_friction: 2.0, dynamic_friction: 2.0}
-)") + robot_->getFacts().camera_yaml;
+  spec.default_config = "physics:\n  contact:\n    bodies:\n"
+                        "      - {articulation: cabinet, static_friction: 1.0, dynamic_friction: 1.0}\n" +
+                        robot_->getFingerFrictionYaml() + robot_->getFacts().camera_yaml;
   return spec;
 }
 
-const CabinetModel& OpenCabinetTask::getCabinet(const std::string& cabinet_id) const {
-  auto& slot = cabinets_[cabinet_id];
-  if (!slot)
-    slot = std::make_shared<CabinetModel>(partnet_dir_.empty() ? generateCabinet(cabinet_id)
-                                                                : loadPartNetCabinet(partnet_dir_, cabinet_id));
-  return *slot;
-}
-
 std::vector<std::string> OpenCabinetTask::listObjects(const std::string& split) const {
-  const std::vector<std::string> cabinets =
-      partnet_dir_.empty() ? listGeneratedCabinets(kind_, split) : listPartNetCabinets(partnet_dir_, split);
   std::vector<std::string> ids;
-  for (const std::string& c : cabinets) {
-    const CabinetModel* cabinet = nullptr;
-    std::string reason;
-    try {
-      cabinet = &getCabinet(c);
-      if (cabinet->getTargets(TargetKind::kDoor).empty() && cabinet->getTargets(TargetKind::kDrawer).empty())
-        reason = "no door or drawer with a handle part (a visual or semantics.txt label naming 'handle')";
-    } catch (const std::exception& e) {
-      // A generated cabinet that fails is our bug: let it through.
-      if (partnet_dir_.empty()) throw;
-      reason = e.what();
-    }
-    if (!reason.empty()) {
-      // One bad object of a user's folder must not make the folder
-      // unusable: skip it, and say why once per process.
-      if (skipped_.insert(c).second)
-        std::cerr << "manibench: warning: " << taskName(kind_) << ": skipping PartNet cabinet " << c << " ("
-                  << (std::filesystem::path(partnet_dir_) / c).string() << "): " << reason << "\n";
-      continue;
-    }
-    for (const TargetLink* t : cabinet->getTargets(kind_)) ids.push_back(c + "_" + t->link);
-  }
+  for (const std::string& c : cabinets_.list(split))
+    for (const TargetLink* t : cabinets_.get(c)->getTargets(kind_)) ids.push_back(c + "_" + t->link);
   return ids;
 }
 
 void OpenCabinetTask::buildScene(SceneView& scene, const std::string& object_id) {
   const auto [cabinet_id, link] = splitObjectId(object_id);
-  getCabinet(cabinet_id);
-  cabinet_ = cabinets_.at(cabinet_id);
+  cabinet_ = cabinets_.get(cabinet_id);
   target_ = nullptr;
   for (const TargetLink* t : cabinet_->getTargets(kind_))
     if (t->link == link) target_ = t;
@@ -153,8 +92,7 @@ void OpenCabinetTask::buildScene(SceneView& scene, const std::string& object_id)
                     (kind_ == TargetKind::kDoor ? "door" : "drawer") + " with a handle named " + link,
                 MB_NOT_FOUND);
   scene.addGround(0.0);
-  robot_id_ = scene.addUrdfFile(robot_->getFacts().urdf, "robot", Pose(), /*fixed_base=*/true);
-  robot_->bind(scene, robot_id_);
+  robot_id_ = robot_->addTo(scene);
   Pose placement;
   placement.position = cabinet_->placement;
   cabinet_id_ = scene.addUrdfString(cabinet_->urdf, cabinet_->base_dir, "cabinet", placement, /*fixed_base=*/true);
@@ -181,13 +119,7 @@ void OpenCabinetTask::reset(SceneView& scene, uint64_t seed) {
   const Eigen::Vector3d centre = (cabinet_->lower + cabinet_->upper) / 2;
   const double distance = rng.uniform(1.6, 1.8);
   const double around = rng.uniform(0.9 * kPi, 1.1 * kPi);
-  const double heading = around + kPi + rng.uniform(-0.05 * kPi, 0.05 * kPi);
-  Eigen::VectorXd q = robot_->getFacts().initial;
-  q[0] = centre.x() + distance * std::cos(around);
-  q[1] = centre.y() + distance * std::sin(around);
-  q[2] = std::remainder(heading, 2 * kPi);
-  scene.setJointPositions(robot_id_, q);
-  scene.setJointVelocities(robot_id_, Eigen::VectorXd::Zero(q.size()));
+  robot_->placeFacing(scene, rng, centre.head<2>(), distance, around, kPi);
   // every door and drawer closed, joint friction and damping drawn anew
   scene.setJointPositions(cabinet_id_, Eigen::VectorXd::Zero(cabinet_joint_count_));
   scene.setJointVelocities(cabinet_id_, Eigen::VectorXd::Zero(cabinet_joint_count_));
@@ -213,18 +145,14 @@ Eigen::Vector3d OpenCabinetTask::calcGripperPoint(const SceneView& scene) const 
 void OpenCabinetTask::observe(const SceneView& scene, Eigen::Map<Eigen::VectorXd> out) {
   using L = ObservationLayout;
   robot_->observe(scene, out);
-  auto putPose = [&out](uint32_t at, const Pose& p) {
-    out.segment<3>(at) = p.position;
-    out.segment<4>(at + 3) << p.orientation.w(), p.orientation.x(), p.orientation.y(), p.orientation.z();
-  };
   const Pose link = scene.getLinkPose(target_link_);
-  putPose(L::kTargetLinkPose, link);
+  putPose(out, L::kTargetLinkPose, link);
   out.segment<4>(L::kTargetJoint) << scene.getJointPositions(cabinet_id_)[target_joint_],
       scene.getJointVelocities(cabinet_id_)[target_joint_], lower_, upper_;
   out[L::kTargetJointType] = target_->kind == TargetKind::kDoor ? 0.0 : 1.0;
   out.segment<3>(L::kJointAxis) = link.orientation * target_->axis;
   out.segment<3>(L::kJointOrigin) = link.position;
-  putPose(L::kHandlePose, calcHandlePose(scene));
+  putPose(out, L::kHandlePose, calcHandlePose(scene));
   out[L::kHandleHalfLength] = target_->handle_half_length;
   out.segment<3>(L::kCabinetCenter) = (cabinet_->lower + cabinet_->upper) / 2;
 }
@@ -237,7 +165,7 @@ OpenCabinetTask::Measured OpenCabinetTask::measure(const SceneView& scene) const
   const Pose handle = calcHandlePose(scene);
   m.handle_distance = distanceToSegment(calcGripperPoint(scene), handle.position,
                                         handle.orientation * Eigen::Vector3d::UnitZ(), target_->handle_half_length);
-  const manibench::sdk::Twist twist = scene.getLinkTwist(target_link_);
+  const Twist twist = scene.getLinkTwist(target_link_);
   m.linear_speed = twist.linear.norm();
   m.angular_speed = twist.angular.norm();
   return m;
@@ -248,7 +176,7 @@ double OpenCabinetTask::computeReward(const SceneView& scene, Eigen::Map<const E
   return calcStagedReward(m.handle_distance, m.open_fraction, m.linear_speed, m.angular_speed);
 }
 
-std::vector<Condition> OpenCabinetTask::evaluateSuccess(const SceneView& scene) {
+std::vector<sdk::Condition> OpenCabinetTask::evaluateSuccess(const SceneView& scene) {
   const Measured m = measure(scene);
   const bool open = m.open_fraction >= kOpenFraction;
   const bool still = m.linear_speed <= static_speed_ && m.angular_speed <= static_angular_speed_;

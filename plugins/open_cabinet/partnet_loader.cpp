@@ -14,14 +14,6 @@
 
 namespace open_cabinet {
 
-using manibench::sdk::Error;
-namespace partnet = manibench::kit::partnet;
-
-std::vector<std::string> listPartNetCabinets(const std::string& folder) { return partnet::listObjectIds(folder); }
-std::vector<std::string> listPartNetCabinets(const std::string& folder, const std::string& split) {
-  return partnet::listObjectIds(folder, split);
-}
-
 CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id) {
   const partnet::Object object = partnet::loadObject(folder, id);
   const std::map<std::string, Eigen::Isometry3d> pose = object.calcLinkPoses();

@@ -20,24 +20,13 @@
 
 namespace push_chair {
 
-using manibench::sdk::Error;
-using manibench::sdk::kPi;
-
 namespace {
 
 constexpr double kDensity = 200;  // kg/m^3, ManiSkill's chairs
-constexpr int kTrainFirst = 3000, kTrainCount = 30, kTestFirst = 3100, kTestCount = 10;
+const NumberedIds kIds{{3000, 30}, {3100, 10}};
 constexpr double kMechanismHeight = 0.05;  // seat mechanism box under the cushion
 constexpr double kMaxChairHeight = 1.2;    // stays below the robot's arms at lift 0.9
 constexpr double kSurfaceSpacing = 0.03;   // reward point sampling, m
-
-std::optional<bool> classifyId(const std::string& id) {  // is it a test chair?
-  if (id.size() != 4 || !std::all_of(id.begin(), id.end(), ::isdigit)) return std::nullopt;
-  const int n = std::stoi(id);
-  if (n >= kTrainFirst && n < kTrainFirst + kTrainCount) return false;
-  if (n >= kTestFirst && n < kTestFirst + kTestCount) return true;
-  return std::nullopt;
-}
 
 using Color = std::array<double, 3>;
 
@@ -272,20 +261,10 @@ std::string toString(ArmrestType type) {
   return "?";
 }
 
-std::vector<std::string> listGeneratedChairs(const std::string& split) {
-  if (split != "train" && split != "test")
-    throw Error("unknown split '" + split + "' (use train or test)", MB_INVALID_ARGUMENT);
-  const bool test = split == "test";
-  std::vector<std::string> ids;
-  for (int i = 0; i < (test ? kTestCount : kTrainCount); ++i)
-    ids.push_back(std::to_string((test ? kTestFirst : kTrainFirst) + i));
-  return ids;
-}
+std::vector<std::string> listGeneratedChairs(const std::string& split) { return kIds.list(split); }
 
 ChairParams getChairParams(const std::string& chair_id) {
-  const std::optional<bool> test = classifyId(chair_id);
-  if (!test)
-    throw Error("no generated chair '" + chair_id + "' (train 3000-3029, test 3100-3109)", MB_NOT_FOUND);
+  const bool test = kIds.requireTest(chair_id, "generated chair");
   Random rng(hashString("manibench.push_chair.v1:" + chair_id));
   ChairParams p;
   // base: 0.66-0.71 m across the leg ends
@@ -297,13 +276,13 @@ ChairParams getChairParams(const std::string& chair_id) {
   p.hub_height = p.wheel_radius + p.caster_drop + rng.uniform(0.035, 0.055);
   p.column_radius = rng.uniform(0.025, 0.03);
   // seat
-  p.seat_height = *test ? rng.uniform(0.44, 0.52) : rng.uniform(0.42, 0.50);
-  p.seat_width = *test ? rng.uniform(0.50, 0.56) : rng.uniform(0.44, 0.52);
-  p.seat_depth = *test ? rng.uniform(0.44, 0.52) : rng.uniform(0.42, 0.50);
+  p.seat_height = test ? rng.uniform(0.44, 0.52) : rng.uniform(0.42, 0.50);
+  p.seat_width = test ? rng.uniform(0.50, 0.56) : rng.uniform(0.44, 0.52);
+  p.seat_depth = test ? rng.uniform(0.44, 0.52) : rng.uniform(0.42, 0.50);
   p.seat_thickness = rng.uniform(0.06, 0.09);
   p.seat_offset = rng.uniform(0.0, 0.04);
   // backrest
-  p.backrest = *test ? (rng.chance(0.5) ? BackrestShape::kHeadrest : BackrestShape::kCurved)
+  p.backrest = test ? (rng.chance(0.5) ? BackrestShape::kHeadrest : BackrestShape::kCurved)
                      : (rng.chance(0.5) ? BackrestShape::kRectangular : BackrestShape::kRounded);
   p.backrest_width = p.seat_width * rng.uniform(0.85, 1.0);
   p.backrest_height = rng.uniform(0.40, 0.60);
@@ -313,7 +292,7 @@ ChairParams getChairParams(const std::string& chair_id) {
   p.reclining = rng.chance(0.5);
   // armrests
   const double a = rng.uniform(0, 1);
-  if (*test)
+  if (test)
     p.armrest = a < 0.3 ? ArmrestType::kNone : a < 0.65 ? ArmrestType::kLoop : ArmrestType::kAdjustableT;
   else
     p.armrest = a < 0.4 ? ArmrestType::kNone : ArmrestType::kFixedT;
@@ -331,25 +310,22 @@ ChairParams getChairParams(const std::string& chair_id) {
 
 ChairModel generateChair(const std::string& chair_id) { return generateChair(chair_id, getChairParams(chair_id)); }
 
-ChairModel generateChair(const std::string& chair_id, const ChairParams& p) {
-  if (p.legs < 3 || !(p.base_radius > p.hub_radius) || !(p.wheel_radius > 0) ||
-      !(p.seat_height - p.seat_thickness - kMechanismHeight > p.hub_height + 0.05))
-    throw Error("chair " + chair_id + ": inconsistent parameters (legs, radii, heights)", MB_INVALID_ARGUMENT);
-  ChairModel chair;
-  chair.id = chair_id;
-  const Color& frame = p.frame_color;
-  const Color dark{0.05, 0.05, 0.05};
-  const Color metal{0.75, 0.76, 0.78};
-  const double hub_half = 0.03;
-  const double mount = p.wheel_radius + p.caster_drop;  // swivel mount height
-  const double column_top = p.seat_height - p.seat_thickness - kMechanismHeight;
-  std::ostringstream urdf;
-  urdf << "<?xml version=\"1.0\"?>\n<robot name=\"chair_" << chair_id << "\">\n";
-  std::vector<std::string> joints_xml;
+namespace {
 
-  // base: hub, legs, leg-end caps, gas-lift column
+const Color kDark{0.05, 0.05, 0.05};
+const Color kMetal{0.75, 0.76, 0.78};
+constexpr double kHubHalf = 0.03;
+
+// The swivel mounts' height and the column's top (the seat's frame).
+double calcMountHeight(const ChairParams& p) { return p.wheel_radius + p.caster_drop; }
+double calcColumnTop(const ChairParams& p) { return p.seat_height - p.seat_thickness - kMechanismHeight; }
+
+// The base link: hub, legs, leg-end caps, gas-lift column.
+std::vector<Part> makeBase(const ChairParams& p) {
+  const Color& frame = p.frame_color;
+  const double mount = calcMountHeight(p), column_top = calcColumnTop(p);
   std::vector<Part> base;
-  base.push_back(cylinder("hub", at({0, 0, p.hub_height}), p.hub_radius, 2 * hub_half, frame));
+  base.push_back(cylinder("hub", at({0, 0, p.hub_height}), p.hub_radius, 2 * kHubHalf, frame));
   for (int k = 0; k < p.legs; ++k) {
     const double a = 2 * kPi * k / p.legs;
     const Eigen::Vector3d dir(std::cos(a), std::sin(a), 0);
@@ -359,21 +335,24 @@ ChairModel generateChair(const std::string& chair_id, const ChairParams& p) {
     base.push_back(cylinder("leg_cap_" + std::to_string(k), at(p.base_radius * dir + Eigen::Vector3d(0, 0, mount + 0.0125)),
                             0.02, 0.025, frame));
   }
-  const double column_bottom = p.hub_height + hub_half;
+  const double column_bottom = p.hub_height + kHubHalf;
   base.push_back(cylinder("column", at({0, 0, (column_bottom + column_top) / 2}), p.column_radius,
-                          column_top - column_bottom, metal));
+                          column_top - column_bottom, kMetal));
   base.push_back(cylinder("column_sleeve", at({0, 0, column_bottom + 0.06}), p.column_radius + 0.008, 0.12, frame));
   base.back().collision = false;
-  urdf << writeLink("base", base);
-  chair.surface.push_back({"base", samplePartSurfaces(base)});
+  return base;
+}
 
-  // casters: the fork turns about the vertical at the leg end, the wheel
-  // trails behind the swivel axis (along the fork's -x)
+// The casters: the fork turns about the vertical at the leg end, the wheel
+// trails behind the swivel axis (along the fork's -x). Their links go to
+// `urdf`, their joints to `joints_xml` and the chair.
+void addCasters(const ChairParams& p, ChairModel& chair, std::ostream& urdf, std::vector<std::string>& joints_xml) {
+  const double mount = calcMountHeight(p);
   for (int k = 0; k < p.legs; ++k) {
     const std::string n = std::to_string(k);
     const double a = 2 * kPi * k / p.legs;
     std::vector<Part> fork = {box("fork_" + n, at({-p.caster_trail / 2, 0, -p.caster_drop / 2 + 0.005}),
-                                  Eigen::Vector3d(p.caster_trail + 0.025, 0.03, p.caster_drop), dark)};
+                                  Eigen::Vector3d(p.caster_trail + 0.025, 0.03, p.caster_drop), kDark)};
     urdf << writeLink("caster_" + n, fork);
     joints_xml.push_back(writeJoint("caster_swivel_" + n, "continuous", "base", "caster_" + n,
                                     at(Eigen::Vector3d(p.base_radius * std::cos(a), p.base_radius * std::sin(a), mount),
@@ -382,7 +361,7 @@ ChairModel generateChair(const std::string& chair_id, const ChairParams& p) {
     chair.joints.push_back({"caster_swivel_" + n, JointRole::kCasterSwivel, p.caster_trail});
     // wheel: a sphere collides (smooth rolling on the floor), a twin-wheel
     // cylinder shows
-    Part tread = cylinder("wheel_" + n, at(Eigen::Vector3d::Zero(), rotX(kPi / 2)), p.wheel_radius, 0.024, dark);
+    Part tread = cylinder("wheel_" + n, at(Eigen::Vector3d::Zero(), rotX(kPi / 2)), p.wheel_radius, 0.024, kDark);
     tread.collision = false;
     Part ball = tread;
     ball.name = "wheel_" + n + "_contact";
@@ -399,25 +378,21 @@ ChairModel generateChair(const std::string& chair_id, const ChairParams& p) {
     chair.wheel_links.push_back("wheel_" + n);
     chair.surface.push_back({"wheel_" + n, samplePartSurfaces(wheel)});
   }
+}
 
-  // seat (frame at the column top, on the swivel)
-  const double cushion_bottom = kMechanismHeight;
-  const double cushion_top = cushion_bottom + p.seat_thickness;
-  std::vector<Part> seat;
-  seat.push_back(box("mechanism", at({0, 0, kMechanismHeight / 2}), Eigen::Vector3d(0.2, 0.2, kMechanismHeight), frame));
-  seat.push_back(box("cushion", at({p.seat_offset, 0, cushion_bottom + p.seat_thickness / 2}),
-                     Eigen::Vector3d(p.seat_depth, p.seat_width, p.seat_thickness), p.seat_color));
-  chair.seat_link = "seat";
-  chair.seat_top = Eigen::Vector3d(p.seat_offset, 0, cushion_top);
-  joints_xml.push_back(writeJoint("seat_swivel", "continuous", "base", "seat", at({0, 0, column_top}),
-                                  Eigen::Vector3d::UnitZ()));
-  chair.joints.push_back({"seat_swivel", JointRole::kSeat});
+// Where a reclining backrest is hinged, in the seat frame: under the
+// cushion's rear.
+Eigen::Vector3d calcBackrestHinge(const ChairParams& p) {
+  return Eigen::Vector3d(p.seat_offset - p.seat_depth / 2 + 0.06, 0, 0.02);
+}
 
-  // backrest: a spine from under the cushion's rear, behind it and up to
-  // the panel(s), leaning back by backrest_angle; in the seat link, or on
-  // its own link hinged under the cushion's rear (rests on its lower stop)
+// The backrest in the seat frame: a spine from under the cushion's rear,
+// behind it and up to the panel(s), leaning back by backrest_angle.
+std::vector<Part> makeBackrest(const ChairParams& p) {
+  const Color& frame = p.frame_color;
+  const double cushion_top = kMechanismHeight + p.seat_thickness;
   std::vector<Part> back;
-  const Eigen::Vector3d hinge(p.seat_offset - p.seat_depth / 2 + 0.06, 0, 0.02);
+  const Eigen::Vector3d hinge = calcBackrestHinge(p);
   const double rear = p.seat_offset - p.seat_depth / 2 - 0.03;
   const Eigen::Matrix3d lean = rotY(-p.backrest_angle);
   const Eigen::Vector3d panel_bottom(rear - 0.01, 0, cushion_top + p.backrest_gap);
@@ -443,7 +418,7 @@ ChairModel generateChair(const std::string& chair_id, const ChairParams& p) {
       for (const double s : {-1.0, 1.0})
         back.push_back(box(s < 0 ? "headrest_post_0" : "headrest_post_1",
                            at(panel_bottom + lean * Eigen::Vector3d(0, s * 0.12, h + 0.03), lean),
-                           Eigen::Vector3d(0.015, 0.015, 0.08), metal));
+                           Eigen::Vector3d(0.015, 0.015, 0.08), kMetal));
       back.push_back(box("headrest", at(panel_bottom + lean * Eigen::Vector3d(0.01, 0, h + 0.12), lean),
                          Eigen::Vector3d(1.2 * t, 0.6 * w, 0.14), p.seat_color));
       break;
@@ -458,60 +433,120 @@ ChairModel generateChair(const std::string& chair_id, const ChairParams& p) {
       break;
     }
   }
+  return back;
+}
 
-  // armrests on brackets under the cushion
-  std::vector<std::vector<Part>> arm_links;  // adjustable: one link per side
-  std::vector<Eigen::Vector3d> arm_origins;
-  if (p.armrest != ArmrestType::kNone) {
-    const double xa = p.seat_offset - 0.02;
-    const double pad_top = cushion_top + p.armrest_height;
-    for (const double s : {-1.0, 1.0}) {
-      const std::string side = s < 0 ? "right" : "left";
-      const double ya = s * (p.seat_width / 2 + 0.035);
-      auto bracket = [&](double x) {
-        seat.push_back(beam("armrest_bracket_" + side + (x == xa ? "" : "_rear"), Eigen::Vector3d(x, s * 0.08, 0.02),
-                            Eigen::Vector3d(x, ya + s * 0.0125, 0.02), 0.05, 0.02, frame));
-      };
-      switch (p.armrest) {
-        case ArmrestType::kFixedT:
-          bracket(xa);
-          seat.push_back(box("armrest_post_" + side, at({xa, ya, (0.01 + pad_top - 0.03) / 2}),
-                             Eigen::Vector3d(0.05, 0.025, pad_top - 0.03 - 0.01), frame));
-          seat.push_back(box("armrest_pad_" + side, at({xa + 0.03, ya, pad_top - 0.015}), Eigen::Vector3d(0.26, 0.075, 0.03),
-                             dark));
-          break;
-        case ArmrestType::kLoop: {
-          const double xf = p.seat_offset + p.seat_depth / 2 - 0.07, xr = p.seat_offset - p.seat_depth / 2 + 0.07;
-          bracket(xf);
-          bracket(xr);
-          for (const double x : {xf, xr})
-            seat.push_back(box("armrest_post_" + side + (x == xf ? "_front" : "_rear"),
-                               at({x, ya, (0.01 + pad_top - 0.03) / 2}), Eigen::Vector3d(0.03, 0.025, pad_top - 0.03 - 0.01),
-                               frame));
-          seat.push_back(box("armrest_pad_" + side, at({(xf + xr) / 2, ya, pad_top - 0.015}),
-                             Eigen::Vector3d(xf - xr + 0.05, 0.06, 0.03), dark));
-          break;
-        }
-        case ArmrestType::kAdjustableT: {
-          bracket(xa);
-          seat.push_back(box("armrest_sleeve_" + side, at({xa, ya, (0.01 + cushion_top) / 2}),
-                             Eigen::Vector3d(0.05, 0.03, cushion_top - 0.01), frame));
-          // the arm slides up to 8 cm out of the sleeve; its frame is the sleeve top
-          const double above = p.armrest_height - 0.03;
-          arm_links.push_back({box("armrest_post_" + side, at({0, 0, above / 2 - 0.02}), Eigen::Vector3d(0.035, 0.02, above + 0.04),
-                                   metal),
-                               box("armrest_pad_" + side, at({0.03, 0, above + 0.015}), Eigen::Vector3d(0.26, 0.075, 0.03), dark)});
-          arm_origins.emplace_back(xa, ya, cushion_top);
-          break;
-        }
-        case ArmrestType::kNone: break;
+// The armrests, on brackets under the cushion: fixed parts join the seat;
+// a height-adjustable arm is a link of its own (`arm_links`, its frame at
+// `arm_origins` in the seat frame: the sleeve's top).
+void addArmrests(const ChairParams& p, std::vector<Part>& seat, std::vector<std::vector<Part>>& arm_links,
+                 std::vector<Eigen::Vector3d>& arm_origins) {
+  if (p.armrest == ArmrestType::kNone) return;
+  const Color& frame = p.frame_color;
+  const double cushion_top = kMechanismHeight + p.seat_thickness;
+  const double xa = p.seat_offset - 0.02;
+  const double pad_top = cushion_top + p.armrest_height;
+  for (const double s : {-1.0, 1.0}) {
+    const std::string side = s < 0 ? "right" : "left";
+    const double ya = s * (p.seat_width / 2 + 0.035);
+    auto bracket = [&](double x) {
+      seat.push_back(beam("armrest_bracket_" + side + (x == xa ? "" : "_rear"), Eigen::Vector3d(x, s * 0.08, 0.02),
+                          Eigen::Vector3d(x, ya + s * 0.0125, 0.02), 0.05, 0.02, frame));
+    };
+    switch (p.armrest) {
+      case ArmrestType::kFixedT:
+        bracket(xa);
+        seat.push_back(box("armrest_post_" + side, at({xa, ya, (0.01 + pad_top - 0.03) / 2}),
+                           Eigen::Vector3d(0.05, 0.025, pad_top - 0.03 - 0.01), frame));
+        seat.push_back(box("armrest_pad_" + side, at({xa + 0.03, ya, pad_top - 0.015}), Eigen::Vector3d(0.26, 0.075, 0.03),
+                           kDark));
+        break;
+      case ArmrestType::kLoop: {
+        const double xf = p.seat_offset + p.seat_depth / 2 - 0.07, xr = p.seat_offset - p.seat_depth / 2 + 0.07;
+        bracket(xf);
+        bracket(xr);
+        for (const double x : {xf, xr})
+          seat.push_back(box("armrest_post_" + side + (x == xf ? "_front" : "_rear"),
+                             at({x, ya, (0.01 + pad_top - 0.03) / 2}), Eigen::Vector3d(0.03, 0.025, pad_top - 0.03 - 0.01),
+                             frame));
+        seat.push_back(box("armrest_pad_" + side, at({(xf + xr) / 2, ya, pad_top - 0.015}),
+                           Eigen::Vector3d(xf - xr + 0.05, 0.06, 0.03), kDark));
+        break;
       }
+      case ArmrestType::kAdjustableT: {
+        bracket(xa);
+        seat.push_back(box("armrest_sleeve_" + side, at({xa, ya, (0.01 + cushion_top) / 2}),
+                           Eigen::Vector3d(0.05, 0.03, cushion_top - 0.01), frame));
+        // the arm slides up to 8 cm out of the sleeve; its frame is the sleeve top
+        const double above = p.armrest_height - 0.03;
+        arm_links.push_back({box("armrest_post_" + side, at({0, 0, above / 2 - 0.02}), Eigen::Vector3d(0.035, 0.02, above + 0.04),
+                                 kMetal),
+                             box("armrest_pad_" + side, at({0.03, 0, above + 0.015}), Eigen::Vector3d(0.26, 0.075, 0.03), kDark)});
+        arm_origins.emplace_back(xa, ya, cushion_top);
+        break;
+      }
+      case ArmrestType::kNone: break;
     }
   }
+}
+
+// The chair's size facts and its one-line summary.
+void describeChair(const ChairParams& p, ChairModel& chair) {
+  chair.root_height = 0;
+  chair.footprint_radius = p.base_radius + p.caster_trail + p.wheel_radius;
+  const double headrest_top = p.backrest == BackrestShape::kHeadrest ? 0.19 : 0.0;
+  chair.height = std::max(p.seat_height + p.backrest_gap + std::cos(p.backrest_angle) * p.backrest_height + headrest_top,
+                          p.armrest == ArmrestType::kNone ? 0.0 : p.seat_height + p.armrest_height);
+  std::ostringstream summary;
+  summary << std::fixed << std::setprecision(2) << "seat " << p.seat_width << " x " << p.seat_depth << " m at "
+          << p.seat_height << " m, base " << 2 * (p.base_radius + 0.02) << " m across, " << toString(p.backrest)
+          << (p.reclining ? " reclining" : "") << " backrest, armrests " << toString(p.armrest) << ", "
+          << chair.joints.size() << " joints";
+  chair.summary = summary.str();
+}
+
+}  // namespace
+
+// The links in URDF order: base, casters, seat (with a fixed backrest and
+// the fixed armrest parts), a reclining backrest, adjustable armrests; then
+// the joints.
+ChairModel generateChair(const std::string& chair_id, const ChairParams& p) {
+  if (p.legs < 3 || !(p.base_radius > p.hub_radius) || !(p.wheel_radius > 0) ||
+      !(p.seat_height - p.seat_thickness - kMechanismHeight > p.hub_height + 0.05))
+    throw Error("chair " + chair_id + ": inconsistent parameters (legs, radii, heights)", MB_INVALID_ARGUMENT);
+  ChairModel chair;
+  chair.id = chair_id;
+  std::ostringstream urdf;
+  urdf << "<?xml version=\"1.0\"?>\n<robot name=\"chair_" << chair_id << "\">\n";
+  std::vector<std::string> joints_xml;
+
+  const std::vector<Part> base = makeBase(p);
+  urdf << writeLink("base", base);
+  chair.surface.push_back({"base", samplePartSurfaces(base)});
+  addCasters(p, chair, urdf, joints_xml);
+
+  // seat (frame at the column top, on the swivel)
+  const double cushion_top = kMechanismHeight + p.seat_thickness;
+  std::vector<Part> seat;
+  seat.push_back(box("mechanism", at({0, 0, kMechanismHeight / 2}), Eigen::Vector3d(0.2, 0.2, kMechanismHeight),
+                     p.frame_color));
+  seat.push_back(box("cushion", at({p.seat_offset, 0, kMechanismHeight + p.seat_thickness / 2}),
+                     Eigen::Vector3d(p.seat_depth, p.seat_width, p.seat_thickness), p.seat_color));
+  chair.seat_link = "seat";
+  chair.seat_top = Eigen::Vector3d(p.seat_offset, 0, cushion_top);
+  joints_xml.push_back(writeJoint("seat_swivel", "continuous", "base", "seat", at({0, 0, calcColumnTop(p)}),
+                                  Eigen::Vector3d::UnitZ()));
+  chair.joints.push_back({"seat_swivel", JointRole::kSeat});
+
+  const std::vector<Part> back = makeBackrest(p);
+  std::vector<std::vector<Part>> arm_links;  // adjustable: one link per side
+  std::vector<Eigen::Vector3d> arm_origins;
+  addArmrests(p, seat, arm_links, arm_origins);
   if (!p.reclining) seat.insert(seat.end(), back.begin(), back.end());
   urdf << writeLink("seat", seat);
   chair.surface.push_back({"seat", samplePartSurfaces(seat)});
   if (p.reclining) {
+    const Eigen::Vector3d hinge = calcBackrestHinge(p);
     std::vector<Part> local = back;  // in the hinge's frame
     for (Part& part : local) part.pose = at(-hinge) * part.pose;
     urdf << writeLink("backrest", local);
@@ -533,18 +568,7 @@ ChairModel generateChair(const std::string& chair_id, const ChairParams& p) {
   for (const std::string& j : joints_xml) urdf << j;
   urdf << "</robot>\n";
   chair.urdf = urdf.str();
-
-  chair.root_height = 0;
-  chair.footprint_radius = p.base_radius + p.caster_trail + p.wheel_radius;
-  const double headrest_top = p.backrest == BackrestShape::kHeadrest ? 0.19 : 0.0;
-  chair.height = std::max(p.seat_height + p.backrest_gap + std::cos(p.backrest_angle) * p.backrest_height + headrest_top,
-                          p.armrest == ArmrestType::kNone ? 0.0 : p.seat_height + p.armrest_height);
-  std::ostringstream summary;
-  summary << std::fixed << std::setprecision(2) << "seat " << p.seat_width << " x " << p.seat_depth << " m at "
-          << p.seat_height << " m, base " << 2 * (p.base_radius + 0.02) << " m across, " << toString(p.backrest)
-          << (p.reclining ? " reclining" : "") << " backrest, armrests " << toString(p.armrest) << ", "
-          << chair.joints.size() << " joints";
-  chair.summary = summary.str();
+  describeChair(p, chair);
   return chair;
 }
 

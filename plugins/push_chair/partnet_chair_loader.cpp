@@ -16,9 +16,6 @@
 
 namespace push_chair {
 
-using manibench::sdk::Error;
-namespace partnet = manibench::kit::partnet;
-
 namespace {
 
 constexpr double kVoxel = 0.02;  // m: reward points, one per voxel of this size

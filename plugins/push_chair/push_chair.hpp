@@ -5,23 +5,11 @@
 // (partnet_chair_loader.cpp, over the SDK's manibench/kit/partnet.hpp).
 #pragma once
 
-#include <manibench/sdk.hpp>
-#include <manibench/kit/mobile_panda.hpp>
-#include <manibench/sdk/random.hpp>
-
-#include <algorithm>
-#include <array>
-#include <cmath>
-#include <cstdint>
-#include <map>
-#include <memory>
-#include <string>
-#include <vector>
+#include <manibench/kit/family.hpp>
 
 namespace push_chair {
 
-using manibench::sdk::Random;
-using manibench::sdk::hashString;
+using namespace manibench::kit;  // kit/family.hpp
 
 // How the task randomizes a chair joint's friction and damping per episode
 // (maniskill-v1-facts.md): the seat's swivel differs from the rest.
@@ -114,20 +102,11 @@ std::vector<Eigen::Vector3d> sampleBoxSurface(const Eigen::Isometry3d& pose, con
 constexpr uint32_t kRobotDof = 22;
 constexpr uint32_t kMaxChairJoints = 20;
 
+// After the robot's part (the kit's AgentState: the dual-arm ManiSkill
+// agent vector with all 22 joints, then both TCP poses; experts find its
+// segments by name), the chair's and the target.
 struct ObservationLayout {
-  // robot (the dual-arm ManiSkill agent vector with all 22 joints, then the TCP poses)
-  static constexpr uint32_t kFingertipPositions = 0;    // 12: right arm left, right pad; left arm left, right pad
-  static constexpr uint32_t kFingertipVelocities = 12;  // 12
-  static constexpr uint32_t kBasePosition = 24;         // 2: x, y
-  static constexpr uint32_t kBaseYaw = 26;              // 1
-  static constexpr uint32_t kBaseVelocity = 27;         // 2: world x, y
-  static constexpr uint32_t kBaseAngularVelocity = 29;  // 1
-  static constexpr uint32_t kJointPositions = 30;       // 22
-  static constexpr uint32_t kJointVelocities = 52;      // 22
-  static constexpr uint32_t kRightTcpPose = 74;         // 7: position, quaternion wxyz
-  static constexpr uint32_t kLeftTcpPose = 81;          // 7
   static constexpr uint32_t kAgentDim = 88;
-  // chair
   static constexpr uint32_t kChairPose = 88;              // 7: root link, position, quaternion wxyz
   static constexpr uint32_t kChairVelocity = 95;          // 3: root link, world
   static constexpr uint32_t kChairAngularVelocity = 98;   // 3
@@ -170,34 +149,30 @@ int calcRewardStage(const RewardInput& in);  // 1, 2 or 3
 
 // ---- the task ---------------------------------------------------------------------
 
-class PushChairTask : public manibench::sdk::Task {
+class PushChairTask : public sdk::Task {
  public:
-  explicit PushChairTask(const manibench::sdk::Config& config);
+  explicit PushChairTask(const Config& config);
 
-  manibench::sdk::TaskSpec describe() const override;
+  sdk::TaskSpec describe() const override;
   std::vector<std::string> listObjects(const std::string& split) const override;
-  void buildScene(manibench::sdk::SceneView& scene, const std::string& object_id) override;
-  void reset(manibench::sdk::SceneView& scene, uint64_t seed) override;
-  void observe(const manibench::sdk::SceneView& scene, Eigen::Map<Eigen::VectorXd> out) override;
-  double computeReward(const manibench::sdk::SceneView& scene,
-                       Eigen::Map<const Eigen::VectorXd> action) override;
-  std::vector<manibench::sdk::Condition> evaluateSuccess(const manibench::sdk::SceneView& scene) override;
+  void buildScene(SceneView& scene, const std::string& object_id) override;
+  void reset(SceneView& scene, uint64_t seed) override;
+  void observe(const SceneView& scene, Eigen::Map<Eigen::VectorXd> out) override;
+  double computeReward(const SceneView& scene, Eigen::Map<const Eigen::VectorXd> action) override;
+  std::vector<sdk::Condition> evaluateSuccess(const SceneView& scene) override;
 
  private:
-  const ChairModel& getChair(const std::string& chair_id) const;
-  RewardInput measure(const manibench::sdk::SceneView& scene) const;
-  double calcPadDistance(const manibench::sdk::SceneView& scene) const;
+  RewardInput measure(const SceneView& scene) const;
+  double calcPadDistance(const SceneView& scene) const;
 
-  std::string partnet_dir_;
   double partnet_scale_;
-  std::string robot_dir_;
   double static_speed_, static_angular_speed_;
   uint32_t hold_steps_;
   // the robot's facts (assets/robots/mobile_panda_dual.yaml) and state
-  std::unique_ptr<manibench::kit::mobile_panda::AgentState> robot_;
-  mutable std::map<std::string, std::shared_ptr<ChairModel>> chairs_;
+  std::unique_ptr<mobile_panda::AgentState> robot_;
+  ObjectCatalog<ChairModel> chairs_;
   // the scene
-  std::shared_ptr<ChairModel> chair_;
+  std::shared_ptr<const ChairModel> chair_;
   mb_id robot_id_ = -1, chair_id_ = -1, root_link_ = -1, seat_link_ = -1;
   std::vector<mb_id> surface_links_;
   uint32_t chair_joint_count_ = 0;
@@ -205,21 +180,31 @@ class PushChairTask : public manibench::sdk::Task {
   Eigen::Vector3d target_ = Eigen::Vector3d::Zero();
 };
 
+// The expert's phases, in order (an episode starts in the first).
+enum class ExpertPhase { kApproach, kPush, kRelease };
+
 // Scripted expert over the mobile_panda_ee controller (dual arm); reads the
 // privileged state observation.
-class PushChairExpert : public manibench::sdk::Policy {
+class PushChairExpert : public mobile_panda::Expert<ExpertPhase> {
  public:
-  explicit PushChairExpert(const manibench::sdk::PolicyContext& context);
+  explicit PushChairExpert(const sdk::PolicyContext& context);
   void reset(uint64_t seed) override;
-  Eigen::VectorXd act(const manibench::sdk::Observation& observation) override;
+  Eigen::VectorXd act(const sdk::Observation& observation) override;
+
+  struct View;     // what one step reads from the state (push_chair_expert.cpp)
+  struct Command;  // the base's velocity and heading
 
  private:
-  enum class Phase { kApproach, kPush, kRelease };
-  Phase phase_ = Phase::kApproach;
-  uint32_t phase_steps_ = 0;
-  Eigen::Index action_dim_ = 18;
-  uint32_t base_ = 0;
-  std::array<uint32_t, 2> ee_linear_{}, ee_angular_{}, gripper_{};  // right, left
+  using Phase = ExpertPhase;
+  View read(const sdk::Observation& observation) const;
+  // One function per phase: each sets the base's command and says when
+  // the next phase begins.
+  void approach(const View& v, Command& c);
+  void push(const View& v, Command& c);
+  void release(const View& v, Command& c);
+  // The base, the lift and the two hands (a rigid paddle) as commanded.
+  Eigen::VectorXd calcAction(const View& v, const Command& c) const;
+
   bool nominal_ready_ = false;
   std::array<Eigen::Matrix3d, 2> nominal_rotation_{};  // TCP orientation in the base frame at the start
   double nominal_height_ = 0;  // the TCPs' mean height above the lift at the start

@@ -20,18 +20,6 @@
 #include <cmath>
 
 namespace push_chair {
-
-using manibench::kit::clipNorm;
-using manibench::kit::MobilePandaSpeeds;
-using manibench::kit::setBaseAction;
-using manibench::kit::setEeAction;
-using manibench::kit::getQuaternion;
-using manibench::kit::getVector3;
-using manibench::sdk::Error;
-using manibench::sdk::Observation;
-using manibench::sdk::PolicyContext;
-using manibench::sdk::kPi;
-
 namespace {
 
 constexpr double kBaseSpeed = MobilePandaSpeeds::kBase;  // per unit action
@@ -52,174 +40,163 @@ Eigen::Vector2d unit(double angle) { return {std::cos(angle), std::sin(angle)}; 
 
 }  // namespace
 
-PushChairExpert::PushChairExpert(const PolicyContext& context) : action_dim_(context.action.dim) {
-  if (context.task_name != "PushChair-v0")
-    throw Error("push_chair_expert drives PushChair-v0, not '" + context.task_name + "'", MB_INVALID_ARGUMENT);
-  if (context.observation_mode != "state" || context.observation.dim != ObservationLayout::kDim)
-    throw Error("push_chair_expert needs the state observation (" + std::to_string(ObservationLayout::kDim) +
-                    " values), got mode '" + context.observation_mode + "' with " +
-                    std::to_string(context.observation.dim),
-                MB_INVALID_ARGUMENT);
-  const std::vector<std::pair<const char*, uint32_t>> wanted = {
-      {"base_forward", 1},    {"base_left", 1},       {"base_yaw", 1},        {"lift", 1},
-      {"right_ee_linear", 3}, {"right_ee_angular", 3}, {"right_gripper", 1}, {"left_ee_linear", 3},
-      {"left_ee_angular", 3}, {"left_gripper", 1}};
-  for (const auto& [name, size] : wanted) {
-    const manibench::sdk::SegmentInfo* s = context.action.find(name);
-    if (s == nullptr || s->size != size)
-      throw Error(std::string("push_chair_expert needs the dual-arm mobile_panda_ee controller (action segment '") +
-                      name + "' of size " + std::to_string(size) +
-                      " is missing); run it with --controller mobile_panda_ee",
-                  MB_INVALID_ARGUMENT);
-  }
-  base_ = context.action.get("base_forward").offset;
-  if (context.action.get("base_left").offset != base_ + 1 || context.action.get("base_yaw").offset != base_ + 2 ||
-      context.action.get("lift").offset != base_ + 3)
-    throw Error("push_chair_expert: base_forward, base_left, base_yaw, lift must be consecutive", MB_INVALID_ARGUMENT);
-  const char* sides[2] = {"right", "left"};
-  for (int a = 0; a < 2; ++a) {
-    ee_linear_[a] = context.action.get(std::string(sides[a]) + "_ee_linear").offset;
-    ee_angular_[a] = context.action.get(std::string(sides[a]) + "_ee_angular").offset;
-    gripper_[a] = context.action.get(std::string(sides[a]) + "_gripper").offset;
-  }
-}
+PushChairExpert::PushChairExpert(const sdk::PolicyContext& context)
+    : Expert(context, "push_chair_expert", {"PushChair-v0"}, ObservationLayout::kDim, 2) {}
 
-void PushChairExpert::reset(uint64_t) {
-  phase_ = Phase::kApproach;
-  phase_steps_ = 0;
+void PushChairExpert::reset(uint64_t seed) {
+  Expert::reset(seed);
   nominal_ready_ = false;
   orbit_sign_ = 0;
   orbiting_ = false;
 }
 
-Eigen::VectorXd PushChairExpert::act(const Observation& observation) {
+struct PushChairExpert::View {
+  mobile_panda::AgentOffsets::Reading robot;
+  std::array<Eigen::Vector3d, 2> tcp;
+  Eigen::Vector2d chair, chair_velocity;
+  // The push line: from the chair to the target.
+  double distance = 0;        // the chair's to the target
+  Eigen::Vector2d d, side;    // along the line, and across it
+  double hand_height = 0;     // the hands' when pushing
+  // Where the hands go: ahead of the base, right arm to the right (higher
+  // while the last step went round the chair).
+  std::array<Eigen::Vector3d, 2> hand_goal;
+};
+
+struct PushChairExpert::Command {
+  Eigen::Vector2d base_velocity = Eigen::Vector2d::Zero();  // world
+  double yaw_goal = 0;
+};
+
+PushChairExpert::View PushChairExpert::read(const sdk::Observation& observation) const {
   using L = ObservationLayout;
   const Eigen::VectorXd s = observation.state;
-  const Eigen::Vector2d base(s[L::kBasePosition], s[L::kBasePosition + 1]);
-  const double yaw = s[L::kBaseYaw];
-  const double lift = s[L::kJointPositions + 3];
-  const Eigen::Matrix3d base_rotation = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  const std::array<Eigen::Vector3d, 2> tcp = {getVector3(s, L::kRightTcpPose), getVector3(s, L::kLeftTcpPose)};
-  const std::array<Eigen::Quaterniond, 2> tcp_q = {getQuaternion(s, L::kRightTcpPose + 3), getQuaternion(s, L::kLeftTcpPose + 3)};
-  const Eigen::Vector2d chair = s.segment<2>(L::kChairPose);
-  const Eigen::Vector2d chair_velocity = s.segment<2>(L::kChairVelocity);
+  View v;
+  v.robot = agent_.read(s);
+  v.tcp = {v.robot.tcp[0], v.robot.tcp[1]};
+  v.chair = s.segment<2>(L::kChairPose);
+  v.chair_velocity = s.segment<2>(L::kChairVelocity);
   const Eigen::Vector2d target = s.segment<2>(L::kTarget);
   const double seat_top = s[L::kSeatTop + 2];
-
-  if (!nominal_ready_) {  // the hands' starting orientation (relative to the base) and height above the lift
-    for (int a = 0; a < 2; ++a) nominal_rotation_[a] = base_rotation.transpose() * tcp_q[a].toRotationMatrix();
-    nominal_height_ = 0.5 * (tcp[0].z() + tcp[1].z()) - lift;
-    nominal_ready_ = true;
-  }
-  ++phase_steps_;
-  auto next = [this](Phase p) {
-    phase_ = p;
-    phase_steps_ = 0;
-  };
-
-  // The push line: from the chair to the target.
-  const Eigen::Vector2d to_target = target - chair;
-  const double distance = to_target.norm();
-  const Eigen::Vector2d d = distance > 1e-6 ? Eigen::Vector2d(to_target / distance) : unit(yaw);
-  const Eigen::Vector2d side(-d.y(), d.x());
-  const double hand_height = seat_top - kBelowSeatTop;
-
-  // Where the hands go: ahead of the base, right arm to the right.
-  std::array<Eigen::Vector3d, 2> hand_goal;
+  const Eigen::Vector2d to_target = target - v.chair;
+  v.distance = to_target.norm();
+  v.d = v.distance > 1e-6 ? Eigen::Vector2d(to_target / v.distance) : unit(v.robot.yaw);
+  v.side = Eigen::Vector2d(-v.d.y(), v.d.x());
+  v.hand_height = seat_top - kBelowSeatTop;
   for (int a = 0; a < 2; ++a)
-    hand_goal[a] = Eigen::Vector3d(base.x(), base.y(), hand_height + (orbiting_ ? kOrbitHandRise : 0.0)) +
-                   base_rotation * Eigen::Vector3d(kHandForward, a == 0 ? -kHandSide : kHandSide, 0);
+    v.hand_goal[a] =
+        Eigen::Vector3d(v.robot.base.x(), v.robot.base.y(), v.hand_height + (orbiting_ ? kOrbitHandRise : 0.0)) +
+        v.robot.base_rotation * Eigen::Vector3d(kHandForward, a == 0 ? -kHandSide : kHandSide, 0);
+  return v;
+}
 
-  Eigen::Vector2d base_velocity = Eigen::Vector2d::Zero();
-  double yaw_goal = std::atan2(d.y(), d.x());
-  switch (phase_) {
-    case Phase::kApproach: {
-      // Round the chair to the staging point behind it (seen from the
-      // target), on a circle that keeps the hands clear of it, turned 45
-      // degrees towards the way round: the base moves diagonally in its own
-      // frame, where both its axes add up to 0.7 m/s.
-      const Eigen::Vector2d from_chair = base - chair;
-      const double here = std::atan2(from_chair.y(), from_chair.x());
-      const double staging = std::atan2(-d.y(), -d.x());
-      const double to_go = std::remainder(staging - here, 2 * kPi);
-      if (orbit_sign_ == 0) orbit_sign_ = to_go >= 0 ? 1 : -1;
-      const Eigen::Vector2d look = chair - base;
-      yaw_goal = std::atan2(look.y(), look.x());
-      orbiting_ = std::abs(to_go) > 0.35;
-      if (orbiting_) {
-        const int way = std::abs(to_go) > 2.8 ? orbit_sign_ : (to_go >= 0 ? 1 : -1);
-        const Eigen::Vector2d radial = unit(here), tangent = way * Eigen::Vector2d(-radial.y(), radial.x());
-        base_velocity = kOrbitSpeed * tangent + 3.0 * (kOrbitRadius - from_chair.norm()) * radial;
-        yaw_goal += way * kPi / 4;
-      } else {
-        const Eigen::Vector2d goal = chair - kOrbitRadius * d;
-        base_velocity = 3.0 * (goal - base);
-        const double yaw_error = std::abs(std::remainder(yaw_goal - yaw, 2 * kPi));
-        // (the hands' height is what the lift and arm reach: only where
-        // they are in the plane counts)
-        const double hand_error =
-            std::max((tcp[0] - hand_goal[0]).head<2>().norm(), (tcp[1] - hand_goal[1]).head<2>().norm());
-        if (((goal - base).norm() < 0.12 && yaw_error < 0.2 && hand_error < 0.1) || phase_steps_ > 100)
-          next(Phase::kPush);
-      }
-      break;
-    }
-    case Phase::kPush: {
-      orbiting_ = false;
-      // Along the push line at a speed that falls with the distance still
-      // to go; sideways back onto the line through the chair's centre.
-      const double speed = std::clamp(kPushGain * (distance - kStopLead), 0.0, kPushSpeed);
-      const Eigen::Vector2d offset = base - chair;
-      base_velocity = speed * d - 2.0 * offset.dot(side) * side;
-      // Close to the target the line turns quickly with the chair's
-      // sideways drift: hold the heading and line there.
-      if (distance < 0.3) {
-        yaw_goal = yaw;
-        base_velocity = speed * unit(yaw);
-      }
-      if (distance < kReleaseDistance || (distance < 0.09 && chair_velocity.dot(d) < 0.02 && phase_steps_ > 10) ||
-          offset.dot(d) > 0)
-        next(Phase::kRelease);
-      break;
-    }
-    case Phase::kRelease:
-      // Back off a little, then stay; a chair that stopped short (or
-      // drifted off) is pushed again from where it is now.
-      if (phase_steps_ <= 6) base_velocity = -0.25 * unit(yaw);
-      yaw_goal = yaw;
-      if (phase_steps_ > 6 && distance > kRetryDistance && chair_velocity.norm() < 0.05) {
-        next(Phase::kApproach);
-        orbit_sign_ = 0;
-      }
-      break;
+// Round the chair to the staging point behind it (seen from the target),
+// on a circle that keeps the hands clear of it, turned 45 degrees towards
+// the way round: the base moves diagonally in its own frame, where both
+// its axes add up to 0.7 m/s.
+void PushChairExpert::approach(const View& v, Command& c) {
+  const Eigen::Vector2d from_chair = v.robot.base - v.chair;
+  const double here = std::atan2(from_chair.y(), from_chair.x());
+  const double staging = std::atan2(-v.d.y(), -v.d.x());
+  const double to_go = std::remainder(staging - here, 2 * kPi);
+  if (orbit_sign_ == 0) orbit_sign_ = to_go >= 0 ? 1 : -1;
+  const Eigen::Vector2d look = v.chair - v.robot.base;
+  c.yaw_goal = std::atan2(look.y(), look.x());
+  orbiting_ = std::abs(to_go) > 0.35;
+  if (orbiting_) {
+    const int way = std::abs(to_go) > 2.8 ? orbit_sign_ : (to_go >= 0 ? 1 : -1);
+    const Eigen::Vector2d radial = unit(here), tangent = way * Eigen::Vector2d(-radial.y(), radial.x());
+    c.base_velocity = kOrbitSpeed * tangent + 3.0 * (kOrbitRadius - from_chair.norm()) * radial;
+    c.yaw_goal += way * kPi / 4;
+    return;
   }
+  const Eigen::Vector2d goal = v.chair - kOrbitRadius * v.d;
+  c.base_velocity = 3.0 * (goal - v.robot.base);
+  const double yaw_error = std::abs(std::remainder(c.yaw_goal - v.robot.yaw, 2 * kPi));
+  // (the hands' height is what the lift and arm reach: only where they
+  // are in the plane counts)
+  const double hand_error =
+      std::max((v.tcp[0] - v.hand_goal[0]).head<2>().norm(), (v.tcp[1] - v.hand_goal[1]).head<2>().norm());
+  if (((goal - v.robot.base).norm() < 0.12 && yaw_error < 0.2 && hand_error < 0.1) || phase_steps_ > 100)
+    enter(Phase::kPush);
+}
+
+// Along the push line at a speed that falls with the distance still to
+// go; sideways back onto the line through the chair's centre.
+void PushChairExpert::push(const View& v, Command& c) {
+  orbiting_ = false;
+  const double speed = std::clamp(kPushGain * (v.distance - kStopLead), 0.0, kPushSpeed);
+  const Eigen::Vector2d offset = v.robot.base - v.chair;
+  c.base_velocity = speed * v.d - 2.0 * offset.dot(v.side) * v.side;
+  // Close to the target the line turns quickly with the chair's sideways
+  // drift: hold the heading and line there.
+  if (v.distance < 0.3) {
+    c.yaw_goal = v.robot.yaw;
+    c.base_velocity = speed * unit(v.robot.yaw);
+  }
+  if (v.distance < kReleaseDistance || (v.distance < 0.09 && v.chair_velocity.dot(v.d) < 0.02 && phase_steps_ > 10) ||
+      offset.dot(v.d) > 0)
+    enter(Phase::kRelease);
+}
+
+// Back off a little, then stay; a chair that stopped short (or drifted
+// off) is pushed again from where it is now.
+void PushChairExpert::release(const View& v, Command& c) {
+  if (phase_steps_ <= 6) c.base_velocity = -0.25 * unit(v.robot.yaw);
+  c.yaw_goal = v.robot.yaw;
+  if (phase_steps_ > 6 && v.distance > kRetryDistance && v.chair_velocity.norm() < 0.05) {
+    enter(Phase::kApproach);
+    orbit_sign_ = 0;
+  }
+}
+
+Eigen::VectorXd PushChairExpert::calcAction(const View& v, const Command& c) const {
+  const mobile_panda::AgentOffsets::Reading& robot = v.robot;
   // Each base axis runs at up to kBaseSpeed: scale the command down as a whole.
-  Eigen::Vector2d base_local = Eigen::Rotation2Dd(-yaw).toRotationMatrix() * base_velocity;
+  Eigen::Vector2d base_local = Eigen::Rotation2Dd(-robot.yaw).toRotationMatrix() * c.base_velocity;
   base_local /= std::max(1.0, base_local.cwiseAbs().maxCoeff() / kBaseSpeed);
-  base_velocity = Eigen::Rotation2Dd(yaw).toRotationMatrix() * base_local;
-  double yaw_rate = std::clamp(3.0 * std::remainder(yaw_goal - yaw, 2 * kPi), -2.0, 2.0);
+  const Eigen::Vector2d base_velocity = Eigen::Rotation2Dd(robot.yaw).toRotationMatrix() * base_local;
+  double yaw_rate = std::clamp(3.0 * std::remainder(c.yaw_goal - robot.yaw, 2 * kPi), -2.0, 2.0);
   if (phase_ == Phase::kRelease) yaw_rate = 0;
 
   // Lift: the hands at the cushion, the arms at their starting height above it.
-  const double lift_goal = std::clamp(hand_height - nominal_height_, 0.0, 1.5);
-  const double lift_rate = 3.0 * (lift_goal - lift);
+  const double lift_goal = std::clamp(v.hand_height - nominal_height_, 0.0, 1.5);
+  const double lift_rate = 3.0 * (lift_goal - robot.lift);
 
-  Eigen::VectorXd action = Eigen::VectorXd::Zero(action_dim_);
-  setBaseAction(action, base_, base_local, yaw_rate, lift_rate);
+  Eigen::VectorXd action = Eigen::VectorXd::Zero(action_.dim);
+  setBaseAction(action, action_.base, base_local, yaw_rate, lift_rate);
   for (int a = 0; a < 2; ++a) {
-    Eigen::Vector3d velocity = clipNorm(5.0 * (hand_goal[a] - tcp[a]), kEeSpeed);
+    Eigen::Vector3d velocity = clipNorm(5.0 * (v.hand_goal[a] - v.tcp[a]), kEeSpeed);
     // The command is relative to the moving base and lift: take out what
     // they do to the TCP.
-    const Eigen::Vector3d lever = tcp[a] - Eigen::Vector3d(base.x(), base.y(), tcp[a].z());
+    const Eigen::Vector3d lever = v.tcp[a] - Eigen::Vector3d(robot.base.x(), robot.base.y(), v.tcp[a].z());
     velocity -= Eigen::Vector3d(base_velocity.x(), base_velocity.y(), lift_rate) +
                 Eigen::Vector3d(0, 0, yaw_rate).cross(lever);
-    const Eigen::AngleAxisd error(base_rotation * nominal_rotation_[a] * tcp_q[a].toRotationMatrix().transpose());
+    const Eigen::AngleAxisd error(robot.base_rotation * nominal_rotation_[a] * robot.tcp_rotation[a].transpose());
     Eigen::Vector3d angular = clipNorm(4.0 * error.angle() * error.axis(), kEeAngularSpeed);
     angular.z() -= yaw_rate;
-    setEeAction(action, ee_linear_[a], ee_angular_[a], base_rotation, velocity, angular);
-    action[gripper_[a]] = -1.0;  // closed: a compact fist
+    setEeAction(action, action_.arms[a].linear, action_.arms[a].angular, robot.base_rotation, velocity, angular);
+    action[action_.arms[a].gripper] = -1.0;  // closed: a compact fist
   }
   return action;
+}
+
+Eigen::VectorXd PushChairExpert::act(const sdk::Observation& observation) {
+  const View v = read(observation);
+  if (!nominal_ready_) {  // the hands' starting orientation (relative to the base) and height above the lift
+    for (int a = 0; a < 2; ++a) nominal_rotation_[a] = v.robot.base_rotation.transpose() * v.robot.tcp_rotation[a];
+    nominal_height_ = 0.5 * (v.tcp[0].z() + v.tcp[1].z()) - v.robot.lift;
+    nominal_ready_ = true;
+  }
+  ++phase_steps_;
+  Command c;
+  c.yaw_goal = std::atan2(v.d.y(), v.d.x());
+  switch (phase_) {
+    case Phase::kApproach: approach(v, c); break;
+    case Phase::kPush: push(v, c); break;
+    case Phase::kRelease: release(v, c); break;
+  }
+  return calcAction(v, c);
 }
 
 }  // namespace push_chair

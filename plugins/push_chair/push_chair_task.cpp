@@ -1,11 +1,8 @@
 // PushChair-v0: scene, reset, observation, staged reward and success.
 #include "push_chair.hpp"
 
-#include <manibench/kit/partnet.hpp>
-
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <limits>
 #include <sstream>
 
@@ -14,16 +11,6 @@
 #endif
 
 namespace push_chair {
-
-using manibench::sdk::Condition;
-using manibench::sdk::Config;
-using manibench::sdk::Error;
-using manibench::sdk::Pose;
-using manibench::sdk::SceneView;
-using manibench::sdk::TaskSpec;
-using manibench::sdk::kPi;
-namespace mobile_panda = manibench::kit::mobile_panda;
-
 namespace {
 
 constexpr const char* kTaskName = "PushChair";
@@ -51,32 +38,31 @@ double calcTilt(const Eigen::Quaterniond& q) {
 // ---- the task ---------------------------------------------------------------------
 
 PushChairTask::PushChairTask(const Config& config)
-    : partnet_dir_(config.get<std::string>("partnet_dir", "")),
-      partnet_scale_(config.get<double>("partnet_scale", 0.8)),
-      robot_dir_(config.get<std::string>("robot_dir", MANIBENCH_ROBOT_DIR)),
+    : partnet_scale_(config.get<double>("partnet_scale", 0.8)),
       static_speed_(config.get<double>("static_speed", 0.1)),
       static_angular_speed_(config.get<double>("static_angular_speed", 0.2)),
-      hold_steps_(config.get<uint32_t>("hold_steps", 10)) {
+      hold_steps_(config.get<uint32_t>("hold_steps", 10)),
+      chairs_(kTaskName, "chair", readPartNetDir(config, kTaskName),
+              {listGeneratedChairs, [](const std::string& id) { return generateChair(id); },
+               [scale = partnet_scale_](const std::string& folder, const std::string& id) {
+                 return loadPartNetChair(folder, id, scale);
+               },
+               nullptr, nullptr}) {
   config.requireKnownKeys(
       {"partnet_dir", "partnet_scale", "robot_dir", "static_speed", "static_angular_speed", "hold_steps"},
       "PushChair: task");
   if (!(static_speed_ > 0) || !(static_angular_speed_ > 0) || hold_steps_ == 0)
     throw Error("PushChair: static_speed, static_angular_speed and hold_steps must be positive", MB_INVALID_ARGUMENT);
   if (!(partnet_scale_ > 0)) throw Error("PushChair: task.partnet_scale must be positive", MB_INVALID_ARGUMENT);
-  if (!partnet_dir_.empty() && !std::filesystem::is_directory(partnet_dir_))
-    throw Error("PushChair: task.partnet_dir '" + partnet_dir_ + "' is not a folder", MB_INVALID_ARGUMENT);
-  robot_ = std::make_unique<mobile_panda::AgentState>(mobile_panda::loadFacts(robot_dir_, "mobile_panda_dual", kTaskName));
-  if (robot_->getFacts().joints.size() != kRobotDof || robot_->getDim() != ObservationLayout::kAgentDim)
-    throw Error("PushChair: expected the dual-arm robot (22 joints) in " + robot_->getFacts().urdf, MB_ERROR);
+  robot_ = std::make_unique<mobile_panda::AgentState>(config.get<std::string>("robot_dir", MANIBENCH_ROBOT_DIR),
+                                                      "mobile_panda_dual", kTaskName, 2, kRobotDof);
 }
 
-TaskSpec PushChairTask::describe() const {
-  TaskSpec spec;
+sdk::TaskSpec PushChairTask::describe() const {
   // The robot's own state (what the pointcloud and rgbd modes pass on),
   // then the privileged chair and target.
-  spec.observation = robot_->describe();
-  spec.agent_state_dim = robot_->getDim();
-  const std::vector<manibench::sdk::Segment> object = {
+  sdk::TaskSpec spec = robot_->describeTask();
+  const std::vector<Segment> object = {
       {"chair_pose", 7, "the chair's root link (star base, frame on the floor under the column): position, quaternion wxyz"},
       {"chair_velocity", 3, "root link origin, world (m/s)"},
       {"chair_angular_velocity", 3, "root link, world (rad/s)"},
@@ -89,12 +75,6 @@ TaskSpec PushChairTask::describe() const {
   spec.success_conditions = {"close_to_target", "static", "upright", "success"};
   spec.success_hold_steps = hold_steps_;
   spec.masks = {"robot"};
-  spec.robot_articulation = "robot";
-  spec.actuated_joints = robot_->getFacts().joints;
-  spec.default_controller = "mobile_panda";
-  spec.control_frequency = 100;
-  spec.frame_skip = 5;
-  spec.max_episode_steps = 200;
   // ManiSkill v1: chair density 200 (links without <inertial>: PartNet
   // chairs), friction ground 0.5 (its default), chair 0.1, wheels 1.0,
   // finger pads 2.
@@ -104,30 +84,16 @@ TaskSpec PushChairTask::describe() const {
          << "      - {articulation: chair, static_friction: 0.1, dynamic_friction: 0.1}\n";
   for (int k = 0; k < 5; ++k)
     config << "      - {articulation: chair, link: wheel_" << k << ", static_friction: 1.0, dynamic_friction: 1.0}\n";
-  for (const std::string& finger : robot_->getFacts().finger_links)
-    config << "      - {articulation: robot, link: " << finger << ", static_friction: 2.0, dynamic_friction: 2.0}\n";
-  spec.default_config = config.str() + robot_->getFacts().camera_yaml;
+  spec.default_config = config.str() + robot_->getFingerFrictionYaml() + robot_->getFacts().camera_yaml;
   return spec;
 }
 
-const ChairModel& PushChairTask::getChair(const std::string& chair_id) const {
-  auto& slot = chairs_[chair_id];
-  if (!slot)
-    slot = std::make_shared<ChairModel>(partnet_dir_.empty() ? generateChair(chair_id)
-                                                              : loadPartNetChair(partnet_dir_, chair_id, partnet_scale_));
-  return *slot;
-}
-
-std::vector<std::string> PushChairTask::listObjects(const std::string& split) const {
-  return partnet_dir_.empty() ? listGeneratedChairs(split) : manibench::kit::partnet::listObjectIds(partnet_dir_, split);
-}
+std::vector<std::string> PushChairTask::listObjects(const std::string& split) const { return chairs_.list(split); }
 
 void PushChairTask::buildScene(SceneView& scene, const std::string& object_id) {
-  getChair(object_id);
-  chair_ = chairs_.at(object_id);
+  chair_ = chairs_.get(object_id);
   scene.addGround(0.0);
-  robot_id_ = scene.addUrdfFile(robot_->getFacts().urdf, "robot", Pose(), /*fixed_base=*/true);
-  robot_->bind(scene, robot_id_);
+  robot_id_ = robot_->addTo(scene);
   Pose placement;
   placement.position = Eigen::Vector3d(0, 0, chair_->root_height);
   chair_id_ = scene.addUrdfString(chair_->urdf, chair_->base_dir, "chair", placement, /*fixed_base=*/false);
@@ -162,14 +128,7 @@ void PushChairTask::reset(SceneView& scene, uint64_t seed) {
   const Eigen::Vector2d chair_xy = target_.head<2>() + chair_distance * Eigen::Vector2d(std::cos(chair_bearing), std::sin(chair_bearing));
   const double robot_distance = rng.uniform(0.8, 1.2);
   const double robot_bearing = rng.uniform(-kPi, kPi);
-  const Eigen::Vector2d robot_xy = chair_xy + robot_distance * Eigen::Vector2d(std::cos(robot_bearing), std::sin(robot_bearing));
-  const double heading = robot_bearing + kPi + rng.uniform(-0.05 * kPi, 0.05 * kPi);
-  Eigen::VectorXd q = robot_->getFacts().initial;
-  q[0] = robot_xy.x();
-  q[1] = robot_xy.y();
-  q[2] = std::remainder(heading, 2 * kPi);
-  scene.setJointPositions(robot_id_, q);
-  scene.setJointVelocities(robot_id_, Eigen::VectorXd::Zero(q.size()));
+  robot_->placeFacing(scene, rng, chair_xy, robot_distance, robot_bearing, kPi);
 
   Pose pose;
   pose.position = Eigen::Vector3d(chair_xy.x(), chair_xy.y(), chair_->root_height);
@@ -222,12 +181,8 @@ double PushChairTask::calcPadDistance(const SceneView& scene) const {
 void PushChairTask::observe(const SceneView& scene, Eigen::Map<Eigen::VectorXd> out) {
   using L = ObservationLayout;
   robot_->observe(scene, out);
-  auto putPose = [&out](uint32_t at, const Pose& p) {
-    out.segment<3>(at) = p.position;
-    out.segment<4>(at + 3) << p.orientation.w(), p.orientation.x(), p.orientation.y(), p.orientation.z();
-  };
-  putPose(L::kChairPose, scene.getLinkPose(root_link_));
-  const manibench::sdk::Twist twist = scene.getLinkTwist(root_link_);
+  putPose(out, L::kChairPose, scene.getLinkPose(root_link_));
+  const Twist twist = scene.getLinkTwist(root_link_);
   out.segment<3>(L::kChairVelocity) = twist.linear;
   out.segment<3>(L::kChairAngularVelocity) = twist.angular;
   out.segment<2 * kMaxChairJoints>(L::kChairJointPositions).setZero();
@@ -241,7 +196,7 @@ void PushChairTask::observe(const SceneView& scene, Eigen::Map<Eigen::VectorXd> 
 RewardInput PushChairTask::measure(const SceneView& scene) const {
   RewardInput m;
   const Pose root = scene.getLinkPose(root_link_);
-  const manibench::sdk::Twist twist = scene.getLinkTwist(root_link_);
+  const Twist twist = scene.getLinkTwist(root_link_);
   const Eigen::Vector2d to_target = target_.head<2>() - root.position.head<2>();
   m.target_distance = to_target.norm();
   m.speed = twist.linear.norm();
@@ -259,7 +214,7 @@ double PushChairTask::computeReward(const SceneView& scene, Eigen::Map<const Eig
   return calcStagedReward(m);
 }
 
-std::vector<Condition> PushChairTask::evaluateSuccess(const SceneView& scene) {
+std::vector<sdk::Condition> PushChairTask::evaluateSuccess(const SceneView& scene) {
   const RewardInput m = measure(scene);
   const bool close = m.target_distance <= kTargetRadius;
   const bool upright = m.tilt < kUprightTilt;

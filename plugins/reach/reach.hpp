@@ -4,12 +4,17 @@
 // copy it to start a new one.
 #pragma once
 
+#include <manibench/kit/object_ids.hpp>
 #include <manibench/sdk.hpp>
 
-#include <array>
 #include <string>
 
 namespace reach {
+
+// The family is written in the kit's and the SDK's names (Error, Pose,
+// SceneView, Config; NumberedIds for its object ids).
+using namespace manibench::kit;
+namespace sdk = manibench::sdk;
 
 // Arm geometry of one object id.
 struct ArmGeometry {
@@ -33,19 +38,17 @@ struct ObservationLayout {
   static constexpr uint32_t kDim = 15;
 };
 
-class ReachTask : public manibench::sdk::Task {
+class ReachTask : public sdk::Task {
  public:
-  explicit ReachTask(const manibench::sdk::Config& config);
+  explicit ReachTask(const Config& config);
 
-  manibench::sdk::TaskSpec describe() const override;
+  sdk::TaskSpec describe() const override;
   std::vector<std::string> listObjects(const std::string& split) const override;
-  void buildScene(manibench::sdk::SceneView& scene, const std::string& object_id) override;
-  void reset(manibench::sdk::SceneView& scene, uint64_t seed) override;
-  void observe(const manibench::sdk::SceneView& scene, Eigen::Map<Eigen::VectorXd> out) override;
-  double computeReward(const manibench::sdk::SceneView& scene,
-                       Eigen::Map<const Eigen::VectorXd> action) override;
-  std::vector<manibench::sdk::Condition> evaluateSuccess(
-      const manibench::sdk::SceneView& scene) override;
+  void buildScene(SceneView& scene, const std::string& object_id) override;
+  void reset(SceneView& scene, uint64_t seed) override;
+  void observe(const SceneView& scene, Eigen::Map<Eigen::VectorXd> out) override;
+  double computeReward(const SceneView& scene, Eigen::Map<const Eigen::VectorXd> action) override;
+  std::vector<sdk::Condition> evaluateSuccess(const SceneView& scene) override;
 
  private:
   double reach_tolerance_;   // m
@@ -57,10 +60,10 @@ class ReachTask : public manibench::sdk::Task {
   Eigen::Vector3d target_ = Eigen::Vector3d::Zero();
 };
 
-class ReachExpert : public manibench::sdk::Policy {
+class ReachExpert : public sdk::Policy {
  public:
-  explicit ReachExpert(const manibench::sdk::PolicyContext& context);
-  Eigen::VectorXd act(const manibench::sdk::Observation& observation) override;
+  explicit ReachExpert(const sdk::PolicyContext& context);
+  Eigen::VectorXd act(const sdk::Observation& observation) override;
 
  private:
   Eigen::Index action_dim_;

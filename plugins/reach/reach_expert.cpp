@@ -7,11 +7,7 @@
 
 namespace reach {
 
-using manibench::sdk::Error;
-using manibench::sdk::Observation;
-using manibench::sdk::PolicyContext;
-
-ReachExpert::ReachExpert(const PolicyContext& context) : action_dim_(context.action.dim) {
+ReachExpert::ReachExpert(const sdk::PolicyContext& context) : action_dim_(context.action.dim) {
   if (context.task_name != "Reach-v0" || context.observation.dim != ObservationLayout::kDim ||
       action_dim_ != 2)
     throw Error("reach_expert only drives Reach-v0 with a 2-joint velocity action, not '" +
@@ -19,7 +15,7 @@ ReachExpert::ReachExpert(const PolicyContext& context) : action_dim_(context.act
                 MB_INVALID_ARGUMENT);
 }
 
-Eigen::VectorXd ReachExpert::act(const Observation& observation) {
+Eigen::VectorXd ReachExpert::act(const sdk::Observation& observation) {
   using L = ObservationLayout;
   const Eigen::VectorXd& s = observation.state;
   const Eigen::Vector2d q = s.segment<2>(L::kJointPositions);

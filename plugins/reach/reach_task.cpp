@@ -5,18 +5,10 @@
 #include <sstream>
 
 namespace reach {
-
-using manibench::sdk::Condition;
-using manibench::sdk::Config;
-using manibench::sdk::Error;
-using manibench::sdk::Pose;
-using manibench::sdk::SceneView;
-using manibench::sdk::TaskSpec;
-
 namespace {
 
-constexpr int kTrainObjects = 8;
-constexpr int kTestObjects = 4;
+// Object ids: eight train arms, four longer test arms.
+const NumberedIds kIds{{0, 8}, {8, 4}};
 
 // Rod inertia about its centre, for a link of `mass` and `length` along x.
 std::string inertialXml(double mass, double length) {
@@ -63,29 +55,15 @@ std::string makeArmUrdf(const ArmGeometry& g) {
   return xml.str();
 }
 
-int parseObjectId(const std::string& object_id) {
-  std::size_t used = 0;
-  int id = -1;
-  try {
-    id = std::stoi(object_id, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != object_id.size() || id < 0 || id >= kTrainObjects + kTestObjects)
-    throw Error("Reach has no object '" + object_id + "' (ids 0-" +
-                    std::to_string(kTrainObjects + kTestObjects - 1) + ")",
-                MB_NOT_FOUND);
-  return id;
-}
-
 }  // namespace
 
 ArmGeometry getArmGeometry(const std::string& object_id) {
-  const int id = parseObjectId(object_id);
-  if (id < kTrainObjects)  // train: upper 0.35-0.45 m, forearm 0.25-0.31 m
+  const bool test = kIds.requireTest(object_id, "Reach object");
+  const int id = *NumberedIds::parse(object_id);
+  if (!test)  // train: upper 0.35-0.45 m, forearm 0.25-0.31 m
     return {0.35 + 0.1 * (id % 4) / 3.0, 0.25 + 0.02 * (id / 4) * 3.0};
   // test: longer arms than any train object (0.50-0.55 m / 0.33-0.36 m)
-  const int k = id - kTrainObjects;
+  const int k = id - kIds.test.first;
   return {0.50 + 0.05 * (k % 2), 0.33 + 0.03 * (k / 2)};
 }
 
@@ -98,8 +76,8 @@ ReachTask::ReachTask(const Config& config)
     throw Error("Reach: reach_tolerance and static_speed must be positive", MB_INVALID_ARGUMENT);
 }
 
-TaskSpec ReachTask::describe() const {
-  TaskSpec spec;
+sdk::TaskSpec ReachTask::describe() const {
+  sdk::TaskSpec spec;
   spec.observation = {
       {"joint_positions", 2, "shoulder, elbow (rad)"},
       {"joint_velocities", 2, "shoulder, elbow (rad/s)"},
@@ -131,17 +109,7 @@ cameras:
   return spec;
 }
 
-std::vector<std::string> ReachTask::listObjects(const std::string& split) const {
-  std::vector<std::string> ids;
-  if (split == "train") {
-    for (int i = 0; i < kTrainObjects; ++i) ids.push_back(std::to_string(i));
-  } else if (split == "test") {
-    for (int i = kTrainObjects; i < kTrainObjects + kTestObjects; ++i) ids.push_back(std::to_string(i));
-  } else {
-    throw Error("unknown split '" + split + "' (use train or test)", MB_INVALID_ARGUMENT);
-  }
-  return ids;
-}
+std::vector<std::string> ReachTask::listObjects(const std::string& split) const { return kIds.list(split); }
 
 void ReachTask::buildScene(SceneView& scene, const std::string& object_id) {
   geometry_ = getArmGeometry(object_id);
@@ -186,7 +154,7 @@ double ReachTask::computeReward(const SceneView& scene, Eigen::Map<const Eigen::
   return 1.0 - std::min(speed, 1.0);
 }
 
-std::vector<Condition> ReachTask::evaluateSuccess(const SceneView& scene) {
+std::vector<sdk::Condition> ReachTask::evaluateSuccess(const SceneView& scene) {
   const double distance = (scene.getLinkPose(tip_).position - target_).norm();
   const double speed = scene.getLinkTwist(tip_).linear.norm();
   const bool reached = distance <= reach_tolerance_;

@@ -18,8 +18,8 @@ from typing import Any
 
 from . import _core
 from . import _gym
-from ._core import (ConfigError, EpisodeFailure, Error, InvalidAction, PluginCallError,
-                    PluginError)
+from ._core import (ConfigError, EpisodeFailure, Error, InvalidAction, InvalidArgument,
+                    PluginCallError, PluginError)
 from ._gym import AutoresetMode
 from .env import DTYPES, OBS_MODES, ConfigFiles, ManibenchEnv, Overrides, check_dtypes
 from .env import make_config_files as _make_config_files
@@ -30,8 +30,8 @@ __version__ = _core.get_version()
 
 __all__ = [
     "AutoresetMode", "ConfigError", "DTYPES", "EpisodeFailure", "Error", "InvalidAction",
-    "ManibenchEnv", "OBS_MODES", "PluginCallError", "PluginError", "VectorEnv", "env_ids",
-    "info", "list_plugins", "list_tasks", "make", "make_vec", "objects",
+    "InvalidArgument", "ManibenchEnv", "OBS_MODES", "PluginCallError", "PluginError", "VectorEnv",
+    "env_ids", "info", "list_plugins", "list_tasks", "make", "make_vec", "objects",
 ]
 
 

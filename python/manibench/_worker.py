@@ -59,10 +59,8 @@ def _end_episode(env, block, slot, mode):
         obs, info = env.reset()
         block.set_needs_reset(slot, False)
         return obs, 0.0, False, False, info
-    reward, success, flags, values = env._env.get_last_step()
+    reward, terminated, truncated, success, flags, values = env._env.get_last_step()
     elapsed = env._env.elapsed_steps
-    terminated = bool(success and env.stop_on_success)
-    truncated = bool(elapsed >= env.max_episode_steps)
     final_info = make_step_info(env._env.object_id, env._env.seed, elapsed, success,
                                 env.success_conditions, flags, values)
     final_obs = env.get_obs()
@@ -93,8 +91,7 @@ def run_worker(conn, make_kwargs, spin_wait=0.0, mode=AutoresetMode.NEXT_STEP.va
                 # parent sends a command through the pipe, or an episode
                 # ends (SAME_STEP) or an ended one gets a step (answered here).
                 try:
-                    reason = env._env.serve_steps(block, slot, spin_wait, env.max_episode_steps,
-                                                  parent_pid,
+                    reason = env._env.serve_steps(block, slot, spin_wait, parent_pid,
                                                   mode == AutoresetMode.SAME_STEP.value)
                     if reason != _core.SERVE_TO_PIPE:
                         message = ("ok", _end_episode(env, block, slot, mode))

@@ -180,9 +180,8 @@ class ManibenchEnv(_gym.Env):
         return self._env.get_observation(), self._make_info()
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
-        reward, done, success, flags, values = self._env.step(np.asarray(action, dtype=np.float64))
-        terminated = bool(success and self.stop_on_success)
-        truncated = self._env.elapsed_steps >= self.max_episode_steps
+        reward, terminated, truncated, success, flags, values = self._env.step(
+            np.asarray(action, dtype=np.float64))
         info = make_step_info(self._env.object_id, self._env.seed, self._env.elapsed_steps,
                               success, self.success_conditions, flags, values)
         return self._env.get_observation(), float(reward), terminated, truncated, info

@@ -14,6 +14,7 @@
 #include <manibench/task_name.hpp>
 
 #include "step_block.hpp"
+#include "step_block_bindings.hpp"
 
 #include <unistd.h>
 
@@ -26,6 +27,7 @@
 
 namespace py = pybind11;
 namespace mb = manibench;
+using manibench::python::bindStepBlock;
 using manibench::python::ServeExit;
 using manibench::python::StepBlock;
 using manibench::python::StepBlockLayout;
@@ -177,11 +179,12 @@ class PyEnvironment {
     env.reset(object_id, seed);
   }
 
-  // (reward, done, success, flags, values)
+  // (reward, terminated, truncated, success, flags, values): the step's
+  // StepResult, which decides terminated and truncated.
   py::tuple step(py::array_t<double, py::array::c_style | py::array::forcecast> action) {
     mb::Environment& env = upd();
     if (action.ndim() != 1)
-      throw std::invalid_argument("the action must be a 1-d array, got " +
+      throw mb::InvalidArgument("the action must be a 1-d array, got " +
                                   std::to_string(action.ndim()) + " dimensions");
     const Eigen::Map<const Eigen::VectorXd> view(action.data(), action.shape(0));
     action_ = view;
@@ -193,7 +196,7 @@ class PyEnvironment {
     py::list flags, values;
     for (uint8_t f : r.flags) flags.append(bool(f));
     for (double v : r.values) values.append(v);
-    return py::make_tuple(r.reward, r.done, r.success, flags, values);
+    return py::make_tuple(r.reward, r.terminated, r.truncated, r.success, flags, values);
   }
 
   // The current observation: the state vector, or a dict of arrays in the
@@ -224,29 +227,19 @@ class PyEnvironment {
   }
 
   // A third-person RGB image (height x width x 3, uint8) of the current
-  // state, from the front-right and above the robot's root, as the CLI's
-  // videos (apps/manibench/video.cpp).
+  // state: the CLI's videos' view (calcThirdPersonView), aimed at the
+  // robot's root where it is now.
   py::array_t<std::uint8_t> render(int width, int height) {
     mb::Environment& env = upd();
     if (width <= 0 || height <= 0)
-      throw std::invalid_argument("render size must be positive, got " + std::to_string(width) +
+      throw mb::InvalidArgument("render size must be positive, got " + std::to_string(width) +
                                   "x" + std::to_string(height));
-    mb::CameraSpec camera;
-    camera.name = "python_render";
-    camera.width = width;
-    camera.height = height;
-    camera.fovy = 1.0;
-    camera.far = 20;
-    const mb::Scene& scene = env.getScene();
-    const int robot = scene.findArticulation(env.getTaskDescription().robot_articulation);
-    const Eigen::Vector3d target =
-        (robot >= 0 ? scene.getRootPose(robot).position : Eigen::Vector3d::Zero()) +
-        Eigen::Vector3d(0, 0, 0.6);
-    const mb::Pose pose = mb::calcLookAtPose(target + Eigen::Vector3d(2.5, -2.5, 1.6), target);
+    const mb::ThirdPersonView view =
+        mb::calcThirdPersonView(env.getScene(), env.getTaskDescription().robot_articulation, width, height);
     g_rendered = true;
     {
       py::gil_scoped_release release;
-      env.updObserver().updRenderer().render(camera, pose, frame_);
+      env.updObserver().updRenderer().render(view.camera, view.pose, frame_);
     }
     py::array_t<std::uint8_t> out({py::ssize_t(height), py::ssize_t(width), py::ssize_t(3)});
     std::uint8_t* dst = out.mutable_data();
@@ -264,15 +257,16 @@ class PyEnvironment {
   // auto-reset, which the package does) or, with `same_step`, a Step ends
   // the episode (the package resets at once and answers on the pipe). An
   // exception of a step leaves the loop as it would leave step(): the
-  // package sends it through the pipe.
-  ServeExit serveSteps(StepBlock& block, std::size_t slot, double spin_wait,
-                       int64_t max_episode_steps, int parent_pid, bool same_step) {
+  // package sends it through the pipe. Terminated and truncated are the
+  // step's (StepResult).
+  ServeExit serveSteps(StepBlock& block, std::size_t slot, double spin_wait, int parent_pid,
+                       bool same_step) {
     mb::Environment& env = upd();
     const StepBlockLayout& layout = block.getLayout();
     if (slot >= layout.slot_count) throw std::out_of_range("no slot " + std::to_string(slot));
     if (layout.action_dim != std::size_t(env.getControllerDescription().action_dim) ||
         layout.condition_count != env.getTaskDescription().success_conditions.size())
-      throw std::invalid_argument("serve_steps: the block's layout is not this environment's");
+      throw mb::InvalidArgument("serve_steps: the block's layout is not this environment's");
     StepSlotHeader& header = block.updHeader(slot);
     py::gil_scoped_release release;
     for (;;) {
@@ -284,9 +278,9 @@ class PyEnvironment {
       const mb::StepResult& r = last_step_;
       header.reward = r.reward;
       header.success = r.success;
-      header.terminated = r.success && env.getOptions().stop_on_success;
+      header.terminated = r.terminated;
+      header.truncated = r.truncated;
       header.elapsed_steps = int64_t(env.getElapsedSteps());
-      header.truncated = header.elapsed_steps >= max_episode_steps;
       header.needs_reset = header.terminated || header.truncated;
       std::memcpy(block.updFlags(slot), r.flags.data(), r.flags.size());
       std::memcpy(block.updValues(slot), r.values.data(), r.values.size() * sizeof(double));
@@ -296,12 +290,14 @@ class PyEnvironment {
     }
   }
 
-  // (reward, success, flags, values) of serve_steps' last step.
+  // (reward, terminated, truncated, success, flags, values) of
+  // serve_steps' last step, as step() returns them.
   py::tuple getLastStep() const {
     py::list flags, values;
     for (uint8_t f : last_step_.flags) flags.append(bool(f));
     for (double v : last_step_.values) values.append(v);
-    return py::make_tuple(last_step_.reward, last_step_.success, flags, values);
+    return py::make_tuple(last_step_.reward, last_step_.terminated, last_step_.truncated,
+                          last_step_.success, flags, values);
   }
 
   py::bytes saveState() {
@@ -356,7 +352,7 @@ class PyEnvironment {
 
   std::vector<std::string> listObjects(const std::string& split) const {
     if (split != "train" && split != "test")
-      throw std::invalid_argument("split must be 'train' or 'test', got '" + split + "'");
+      throw mb::InvalidArgument("split must be 'train' or 'test', got '" + split + "'");
     return get().listObjects(split);
   }
 
@@ -415,119 +411,17 @@ class PyEnvironment {
   mb::CameraImages frame_;
 };
 
-// make_vec's shared block (step_block.hpp) as the package uses it: the
-// parent posts and waits and reads the scalars; numpy views of the
-// observation fields come from `memory` and field_offset().
-void bindStepBlock(py::module_& m) {
-  m.attr("SERVE_TO_PIPE") = int(ServeExit::ToPipe);
-  m.attr("SERVE_AUTO_RESET") = int(ServeExit::AutoReset);
-  m.attr("SERVE_EPISODE_ENDED") = int(ServeExit::EpisodeEnded);
-  auto layout = [](std::size_t slots, std::size_t action_dim, std::size_t conditions,
-                   std::vector<std::size_t> field_bytes) {
-    StepBlockLayout l;
-    l.slot_count = slots;
-    l.action_dim = action_dim;
-    l.condition_count = conditions;
-    l.field_bytes = std::move(field_bytes);
-    return l;
-  };
-  py::class_<StepBlock>(m, "StepBlock", py::buffer_protocol())
-      .def_static(
-          "create",
-          [layout](std::size_t slots, std::size_t action_dim, std::size_t conditions,
-                   std::vector<std::size_t> field_bytes) {
-            return StepBlock::create(layout(slots, action_dim, conditions, std::move(field_bytes)));
-          },
-          py::arg("slots"), py::arg("action_dim"), py::arg("conditions"), py::arg("field_bytes"))
-      .def_static(
-          "attach",
-          [layout](const std::string& name, std::size_t slots, std::size_t action_dim,
-                   std::size_t conditions, std::vector<std::size_t> field_bytes) {
-            return StepBlock::attach(name,
-                                     layout(slots, action_dim, conditions, std::move(field_bytes)));
-          },
-          py::arg("name"), py::arg("slots"), py::arg("action_dim"), py::arg("conditions"),
-          py::arg("field_bytes"))
-      .def_property_readonly("name", &StepBlock::getName)
-      .def("unlink_name", &StepBlock::unlinkName)
-      .def_buffer([](StepBlock& b) {
-        return py::buffer_info(b.updData(), 1, py::format_descriptor<uint8_t>::format(), 1,
-                               {py::ssize_t(b.getSize())}, {py::ssize_t(1)});
-      })
-      .def("field_offset", &StepBlock::getFieldOffset, py::arg("slot"), py::arg("field"))
-      .def(
-          "post_step",
-          [](StepBlock& b, py::array_t<double, py::array::c_style | py::array::forcecast> actions) {
-            const StepBlockLayout& l = b.getLayout();
-            if (actions.ndim() != 2 || std::size_t(actions.shape(0)) != l.slot_count ||
-                std::size_t(actions.shape(1)) != l.action_dim)
-              throw std::invalid_argument("post_step: actions must be (" +
-                                          std::to_string(l.slot_count) + ", " +
-                                          std::to_string(l.action_dim) + ")");
-            b.post(StepCommand::Step, actions.data());
-          },
-          py::arg("actions"))
-      .def("post_to_pipe", [](StepBlock& b) { b.post(StepCommand::ToPipe, nullptr); })
-      .def(
-          "wait_all",
-          [](StepBlock& b, double timeout) {
-            py::gil_scoped_release release;
-            return b.waitAll(timeout);
-          },
-          py::arg("timeout"), "Waits for every slot; returns those not done in `timeout` s.")
-      .def(
-          "results",
-          [](StepBlock& b) {
-            // (rewards, terminated, truncated, success, elapsed_steps,
-            //  flags, values, on_pipe, point_count) over the slots.
-            const StepBlockLayout& l = b.getLayout();
-            const py::ssize_t n = py::ssize_t(l.slot_count), c = py::ssize_t(l.condition_count);
-            py::array_t<double> rewards(n), values({n, c});
-            auto bools = [](std::vector<py::ssize_t> shape) {
-              return py::array(py::dtype("bool"), std::move(shape));
-            };
-            py::array terminated = bools({n}), truncated = bools({n}), success = bools({n}),
-                      on_pipe = bools({n}), flags = bools({n, c});
-            py::array_t<int64_t> elapsed(n), points(n);
-            for (py::ssize_t s = 0; s < n; ++s) {
-              const StepSlotHeader& h = b.updHeader(std::size_t(s));
-              rewards.mutable_at(s) = h.reward;
-              static_cast<bool*>(terminated.mutable_data())[s] = h.terminated;
-              static_cast<bool*>(truncated.mutable_data())[s] = h.truncated;
-              static_cast<bool*>(success.mutable_data())[s] = h.success;
-              static_cast<bool*>(on_pipe.mutable_data())[s] =
-                  h.place == uint32_t(StepResultPlace::OnPipe);
-              elapsed.mutable_at(s) = h.elapsed_steps;
-              points.mutable_at(s) = h.point_count;
-              bool* f = static_cast<bool*>(flags.mutable_data()) + s * c;
-              const uint8_t* src = b.updFlags(std::size_t(s));
-              for (py::ssize_t k = 0; k < c; ++k) f[k] = src[k] != 0;
-              if (c > 0)
-                std::memcpy(values.mutable_data() + s * c, b.updValues(std::size_t(s)),
-                            sizeof(double) * std::size_t(c));
-            }
-            return py::make_tuple(rewards, terminated, truncated, success, elapsed, flags, values,
-                                  on_pipe, points);
-          })
-      .def(
-          "finish_on_pipe",
-          [](StepBlock& b, std::size_t slot) { b.finish(slot, StepResultPlace::OnPipe); },
-          py::arg("slot"), "Worker: the taken Step's result went through the pipe.")
-      .def(
-          "set_needs_reset",
-          [](StepBlock& b, std::size_t slot, bool value) { b.updHeader(slot).needs_reset = value; },
-          py::arg("slot"), py::arg("value"));
-}
-
 }  // namespace
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "manibench's C++ core: environments over the plugin registry (use the manibench package)";
 
   // Exceptions carry the C++ message under classes that say what went
-  // wrong; other std::exceptions keep pybind11's mapping (invalid_argument:
-  // ValueError, the rest: RuntimeError). The classes are made here with
-  // type() so that ConfigError and InvalidAction can also be ValueErrors;
+  // wrong, mapped onto manibench::Error's (manibench/error.hpp): every
+  // mb::Error is a manibench.Error, the user-input ones (InvalidArgument,
+  // ConfigError, InvalidAction) also ValueErrors; other std::exceptions
+  // keep pybind11's mapping. The classes are made here with type() so that
+  // those can be ValueErrors too;
   // they live as long as the process (never decref'd: no destructor runs
   // after the interpreter is gone).
   const py::object make_type = py::reinterpret_borrow<py::object>(reinterpret_cast<PyObject*>(&PyType_Type));
@@ -552,6 +446,9 @@ PYBIND11_MODULE(_core, m) {
   static PyObject* invalid_action =
       make_error("InvalidAction", py::make_tuple(base, py::handle(PyExc_ValueError)),
                  "An action of the wrong size, or with NaN or infinity.");
+  static PyObject* invalid_argument =
+      make_error("InvalidArgument", py::make_tuple(base, py::handle(PyExc_ValueError)),
+                 "A bad value: an option, an argument, an object id, a state blob.");
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
@@ -565,6 +462,10 @@ PYBIND11_MODULE(_core, m) {
       PyErr_SetString(plugin_error, e.what());
     } catch (const mb::EpisodeFailure& e) {
       PyErr_SetString(episode_failure, e.what());
+    } catch (const mb::InvalidArgument& e) {
+      PyErr_SetString(invalid_argument, e.what());
+    } catch (const mb::Error& e) {
+      PyErr_SetString(error, e.what());
     }
   });
 
@@ -620,18 +521,15 @@ PYBIND11_MODULE(_core, m) {
       .def("close", &PyEnvironment::close)
       .def(
           "serve_steps",
-          [](PyEnvironment& e, StepBlock& block, std::size_t slot, double spin_wait,
-             int64_t max_episode_steps, int parent_pid, bool same_step) {
-            return int(
-                e.serveSteps(block, slot, spin_wait, max_episode_steps, parent_pid, same_step));
-          },
-          py::arg("block"), py::arg("slot"), py::arg("spin_wait"), py::arg("max_episode_steps"),
-          py::arg("parent_pid"), py::arg("same_step") = false,
+          [](PyEnvironment& e, StepBlock& block, std::size_t slot, double spin_wait, int parent_pid,
+             bool same_step) { return int(e.serveSteps(block, slot, spin_wait, parent_pid, same_step)); },
+          py::arg("block"), py::arg("slot"), py::arg("spin_wait"), py::arg("parent_pid"),
+          py::arg("same_step") = false,
           "make_vec's worker loop: answers the block's steps until the parent posts ToPipe "
           "(returns SERVE_TO_PIPE), an ended episode gets a step (SERVE_AUTO_RESET) or, with "
           "same_step, a step ends the episode (SERVE_EPISODE_ENDED).")
       .def("get_last_step", &PyEnvironment::getLastStep,
-           "(reward, success, flags, values) of serve_steps' last step.");
+           "(reward, terminated, truncated, success, flags, values) of serve_steps' last step.");
 
   bindStepBlock(m);
 }

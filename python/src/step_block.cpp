@@ -1,5 +1,7 @@
 #include "step_block.hpp"
 
+#include <manibench/error.hpp>
+
 #include <fcntl.h>
 #include <linux/futex.h>
 #include <sys/mman.h>
@@ -106,7 +108,7 @@ void StepBlock::calcOffsets() {
 }
 
 StepBlock StepBlock::create(const StepBlockLayout& layout) {
-  if (layout.slot_count == 0) throw std::invalid_argument("a step block needs at least one slot");
+  if (layout.slot_count == 0) throw InvalidArgument("a step block needs at least one slot");
   std::size_t slot_bytes = 0;
   const std::size_t size = calcSize(layout, &slot_bytes);
   const std::string name = makeUniqueName();

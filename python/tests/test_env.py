@@ -130,7 +130,7 @@ def test_reset_options_and_fixed_object_ids():
         assert env.list_objects("test") == ["3"]
         _, info = env.reset(seed=11)
         assert info["object_id"] == "3"
-        with pytest.raises(ValueError, match="3"):
+        with pytest.raises(manibench.InvalidArgument, match="3"):  # a ValueError and a manibench.Error
             env.reset(seed=0, options={"object_id": "4"})
 
 

@@ -619,10 +619,10 @@ TEST(ConfigEnvironment, TimingOverridesChangeTheEnvironmentForReal) {
   const double t0 = env->getScene().getTime();
   StepResult step = env->step(Eigen::VectorXd::Zero(2));
   EXPECT_NEAR(env->getScene().getTime() - t0, 0.04, 1e-12);
-  EXPECT_FALSE(step.done);
+  EXPECT_FALSE(step.isDone());
   env->step(Eigen::VectorXd::Zero(2));
   step = env->step(Eigen::VectorXd::Zero(2));
-  EXPECT_TRUE(step.done);  // the time limit, 3 steps
+  EXPECT_TRUE(step.isDone());  // the time limit, 3 steps
   EXPECT_EQ(env->getElapsedSteps(), 3u);
 }
 
@@ -695,10 +695,10 @@ TEST(ConfigEnvironment, BodyMaterialsReachTheSceneAndBadNamesAreErrors) {
 TEST(ConfigEnvironment, EnvironmentRefusesImpossibleTimingOverrides) {
   EnvironmentOptions options;
   options.control_frequency = 0;
-  EXPECT_THROW(Environment(getBuildTreeRegistry(), "Reach-v0", options), std::invalid_argument);
+  EXPECT_THROW(Environment(getBuildTreeRegistry(), "Reach-v0", options), manibench::InvalidArgument);
   options = {};
   options.frame_skip = 0u;
-  EXPECT_THROW(Environment(getBuildTreeRegistry(), "Reach-v0", options), std::invalid_argument);
+  EXPECT_THROW(Environment(getBuildTreeRegistry(), "Reach-v0", options), manibench::InvalidArgument);
 }
 
 }  // namespace

@@ -3,31 +3,28 @@
 #pragma once
 
 #include <gtest/gtest.h>
-#include <manibench/sdk/numbers.hpp>
+#include <manibench/scene.hpp>
 #include <unistd.h>
 
 #include <cmath>
 #include <cstring>
 #include <fstream>
-#include <manibench/scene.hpp>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "../scene/scene_urdf.hpp"
+
 namespace manibench {
 namespace contact_scenes {
 
-using sdk::kPi;
-constexpr double kG = 9.81;
+// The scene tests' constants and number format (scene/scene_urdf.hpp).
+using scene_testing::kG;
+using scene_testing::kPi;
+using scene_testing::num;
 
 // --- URDF building blocks -------------------------------------------------------
-
-inline std::string num(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  return s.str();
-}
 
 inline std::string origin(const Eigen::Vector3d& xyz,
                           const Eigen::Vector3d& rpy = Eigen::Vector3d::Zero()) {
@@ -262,6 +259,17 @@ inline void expectPileReplays(const std::string& integrator) {
   pile.scene.restoreState(saved);
   for (int k = 150; k < 250; ++k) pile.tick(k);
   EXPECT_TRUE(isBitIdentical(first, pile.snapshot())) << integrator;
+}
+
+// Expects `call` to throw a SceneError mentioning every one of `needles`.
+inline void expectSceneError(const std::function<void()>& call, const std::vector<std::string>& needles) {
+  try {
+    call();
+    ADD_FAILURE() << "no SceneError";
+  } catch (const SceneError& e) {
+    for (const std::string& needle : needles)
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace contact_scenes

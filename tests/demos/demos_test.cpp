@@ -127,7 +127,7 @@ TEST_F(ReachDemos, AStateOfAnotherTaskIsRefusedNamingBoth) {
   const Trajectory t = reader.read("traj_0");
   DemoFileInfo other = reader.getInfo();
   Environment env(getBuildTreeRegistry(), "OpenCabinetDrawer-v0");
-  const std::string message = catchMessage<std::invalid_argument>([&] { replayTrajectory(env, t, true); });
+  const std::string message = catchMessage<manibench::InvalidArgument>([&] { replayTrajectory(env, t, true); });
   expectMentions(message, {"Reach-v0", "OpenCabinetDrawer-v0"});
 }
 

@@ -89,7 +89,7 @@ TEST(FixedObjectEnv, ReachObjectSpecSelectsExactlyItsObjects) {
   EXPECT_EQ(test_object.listObjects("train"), std::vector<std::string>{"10"});
   EXPECT_EQ(test_object.getObjectId(), "10");
 
-  const std::string other = catchMessage<std::invalid_argument>([&] { one.reset("2", 0); });
+  const std::string other = catchMessage<manibench::InvalidArgument>([&] { one.reset("2", 0); });
   EXPECT_TRUE(contains(other, "Reach_1-v0")) << other;
   EXPECT_TRUE(contains(other, "'2'")) << other;
   const std::string unknown = catchMessage<PluginError>(
@@ -132,7 +132,7 @@ TEST(FixedObjectEnv, CabinetAndLinkIdsListTheirTargets) {
   EXPECT_EQ(cabinet->getObjectId(), expected.front());
   cabinet->reset(expected[1], 4);
   EXPECT_EQ(cabinet->getObjectId(), expected[1]);
-  const std::string other = catchMessage<std::invalid_argument>([&] { cabinet->reset("2101_link_0", 0); });
+  const std::string other = catchMessage<manibench::InvalidArgument>([&] { cabinet->reset("2101_link_0", 0); });
   EXPECT_TRUE(contains(other, "OpenCabinetDrawer_2100-v0")) << other;
   EXPECT_TRUE(contains(other, expected.front())) << other;
 
@@ -173,12 +173,7 @@ TEST(FixedObjectEnv, CommandsTakeFixedIds) {
   EXPECT_TRUE(contains(list.out, "<Task>_<object>-v<N>")) << list.out;
 }
 
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using manibench::testing::readFile;
 
 TEST(FixedObjectEnv, EvalOnAFixedIdMatchesTheTaskOnThatObject) {
   char dir[] = "/tmp/manibench_fixed_XXXXXX";

@@ -40,7 +40,7 @@ struct StepRecord {
 
 StepRecord takeStep(Environment& env, const Eigen::VectorXd& action) {
   const StepResult result = env.step(action);
-  return {env.getObservation(), result.reward, result.flags, result.values, result.done};
+  return {env.getObservation(), result.reward, result.flags, result.values, result.isDone()};
 }
 
 // Jerky actions in [-1.2, 1.2] (clipped by the environment), fixed by `seed`.
@@ -154,23 +154,23 @@ TEST(EnvironmentState, BadBlobsNameWhatIsWrong) {
   const std::vector<uint8_t> blob = reach.saveState();
 
   Environment drawer(getBuildTreeRegistry(), "OpenCabinetDrawer-v0");
-  expectMentions(catchMessage<std::invalid_argument>([&] { drawer.restoreState(blob); }),
+  expectMentions(catchMessage<manibench::InvalidArgument>([&] { drawer.restoreState(blob); }),
                  {"a state of task 'Reach-v0'", "'OpenCabinetDrawer-v0'"});
-  expectMentions(catchMessage<std::invalid_argument>([&] {
+  expectMentions(catchMessage<manibench::InvalidArgument>([&] {
                    reach.restoreState(std::vector<uint8_t>(blob.begin(), blob.begin() + 40));
                  }),
                  {"cut short"});
   std::vector<uint8_t> other = blob;
   other[0] = 'X';
-  expectMentions(catchMessage<std::invalid_argument>([&] { reach.restoreState(other); }),
+  expectMentions(catchMessage<manibench::InvalidArgument>([&] { reach.restoreState(other); }),
                  {"not a manibench environment state"});
   other = blob;
   other[4] = 99;  // the version
-  expectMentions(catchMessage<std::invalid_argument>([&] { reach.restoreState(other); }),
+  expectMentions(catchMessage<manibench::InvalidArgument>([&] { reach.restoreState(other); }),
                  {"environment state version 99", "reads version 1"});
   other = blob;
   other.push_back(0);
-  expectMentions(catchMessage<std::invalid_argument>([&] { reach.restoreState(other); }),
+  expectMentions(catchMessage<manibench::InvalidArgument>([&] { reach.restoreState(other); }),
                  {"1 bytes left over"});
   // The scene's bytes start after the header: flip the structure's
   // fingerprint (8 bytes after the scene part's "MBSC" and version).
@@ -179,13 +179,13 @@ TEST(EnvironmentState, BadBlobsNameWhatIsWrong) {
   const auto at = std::search(other.begin(), other.end(), scene_magic, scene_magic + 4);
   ASSERT_NE(at, other.end());
   at[8] ^= 0xFF;
-  expectMentions(catchMessage<std::invalid_argument>([&] { reach.restoreState(other); }),
+  expectMentions(catchMessage<manibench::InvalidArgument>([&] { reach.restoreState(other); }),
                  {"scene of another structure"});
   // Another controller's state.
   EnvironmentOptions position;
   position.controller = "joint_position";
   Environment reach_position(getBuildTreeRegistry(), "Reach-v0", position);
-  expectMentions(catchMessage<std::invalid_argument>([&] { reach_position.restoreState(blob); }),
+  expectMentions(catchMessage<manibench::InvalidArgument>([&] { reach_position.restoreState(blob); }),
                  {"a state of controller 'joint_velocity'", "'joint_position'"});
   // Nothing to save before a reset.
   Environment idle(getBuildTreeRegistry(), "Reach-v0");

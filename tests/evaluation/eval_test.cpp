@@ -32,12 +32,7 @@ const std::string kFixturePath = "MANIBENCH_PLUGIN_PATH=" + kEvalFixtureDir;
 
 using testing::contains;
 
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using manibench::testing::readFile;
 
 // A fresh directory, removed with the object.
 class TempDir {
@@ -175,10 +170,10 @@ std::vector<std::map<std::string, std::string>> checkFilesAgree(const TempDir& o
 TEST(EvalEpisodes, ListIsDeterministicAndSelectsLevels) {
   EXPECT_EQ(parseLevels("0-2,9"), (std::vector<uint64_t>{0, 1, 2, 9}));
   EXPECT_EQ(parseLevels("7, 3,3"), (std::vector<uint64_t>{3, 7}));
-  EXPECT_THROW(parseLevels("3-1"), std::invalid_argument);
-  EXPECT_THROW(parseLevels("x"), std::invalid_argument);
-  EXPECT_THROW(parseLevels("1,,2"), std::invalid_argument);
-  EXPECT_THROW(parseLevels("-2"), std::invalid_argument);
+  EXPECT_THROW(parseLevels("3-1"), manibench::InvalidArgument);
+  EXPECT_THROW(parseLevels("x"), manibench::InvalidArgument);
+  EXPECT_THROW(parseLevels("1,,2"), manibench::InvalidArgument);
+  EXPECT_THROW(parseLevels("-2"), manibench::InvalidArgument);
   EXPECT_EQ(parseIdList("8, 3,8"), (std::vector<std::string>{"8", "3"}));
 
   const auto a = makeEpisodeList({"8", "9"}, {0, 1, 2}, 0);

@@ -12,6 +12,7 @@
 // refusals and the slowest input (docs/robustness.md has the numbers).
 #include <manibench/config.hpp>
 #include <manibench/scene.hpp>
+#include <manibench/sdk/random.hpp>
 
 #include <gtest/gtest.h>
 
@@ -33,22 +34,12 @@ namespace {
 
 const std::string kSourceDir = MANIBENCH_TEST_SOURCE_DIR;
 
-std::string readFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using manibench::testing::readFile;
 
-// splitmix64: the same inputs on every run and machine.
-struct Random {
-  uint64_t state;
-  uint64_t next() {
-    uint64_t z = (state += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-  }
+// The SDK's splitmix64: the same inputs on every run and machine (below()
+// by the remainder, as the fuzz inputs were first drawn).
+struct Random : manibench::sdk::Random {
+  using manibench::sdk::Random::Random;
   std::size_t below(std::size_t n) { return n ? std::size_t(next() % n) : 0; }
 };
 
@@ -94,7 +85,7 @@ FuzzStats fuzz(const char* name, const std::vector<std::string>& seeds, const st
                const std::function<void(const std::string&)>& target, uint64_t minimum) {
   double seconds = 0;
   if (const char* s = std::getenv("MANIBENCH_FUZZ_SECONDS")) seconds = std::atof(s);
-  Random rng{0x5eed ^ std::hash<std::string>()(name)};
+  Random rng(0x5eed ^ std::hash<std::string>()(name));
   FuzzStats stats;
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };

@@ -14,6 +14,8 @@
 #include <fstream>
 #include <regex>
 
+#include "test_support.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -22,12 +24,7 @@ using manibench::sdk::Error;
 
 const std::string kMini = std::string(MANIBENCH_TEST_SOURCE_DIR) + "/tests/fixtures/partnet_mini";
 
-std::string readFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using manibench::testing::readFile;
 
 // A copy of partnet_mini in a fresh temporary folder, to break.
 class BrokenCopy {

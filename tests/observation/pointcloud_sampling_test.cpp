@@ -157,12 +157,12 @@ TEST(PointCloudSampling, InconsistentArraysAreRejected) {
   try {
     selectPointCloudSample(raw, {}, 0);
     FAIL() << "no error";
-  } catch (const std::invalid_argument& e) {
+  } catch (const manibench::InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("disagree"), std::string::npos) << e.what();
   }
   PointCloudSampling bad;
   bad.masked_total = 2000;
-  EXPECT_THROW(selectPointCloudSample(makeCloud({5}, 5, 0), bad, 0), std::invalid_argument);
+  EXPECT_THROW(selectPointCloudSample(makeCloud({5}, 5, 0), bad, 0), manibench::InvalidArgument);
 }
 
 }  // namespace

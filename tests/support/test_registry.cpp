@@ -1,5 +1,6 @@
 #include "test_registry.hpp"
 
+#include <stdexcept>
 #include <string>
 
 namespace manibench::testing {
@@ -21,6 +22,12 @@ const PluginRegistry& getRobotTestbedRegistry() {
     return r;
   }();
   return *registry;
+}
+
+uint32_t getObservationOffset(const Environment& env, const std::string& name) {
+  for (const SegmentDescription& s : env.getTaskDescription().observation_segments)
+    if (s.name == name) return s.offset;
+  throw std::invalid_argument("no observation segment '" + name + "'");
 }
 
 }  // namespace manibench::testing

@@ -19,14 +19,12 @@ long readRssKb() {
   return -1;
 }
 
-namespace {
 std::string readFile(const std::string& path) {
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   std::stringstream s;
   s << in.rdbuf();
   return s.str();
 }
-}  // namespace
 
 CommandResult runCli(const std::vector<std::string>& arguments,
                      const std::vector<std::string>& environment) {

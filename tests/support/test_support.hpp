@@ -30,6 +30,9 @@ std::string catchMessage(Body&& body) {
 // Expects every one of `parts` in `message` (an error, say).
 void expectMentions(const std::string& message, const std::vector<std::string>& parts);
 
+// The bytes of a file ("" when it cannot be read).
+std::string readFile(const std::string& path);
+
 // This process's resident memory (VmRSS), kB; -1 if unknown.
 long readRssKb();
 

@@ -198,13 +198,5 @@ int view(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return view(argc, argv);
-  } catch (const UsageError& e) {
-    std::cerr << "manibench: " << e.what() << "\n\n" << e.usage();
-    return 2;
-  } catch (const std::exception& e) {
-    std::cerr << "manibench: error: " << e.what() << "\n";
-    return 1;
-  }
+  return cli::runMain("manibench", [&] { return view(argc, argv); });
 }

@@ -165,7 +165,7 @@ void Session::startEpisode() {
 void Session::setStatusFrom(const StepResult& result) {
   last_ = result;
   return_ += result.reward;
-  if (result.done) status_ = result.success ? EpisodeStatus::Success : EpisodeStatus::TimeLimit;
+  if (result.isDone()) status_ = result.success ? EpisodeStatus::Success : EpisodeStatus::TimeLimit;
 }
 
 void Session::step(const Eigen::VectorXd& teleop_action) {

@@ -28,7 +28,7 @@ int findSegment(const ControllerDescription& controller, const std::string& name
   for (const SegmentDescription& s : controller.action_segments)
     if (s.name == name) {
       if (s.size != size)
-        throw std::invalid_argument("teleoperation: the controller '" + controller.name +
+        throw InvalidArgument("teleoperation: the controller '" + controller.name +
                                     "' has action segment '" + name + "' of " +
                                     std::to_string(s.size) + " values, expected " +
                                     std::to_string(size));
@@ -61,7 +61,7 @@ TeleopLayout findTeleopLayout(const ControllerDescription& controller) {
   }
   if (layout.arms.empty()) missing += std::string(missing.empty() ? "" : ", ") + "<side>_ee_linear";
   if (!missing.empty())
-    throw std::invalid_argument(
+    throw InvalidArgument(
         "teleoperation drives the robot through the end-effector controller, and the "
         "controller '" + controller.name + "' has no action segment " + missing +
         ": use --controller mobile_panda_ee (the mobile Panda robots), or watch with "

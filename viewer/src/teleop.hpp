@@ -8,6 +8,7 @@
 // which for letters, digits and punctuation are their ASCII characters.
 #pragma once
 
+#include <manibench/error.hpp>
 #include <manibench/plugin_instances.hpp>
 
 #include <Eigen/Core>
@@ -41,7 +42,7 @@ struct TeleopLayout {
   uint32_t action_dim = 0;
 };
 
-// The layout of `controller`, or std::invalid_argument naming the segment
+// The layout of `controller`, or InvalidArgument naming the segment
 // it lacks and the controller to use instead.
 TeleopLayout findTeleopLayout(const ControllerDescription& controller);
 

@@ -117,9 +117,8 @@ const PointCloud& ViewComposer::updPointCloud(Environment& env, uint64_t episode
     cloud_step_ = ~0u;
   }
   if (env.getElapsedSteps() != cloud_step_) {
-    // The environment's own rule for the sample of (seed, step).
-    const uint64_t sample_seed = env.getSeed() * 0x9E3779B97F4A7C15ull + env.getElapsedSteps();
-    cloud_observer_->observe(sample_seed, cloud_observation_);
+    // The environment's own sample of (seed, step).
+    cloud_observer_->observe(env.calcSampleSeed(), cloud_observation_);
     cloud_ = cloud_observation_.points;
     cloud_step_ = env.getElapsedSteps();
   }

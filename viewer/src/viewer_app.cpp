@@ -265,7 +265,7 @@ int ViewerApp::run(Session& session, const ViewSettings& view) {
   if (session.getMode() == SessionMode::Teleop) {
     try {
       teleop_ = std::make_unique<Teleop>(findTeleopLayout(env.getControllerDescription()));
-    } catch (const std::invalid_argument& e) {
+    } catch (const InvalidArgument& e) {
       teleop_unavailable_ = e.what();
     }
   }

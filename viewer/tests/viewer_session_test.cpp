@@ -108,7 +108,7 @@ TEST(Teleop, AControllerWithoutEndEffectorSegmentsIsRefusedNamingTheFix) {
   joints.name = "joint_velocity";
   joints.action_dim = 2;
   joints.action_segments = {{"shoulder", 0, 1, ""}, {"elbow", 1, 1, ""}};
-  expectMentions(catchMessage<std::invalid_argument>([&] { findTeleopLayout(joints); }),
+  expectMentions(catchMessage<InvalidArgument>([&] { findTeleopLayout(joints); }),
                  {"joint_velocity", "base_forward", "--controller mobile_panda_ee", "--policy"});
 }
 

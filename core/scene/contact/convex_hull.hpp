@@ -8,6 +8,8 @@
 // face against face.
 #pragma once
 
+#include <manibench/error.hpp>
+
 #include <memory>
 #include <string>
 #include <vector>
@@ -54,9 +56,9 @@ struct ConvexHull {
 
 // Thrown for input that has no 3-d hull (fewer than 4 points, all on a
 // plane or a line); the caller decides whether that is an error.
-class FlatHullError : public std::runtime_error {
+class FlatHullError : public Error {
  public:
-  using std::runtime_error::runtime_error;
+  using Error::Error;
 };
 
 // Hull of `points`. Throws FlatHullError for degenerate input and

@@ -15,7 +15,7 @@
 #include <fstream>
 
 #include "move_bucket.hpp"
-#include "test_registry.hpp"
+#include "test_env.hpp"
 
 namespace {
 
@@ -29,8 +29,8 @@ constexpr double kScale = 0.3;  // the fixture's raw units are metres / 0.3
 constexpr double kTol = 1e-5;   // the OBJ files hold 6 decimals of raw units
 
 TEST(MoveBucketPartNet, SplitsComeFromTestTxt) {
-  EXPECT_EQ(bk::listPartNetBuckets(kFixture, "train"), std::vector<std::string>{"200001"});
-  EXPECT_EQ(bk::listPartNetBuckets(kFixture, "test"), std::vector<std::string>{"200002"});
+  EXPECT_EQ(manibench::kit::partnet::listObjectIds(kFixture, "train"), std::vector<std::string>{"200001"});
+  EXPECT_EQ(manibench::kit::partnet::listObjectIds(kFixture, "test"), std::vector<std::string>{"200002"});
 }
 
 TEST(MoveBucketPartNet, RimFloorAndHandleAreMeasuredInTheBucketFrame) {
@@ -109,12 +109,27 @@ TEST(MoveBucketPartNet, ErrorsNameTheFileAndTheProblem) {
 }
 
 std::unique_ptr<mb::Environment> makePartNetEnv(std::vector<std::string> overrides = {}) {
-  mb::ConfigSources sources;
-  sources.overrides = {"task.partnet_dir=" + kFixture};
-  sources.overrides.insert(sources.overrides.end(), overrides.begin(), overrides.end());
-  const mb::ConfigNode config = mb::loadTaskConfig(mb::testing::getBuildTreeRegistry(), "MoveBucket-v0", sources);
-  return std::make_unique<mb::Environment>(mb::testing::getBuildTreeRegistry(), "MoveBucket-v0",
-                                           mb::calcEnvironmentOptions(config));
+  overrides.insert(overrides.begin(), "task.partnet_dir=" + kFixture);
+  return mb::testing::makeEnvironment("MoveBucket-v0", overrides);
+}
+
+// A bucket the family cannot read is skipped when the split is listed,
+// with its reason, once (kit/catalog.hpp), and the others stay usable.
+TEST(MoveBucketPartNet, AnUnreadableBucketIsSkippedWithAWarning) {
+  const std::string dir = ::testing::TempDir() + "move_bucket_partnet_skip";
+  std::filesystem::remove_all(dir);
+  std::filesystem::copy(kFixture, dir, std::filesystem::copy_options::recursive);
+  std::filesystem::create_directories(dir + "/200009");
+  std::ofstream(dir + "/200009/mobility.urdf") << "<robot name=\"cut\">\n";
+  ::testing::internal::CaptureStderr();
+  const auto env = makePartNetEnv({"task.partnet_dir=" + dir});
+  EXPECT_EQ(env->listObjects("train"), std::vector<std::string>{"200001"});
+  EXPECT_EQ(env->listObjects("train"), std::vector<std::string>{"200001"});
+  const std::string warnings = ::testing::internal::GetCapturedStderr();
+  mb::testing::expectMentions(warnings, {"MoveBucket: skipping PartNet bucket 200009 (" + dir + "/200009)"});
+  EXPECT_EQ(warnings.find("200009 ("), warnings.rfind("200009 (")) << warnings;
+  env->reset("200001", 0);
+  std::filesystem::remove_all(dir);
 }
 
 // The task on the fixture: the folder replaces the generator; a reset stands

@@ -15,29 +15,17 @@
 #include <iostream>
 
 #include "move_bucket.hpp"
-#include "test_registry.hpp"
+#include "test_env.hpp"
 
 namespace {
 
 namespace mb = manibench;
 using L = move_bucket::ObservationLayout;
 
-struct ExpertSetup {
-  std::unique_ptr<mb::Environment> env;
-  std::unique_ptr<mb::PolicyInstance> expert;
-};
+using mb::testing::ExpertSetup;
 
-ExpertSetup makeExpertSetup(std::vector<std::string> overrides = {}) {
-  mb::ConfigSources sources;
-  sources.overrides = {"control.controller=mobile_panda_ee"};
-  sources.overrides.insert(sources.overrides.end(), overrides.begin(), overrides.end());
-  const mb::ConfigNode config = mb::loadTaskConfig(mb::testing::getBuildTreeRegistry(), "MoveBucket-v0", sources);
-  ExpertSetup s;
-  s.env = std::make_unique<mb::Environment>(mb::testing::getBuildTreeRegistry(), "MoveBucket-v0",
-                                            mb::calcEnvironmentOptions(config));
-  s.expert = std::make_unique<mb::PolicyInstance>(mb::testing::getBuildTreeRegistry(), "move_bucket_expert", "",
-                                                  s.env->calcPolicyLayout(mb::ObservationMode::State));
-  return s;
+ExpertSetup makeExpertSetup(const std::vector<std::string>& overrides = {}) {
+  return mb::testing::makeExpertSetup("MoveBucket-v0", "move_bucket_expert", overrides);
 }
 
 mb::Pose getPose(const Eigen::VectorXd& s, uint32_t at) {
@@ -112,18 +100,21 @@ TEST(MoveBucketScenario, SqueezedBucketDoesNotSlipOutOfTheGrippers) {
     }
     ASSERT_GE(s.env->getObservation()[L::kBucketPose + 2], 0.2) << object << ": lifted";
     const Eigen::VectorXd lifted = s.env->getObservation();
-    const double lift = lifted[L::kJointPositions + 3];
+    const uint32_t joints = mb::testing::getObservationOffset(*s.env, "joint_positions");
+    const double lift = lifted[joints + 3];
     double slip = 0;
     for (int i = 0; i < 100; ++i) {  // 5 s
       action.setZero();
       action[findAction(*s.env, "right_gripper")] = action[findAction(*s.env, "left_gripper")] = -1;  // closed
       // the lift's velocity drive gives way under the load: hold it
       action[findAction(*s.env, "lift")] =
-          std::clamp(3.0 * (lift - s.env->getObservation()[L::kJointPositions + 3]) / 0.5, -1.0, 1.0);
+          std::clamp(3.0 * (lift - s.env->getObservation()[joints + 3]) / 0.5, -1.0, 1.0);
       s.env->step(action);
       const Eigen::VectorXd& o = s.env->getObservation();
-      for (uint32_t tcp : {L::kRightTcpPose, L::kLeftTcpPose})
+      for (const char* tcp_pose : {"right_tcp_pose", "left_tcp_pose"}) {
+        const uint32_t tcp = mb::testing::getObservationOffset(*s.env, tcp_pose);
         slip = std::max(slip, (getBucketInTcp(o, tcp) - getBucketInTcp(lifted, tcp)).norm());
+      }
     }
     EXPECT_LT(slip, 0.005) << object;
     EXPECT_GT(s.env->getObservation()[L::kBucketPose + 2], 0.15) << object << ": still held up";

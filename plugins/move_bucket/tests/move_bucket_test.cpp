@@ -14,7 +14,7 @@
 #include <set>
 
 #include "move_bucket.hpp"
-#include "test_registry.hpp"
+#include "test_env.hpp"
 
 namespace {
 
@@ -23,12 +23,8 @@ namespace bk = move_bucket;
 using L = bk::ObservationLayout;
 using manibench::sdk::kPi;
 
-std::unique_ptr<mb::Environment> makeEnv(std::vector<std::string> overrides = {}) {
-  mb::ConfigSources sources;
-  sources.overrides = std::move(overrides);
-  const mb::ConfigNode config = mb::loadTaskConfig(mb::testing::getBuildTreeRegistry(), "MoveBucket-v0", sources);
-  return std::make_unique<mb::Environment>(mb::testing::getBuildTreeRegistry(), "MoveBucket-v0",
-                                           mb::calcEnvironmentOptions(config));
+std::unique_ptr<mb::Environment> makeEnv(const std::vector<std::string>& overrides = {}) {
+  return mb::testing::makeEnvironment("MoveBucket-v0", overrides);
 }
 
 std::vector<std::string> allBuckets() {
@@ -89,15 +85,16 @@ TEST(MoveBucket, ResetPlacesBucketRobotBallAndPlatform) {
     EXPECT_NEAR(bucket.z(), 0, 1e-3) << "on the floor";
     EXPECT_GT((q * Eigen::Vector3d::UnitZ()).z(), 1 - 1e-6) << "upright";
     yaws.insert(std::round(100 * std::atan2((q * Eigen::Vector3d::UnitX()).y(), (q * Eigen::Vector3d::UnitX()).x())));
-    const Eigen::Vector2d base = s.segment<2>(L::kBasePosition);
+    const Eigen::Vector2d base = s.segment<2>(mb::testing::getObservationOffset(*env, "base_position"));
     const double r = (base - bucket.head<2>()).norm();
     EXPECT_GE(r, 0.6);
     EXPECT_LE(r, 0.8);
     const Eigen::Vector2d away = bucket.head<2>().normalized(), to_robot = (base - bucket.head<2>()).normalized();
     EXPECT_GE(away.dot(to_robot), std::cos(0.4 * kPi) - 1e-9) << "the robot on the bucket's far side";
-    const Eigen::Vector2d heading(std::cos(s[L::kBaseYaw]), std::sin(s[L::kBaseYaw]));
+    const double yaw = s[mb::testing::getObservationOffset(*env, "base_yaw")];
+    const Eigen::Vector2d heading(std::cos(yaw), std::sin(yaw));
     EXPECT_GE(heading.dot(-to_robot), std::cos(0.05 * kPi) - 1e-9) << "facing the bucket";
-    EXPECT_NEAR(s[L::kJointPositions + 3], 0.5, 1e-9) << "lift";
+    EXPECT_NEAR(s[mb::testing::getObservationOffset(*env, "joint_positions") + 3], 0.5, 1e-9) << "lift";
     const Eigen::Vector3d ball = q.inverse() * (s.segment<3>(L::kBallPosition) - bucket);
     EXPECT_LT(ball.head<2>().norm(), 1e-6);
     EXPECT_NEAR(ball.z(), bk::generateBucket(id).floor_height + bk::kBallRadius, 2e-3);

@@ -12,28 +12,16 @@
 #include <manibench/environment.hpp>
 #include <manibench/episode.hpp>
 
-#include "test_registry.hpp"
+#include "test_env.hpp"
 
 namespace {
 
 namespace mb = manibench;
 
-struct ExpertSetup {
-  std::unique_ptr<mb::Environment> env;
-  std::unique_ptr<mb::PolicyInstance> expert;
-};
+using mb::testing::ExpertSetup;
 
-ExpertSetup makeExpertSetup(const std::string& task, std::vector<std::string> overrides = {}) {
-  overrides.push_back("control.controller=mobile_panda_ee");
-  mb::ConfigSources sources;
-  sources.overrides = overrides;
-  const mb::ConfigNode config = mb::loadTaskConfig(mb::testing::getBuildTreeRegistry(), task, sources);
-  ExpertSetup s;
-  s.env = std::make_unique<mb::Environment>(mb::testing::getBuildTreeRegistry(), task,
-                                            mb::calcEnvironmentOptions(config));
-  s.expert = std::make_unique<mb::PolicyInstance>(mb::testing::getBuildTreeRegistry(), "open_cabinet_expert", "",
-                                                  s.env->calcPolicyLayout(mb::ObservationMode::State));
-  return s;
+ExpertSetup makeExpertSetup(const std::string& task, const std::vector<std::string>& overrides = {}) {
+  return mb::testing::makeExpertSetup(task, "open_cabinet_expert", overrides);
 }
 
 void expectExpertSucceeds(ExpertSetup& s, const std::string& object, uint64_t seed) {

@@ -16,7 +16,7 @@
 #include <sstream>
 
 #include "open_cabinet.hpp"
-#include "test_registry.hpp"
+#include "test_env.hpp"
 
 namespace {
 
@@ -24,12 +24,8 @@ namespace mb = manibench;
 namespace oc = open_cabinet;
 using L = oc::ObservationLayout;
 
-std::unique_ptr<mb::Environment> makeEnv(const std::string& task, std::vector<std::string> overrides = {}) {
-  mb::ConfigSources sources;
-  sources.overrides = std::move(overrides);
-  const mb::ConfigNode config = mb::loadTaskConfig(mb::testing::getBuildTreeRegistry(), task, sources);
-  return std::make_unique<mb::Environment>(mb::testing::getBuildTreeRegistry(), task,
-                                           mb::calcEnvironmentOptions(config));
+std::unique_ptr<mb::Environment> makeEnv(const std::string& task, const std::vector<std::string>& overrides = {}) {
+  return mb::testing::makeEnvironment(task, overrides);
 }
 
 std::string cabinetOf(const std::string& object_id) { return object_id.substr(0, object_id.find("_link_")); }
@@ -126,7 +122,7 @@ TEST(OpenCabinet, ResetPlacesTheRobotInFrontFacingTheCabinetWithEverythingClosed
   for (uint64_t seed = 0; seed < 12; ++seed) {
     env->reset(object, seed);
     const Eigen::VectorXd s = env->getObservation();
-    const Eigen::Vector2d base = s.segment<2>(L::kBasePosition);
+    const Eigen::Vector2d base = s.segment<2>(mb::testing::getObservationOffset(*env, "base_position"));
     const Eigen::Vector2d centre = s.segment<2>(L::kCabinetCenter);
     const double distance = (base - centre).norm();
     EXPECT_GE(distance, 1.6) << seed;
@@ -135,7 +131,7 @@ TEST(OpenCabinet, ResetPlacesTheRobotInFrontFacingTheCabinetWithEverythingClosed
     // in front (the cabinet faces -x), heading at the cabinet within 0.15 pi
     EXPECT_LT(base.x(), centre.x() - 1.4);
     const Eigen::Vector2d to_cabinet = (centre - base).normalized();
-    const double heading = s[L::kBaseYaw];
+    const double heading = s[mb::testing::getObservationOffset(*env, "base_yaw")];
     EXPECT_GT(to_cabinet.dot(Eigen::Vector2d(std::cos(heading), std::sin(heading))), std::cos(0.16 * M_PI));
     EXPECT_EQ(s[L::kTargetJoint], 0.0) << "closed";
     EXPECT_EQ(s[L::kTargetJoint + 1], 0.0);
@@ -143,12 +139,7 @@ TEST(OpenCabinet, ResetPlacesTheRobotInFrontFacingTheCabinetWithEverythingClosed
     EXPECT_TRUE(env->getScene().getJointPositions(cabinet).isZero());
   }
   EXPECT_GE(distances.size(), 10u) << "the placement is randomized";
-  // same seed, same episode start
-  env->reset(object, 5);
-  const Eigen::VectorXd a = env->getObservation();
-  env->reset(env->listObjects("train").back(), 1);
-  env->reset(object, 5);
-  EXPECT_EQ(a, env->getObservation());
+  mb::testing::expectSameStartAfterAnotherObject(*env, object, env->listObjects("train").back());
 }
 
 TEST(OpenCabinet, EveryRewardStageStrictlyExceedsTheOneBefore) {
@@ -220,18 +211,12 @@ TEST(OpenCabinet, RandomPolicyNeverSucceeds) {
   for (const std::string task : {"OpenCabinetDoor-v0", "OpenCabinetDrawer-v0"}) {
     const auto env = makeEnv(task, {"episode.max_steps=40"});
     std::mt19937_64 rng(11);
-    std::uniform_real_distribution<double> u(-1, 1);
     const std::vector<std::string> objects = env->listObjects("train");
     for (uint64_t seed = 0; seed < 2; ++seed) {
       env->reset(objects[seed * 7 % objects.size()], seed);
-      Eigen::VectorXd action(env->getControllerDescription().action_dim);
-      mb::StepResult r;
       double most_open = 0;
-      do {
-        for (Eigen::Index i = 0; i < action.size(); ++i) action[i] = u(rng);
-        r = env->step(action);
-        most_open = std::max(most_open, r.values[0]);
-      } while (!r.done);
+      const mb::StepResult r = mb::testing::runRandomEpisode(
+          *env, rng, [&](const mb::StepResult& step) { most_open = std::max(most_open, step.values[0]); });
       EXPECT_FALSE(r.success) << task << " seed " << seed;
       EXPECT_LT(most_open, 0.9) << task << " seed " << seed;
     }
@@ -323,7 +308,7 @@ TEST(OpenCabinet, HandleAndRobotMasksCoverTheirPixels) {
     const Eigen::Quaterniond handle_rotation(s[L::kHandlePose + 3], s[L::kHandlePose + 4],
                                              s[L::kHandlePose + 5], s[L::kHandlePose + 6]);
     const Eigen::Vector3d front = handle_rotation * Eigen::Vector3d::UnitX();
-    const Eigen::Vector3d tcp = s.segment<3>(L::kTcpPose);
+    const Eigen::Vector3d tcp = s.segment<3>(mb::testing::getObservationOffset(*state_env, "tcp_pose"));
     const std::string cameras =
         "cameras=[" + calcProbeCamera("at_handle", handle + 0.45 * front, -front) + ", " +
         calcProbeCamera("at_gripper", tcp + Eigen::Vector3d(0.02, 0, 0.5),
@@ -358,38 +343,6 @@ TEST(OpenCabinet, HandleAndRobotMasksCoverTheirPixels) {
     EXPECT_TRUE(mask(1, v.height / 2, v.width / 2, 2)) << "the gripper is at the image centre";
     EXPECT_FALSE(mask(1, v.height / 2, v.width / 2, 0));
     EXPECT_GT(gripper_robot_pixels, 100);
-  }
-}
-
-// Diagnostics: OPEN_CABINET_TRACE=<task>,<object>,<seed> prints an expert episode
-// (OPEN_CABINET_TRACE_SET=KEY=VALUE adds one configuration key).
-TEST(OpenCabinet, Trace) {
-  const char* spec = std::getenv("OPEN_CABINET_TRACE");
-  if (spec == nullptr) GTEST_SKIP() << "set OPEN_CABINET_TRACE=task,object,seed";
-  std::string s = spec;
-  const std::string task = s.substr(0, s.find(','));
-  s = s.substr(s.find(',') + 1);
-  const std::string object = s.substr(0, s.find(','));
-  const uint64_t seed = std::stoull(s.substr(s.find(',') + 1));
-  std::vector<std::string> overrides = {"control.controller=mobile_panda_ee"};
-  if (const char* extra = std::getenv("OPEN_CABINET_TRACE_SET")) overrides.push_back(extra);  // KEY=VALUE
-  const auto env = makeEnv(task, overrides);
-  mb::PolicyInstance policy(mb::testing::getBuildTreeRegistry(), "open_cabinet_expert", "",
-                            env->calcPolicyLayout(mb::ObservationMode::State));
-  env->reset(object, seed);
-  policy.reset(seed);
-  Eigen::VectorXd action;
-  for (uint32_t step = 0; step < 200; ++step) {
-    const Eigen::VectorXd o = env->getObservation();
-    policy.act(o, step, action);
-    const mb::StepResult r = env->step(action);
-    if (step % 5 == 0 || r.done)
-      std::cout << step << " tcp " << o.segment<3>(L::kTcpPose).transpose() << " handle "
-                << o.segment<3>(L::kHandlePose).transpose() << " q " << o[L::kTargetJoint] << " base "
-                << o.segment<3>(L::kBasePosition).transpose() << " lift " << o[L::kJointPositions + 3]
-                << " fingers " << o.segment<2>(L::kJointPositions + 11).transpose() << " r " << r.reward
-                << "\n   a " << action.transpose() << "\n";
-    if (r.done) break;
   }
 }
 

@@ -12,29 +12,17 @@
 #include <iostream>
 
 #include "push_chair.hpp"
-#include "test_registry.hpp"
+#include "test_env.hpp"
 
 namespace {
 
 namespace mb = manibench;
 using L = push_chair::ObservationLayout;
 
-struct ExpertSetup {
-  std::unique_ptr<mb::Environment> env;
-  std::unique_ptr<mb::PolicyInstance> expert;
-};
+using mb::testing::ExpertSetup;
 
-ExpertSetup makeExpertSetup(std::vector<std::string> overrides = {}) {
-  overrides.push_back("control.controller=mobile_panda_ee");
-  mb::ConfigSources sources;
-  sources.overrides = overrides;
-  const mb::ConfigNode config = mb::loadTaskConfig(mb::testing::getBuildTreeRegistry(), "PushChair-v0", sources);
-  ExpertSetup s;
-  s.env = std::make_unique<mb::Environment>(mb::testing::getBuildTreeRegistry(), "PushChair-v0",
-                                            mb::calcEnvironmentOptions(config));
-  s.expert = std::make_unique<mb::PolicyInstance>(mb::testing::getBuildTreeRegistry(), "push_chair_expert", "",
-                                                  s.env->calcPolicyLayout(mb::ObservationMode::State));
-  return s;
+ExpertSetup makeExpertSetup(const std::vector<std::string>& overrides = {}) {
+  return mb::testing::makeExpertSetup("PushChair-v0", "push_chair_expert", overrides);
 }
 
 void expectExpertSucceeds(ExpertSetup& s, const std::string& object, uint64_t seed) {
@@ -68,33 +56,6 @@ TEST(PushChairScenario, SameSeedSameTrajectory) {
   EXPECT_EQ(ra.steps, rb.steps);
   EXPECT_EQ(ra.total_reward, rb.total_reward);
   EXPECT_EQ(a.env->getObservation(), b.env->getObservation());
-}
-
-// Diagnostics: PUSH_CHAIR_TRACE=<object>,<seed> prints an expert episode.
-TEST(PushChairScenario, Trace) {
-  const char* spec = std::getenv("PUSH_CHAIR_TRACE");
-  if (spec == nullptr) GTEST_SKIP() << "set PUSH_CHAIR_TRACE=object,seed";
-  const std::string text = spec;
-  const std::string object = text.substr(0, text.find(','));
-  const uint64_t seed = std::stoull(text.substr(text.find(',') + 1));
-  ExpertSetup s = makeExpertSetup();
-  s.env->reset(object, seed);
-  s.expert->reset(seed);
-  Eigen::VectorXd action;
-  for (uint32_t step = 0; step < 200; ++step) {
-    const Eigen::VectorXd o = s.env->getObservation();
-    s.expert->act(o, step, action);
-    const mb::StepResult r = s.env->step(action);
-    if (step % 5 == 0 || r.done)
-      std::cout << step << " base " << o.segment<3>(L::kBasePosition).transpose() << " lift "
-                << o[L::kJointPositions + 3] << " tcpR " << o.segment<3>(L::kRightTcpPose).transpose() << " tcpL "
-                << o.segment<3>(L::kLeftTcpPose).transpose() << "\n   chair " << o.segment<3>(L::kChairPose).transpose()
-                << " v " << o.segment<3>(L::kChairVelocity).transpose() << " seat "
-                << o.segment<3>(L::kSeatTop).transpose() << " target " << o.segment<2>(L::kTarget).transpose()
-                << " r " << r.reward << " flags " << r.flags[0] << r.flags[1] << r.flags[2] << " values "
-                << r.values[0] << " " << r.values[1] << " " << r.values[2] << "\n";
-    if (r.done) break;
-  }
 }
 
 }  // namespace

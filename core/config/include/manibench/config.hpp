@@ -12,6 +12,7 @@
 #pragma once
 
 #include <manibench/environment_options.hpp>
+#include <manibench/error.hpp>
 #include <manibench/plugin_instances.hpp>
 #include <manibench/plugin_registry.hpp>
 
@@ -38,9 +39,9 @@ struct ConfigOrigin {
 
 // Bad configuration: unreadable file, malformed YAML, unknown key, wrong
 // type, out-of-range value. The message starts with "origin: key.path: ".
-class ConfigError : public std::runtime_error {
+class ConfigError : public Error {
  public:
-  using std::runtime_error::runtime_error;
+  using Error::Error;
 };
 
 struct ConfigEntry;

@@ -6,6 +6,7 @@
 // written as a terminal table, CSV and JSON (docs/evaluation.md).
 #pragma once
 
+#include <manibench/error.hpp>
 #include <manibench/observation_mode.hpp>
 #include <manibench/plugin_registry.hpp>
 
@@ -24,9 +25,9 @@ struct Trajectory;  // trajectory.hpp
 
 // The evaluation could not start or could not go on (bad options, a worker
 // that cannot build its environment or policy); names the cause.
-class EvaluationError : public std::runtime_error {
+class EvaluationError : public Error {
  public:
-  using std::runtime_error::runtime_error;
+  using Error::Error;
 };
 
 // This build's version, as written into result files.
@@ -47,7 +48,7 @@ uint64_t calcEpisodeSeed(uint64_t seed, const std::string& object_id, uint64_t l
 std::vector<EpisodeSpec> makeEpisodeList(const std::vector<std::string>& objects,
                                          const std::vector<uint64_t>& levels, uint64_t seed);
 // "0-4" (inclusive), "1,3,7" or mixtures ("0-2,9"); sorted, duplicates
-// dropped. Throws std::invalid_argument naming the bad part.
+// dropped. Throws InvalidArgument naming the bad part.
 std::vector<uint64_t> parseLevels(const std::string& text);
 // "3,7" -> {"3", "7"}: ids separated by commas, duplicates dropped, order kept.
 std::vector<std::string> parseIdList(const std::string& text);

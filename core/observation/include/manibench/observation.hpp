@@ -39,7 +39,7 @@ struct ObservationOptions {
   RenderOptions render;
 };
 
-// Throws std::invalid_argument, naming the camera and where it was
+// Throws InvalidArgument, naming the camera and where it was
 // configured, for options no scene could honour: a visual mode without a
 // camera, duplicate camera names, a link without its articulation, an empty
 // image, Rgbd cameras of different sizes, masked_total above total.

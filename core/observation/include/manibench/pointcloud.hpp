@@ -3,6 +3,8 @@
 // a fixed budget that keeps every mask visible.
 #pragma once
 
+#include <manibench/error.hpp>
+
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -75,7 +77,7 @@ class PointCloudSampler {
   // of background candidates only, in random order until enough are found
   // (so a caller computes few heights). The same candidates, sampling and
   // seed always give the same indices (the generator is fixed, not the
-  // standard library's). Throws std::invalid_argument when masked_total >
+  // standard library's). Throws InvalidArgument when masked_total >
   // total.
   const std::vector<uint32_t>& select(const PointCloudSampling& sampling, uint64_t seed,
                                       const std::function<bool(uint32_t)>& is_above_ground);
@@ -95,7 +97,7 @@ class PointCloudSampler {
 // Indices into `raw` of the points D.1 keeps: the masked ones first, then
 // the background ones, each group in increasing index order. The same raw
 // cloud, sampling and seed always give the same indices (the generator is
-// fixed, not the standard library's). Throws std::invalid_argument when
+// fixed, not the standard library's). Throws InvalidArgument when
 // the sizes of raw's arrays disagree or masked_total > total.
 std::vector<uint32_t> selectPointCloudSample(const PointCloud& raw,
                                              const PointCloudSampling& sampling,

@@ -71,6 +71,18 @@ class CameraRig {
   std::vector<int> articulations_;
 };
 
+// The one third-person view, of videos (`render --video`, `demos replay
+// --video`) and of Python's render(): a width x height camera (fovy 1 rad,
+// far 20 m) 2.5 m to the front-right of and 1.6 m above a point 0.6 m over
+// the root of `articulation` (over the origin when the scene has none),
+// looking at that point.
+struct ThirdPersonView {
+  CameraSpec camera;
+  Pose pose;
+};
+ThirdPersonView calcThirdPersonView(const Scene& scene, const std::string& articulation, int width,
+                                    int height);
+
 // Renders the cameras of one scene and assembles the visual observation
 // from the images. The scene, the options and the masks must outlive it.
 class VisualObserver {

@@ -12,6 +12,7 @@
 // the fork; using a context inherited from the parent throws RenderError.
 #pragma once
 
+#include <manibench/error.hpp>
 #include <manibench/scene.hpp>
 
 #include <Eigen/Core>
@@ -27,9 +28,9 @@ namespace manibench {
 
 // EGL could not start, software rendering was refused, the context was
 // inherited across fork(), or a GL object could not be created.
-class RenderError : public std::runtime_error {
+class RenderError : public Error {
  public:
-  using std::runtime_error::runtime_error;
+  using Error::Error;
 };
 
 struct RenderOptions {

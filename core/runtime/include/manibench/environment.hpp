@@ -4,6 +4,7 @@
 #pragma once
 
 #include <manibench/environment_options.hpp>
+#include <manibench/error.hpp>
 #include <manibench/observation.hpp>
 #include <manibench/plugin_instances.hpp>
 #include <manibench/plugin_registry.hpp>
@@ -22,24 +23,28 @@ namespace manibench {
 
 // The action broke the contract (wrong size, NaN, infinity). The message
 // names the episode's object and seed, the step and the index.
-class InvalidAction : public std::runtime_error {
+class InvalidAction : public Error {
  public:
-  using std::runtime_error::runtime_error;
+  using Error::Error;
 };
 
 // Physics diverged or rendering failed during a reset or step; the message
 // names the task, object, seed and step.
-class EpisodeFailure : public std::runtime_error {
+class EpisodeFailure : public Error {
  public:
-  using std::runtime_error::runtime_error;
+  using Error::Error;
 };
 
+// What a step gives; the one place the episode's end is decided (the
+// CLI, the evaluation kit, demonstrations and Python read it from here).
 struct StepResult {
   double reward = 0;
-  bool done = false;      // success (when stop_on_success) or time limit
+  bool terminated = false;  // success, in an environment that stops on success
+  bool truncated = false;   // the time limit: max_episode_steps steps taken
   bool success = false;   // the last condition
   std::vector<uint8_t> flags;   // one per success condition
   std::vector<double> values;   // one per success condition
+  bool isDone() const { return terminated || truncated; }
 };
 
 class Environment {
@@ -51,7 +56,7 @@ class Environment {
   // environment has only the objects of that id (searched in both splits),
   // listObjects returns them whatever the split (as ManiSkill's fixed
   // environments: the object is the choice), the first scene is the first
-  // of them, and a reset on any other object throws std::invalid_argument.
+  // of them, and a reset on any other object throws InvalidArgument.
   Environment(const PluginRegistry& registry, const std::string& environment_id,
               EnvironmentOptions options = {});
   ~Environment();
@@ -92,7 +97,7 @@ class Environment {
   // else, and observes: the steps that follow are bit-identical to those
   // that followed the save (under implicit_euler; integrators with a step
   // history restart at each save, see Scene::saveState). Throws
-  // std::invalid_argument for a blob of another task, of an unknown
+  // InvalidArgument for a blob of another task, of an unknown
   // version, cut short, or made by another scene structure; PluginCallError
   // when a plugin cannot save or restore (built against ABI < 1.2).
   std::vector<uint8_t> saveState();
@@ -126,6 +131,9 @@ class Environment {
   const StageTimes& getStageTimes() const { return stage_times_; }
   const std::string& getObjectId() const { return object_id_; }
   uint64_t getSeed() const { return seed_; }
+  // The seed of this step's point-cloud sample: each step samples anew, yet
+  // (seed, step) fixes the sample (the viewer's clouds draw the same).
+  uint64_t calcSampleSeed() const { return seed_ * 0x9E3779B97F4A7C15ull + elapsed_steps_; }
   const Scene& getScene() const;
   Scene& updScene();
 

@@ -49,7 +49,7 @@ struct EnvironmentOptions {
   ObservationOptions observation;
 };
 
-// Throws std::invalid_argument for options no task could honour (timing
+// Throws InvalidArgument for options no task could honour (timing
 // overrides out of range, and validateObservationOptions' cases).
 void validateEnvironmentOptions(const EnvironmentOptions& options);
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <manibench/abi.h>
+#include <manibench/error.hpp>
 #include <manibench/geometry.hpp>
 #include <manibench/observation_mode.hpp>
 #include <manibench/plugin_registry.hpp>
@@ -16,10 +17,10 @@
 
 namespace manibench {
 
-class PluginCallError : public std::runtime_error {
+class PluginCallError : public Error {
  public:
   PluginCallError(const std::string& message, mb_status status)
-      : std::runtime_error(message), status_(status) {}
+      : Error(message), status_(status) {}
   mb_status status() const { return status_; }
 
  private:

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <manibench/abi.h>
+#include <manibench/error.hpp>
 
 #include <cstdint>
 #include <stdexcept>
@@ -28,9 +29,9 @@ namespace manibench {
 inline constexpr uint16_t kRequiredAbiMinor = 0;
 
 // A plugin could not be loaded, or a name could not be resolved.
-class PluginError : public std::runtime_error {
+class PluginError : public Error {
  public:
-  using std::runtime_error::runtime_error;
+  using Error::Error;
 };
 
 enum class PluginKind { Task = MB_KIND_TASK, Controller = MB_KIND_CONTROLLER, Policy = MB_KIND_POLICY };

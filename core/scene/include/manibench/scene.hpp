@@ -4,6 +4,7 @@
 // includes this header needs neither Simbody's headers nor its no-NDEBUG rule.
 #pragma once
 
+#include <manibench/error.hpp>
 #include <manibench/geometry.hpp>
 
 #include <Eigen/Core>
@@ -190,16 +191,16 @@ struct ArticulationSource {
 
 // Bad input (malformed URDF, unknown name, wrong vector size, misuse of the
 // build/run phases). The message names the file, link or joint at fault.
-class SceneError : public std::runtime_error {
+class SceneError : public Error {
  public:
-  using std::runtime_error::runtime_error;
+  using Error::Error;
 };
 
 // The state became NaN or exploded; the message names the body and the time.
-class SimulationDiverged : public std::runtime_error {
+class SimulationDiverged : public Error {
  public:
   SimulationDiverged(const std::string& message, std::string body, double time)
-      : std::runtime_error(message), body_(std::move(body)), time_(time) {}
+      : Error(message), body_(std::move(body)), time_(time) {}
   const std::string& body() const { return body_; }
   double time() const { return time_; }
 

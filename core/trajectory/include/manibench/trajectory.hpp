@@ -5,6 +5,7 @@
 #pragma once
 
 #include <manibench/environment.hpp>
+#include <manibench/error.hpp>
 #include <manibench/observation_mode.hpp>
 
 #include <Eigen/Core>
@@ -19,9 +20,9 @@ namespace manibench {
 // demonstration file, another format version, cut short, a missing or
 // malformed dataset. The message names the file and, where it is one
 // trajectory's, the trajectory.
-class DemoError : public std::runtime_error {
+class DemoError : public Error {
  public:
-  using std::runtime_error::runtime_error;
+  using Error::Error;
 };
 
 // One recorded episode: T steps, T + 1 observations and states (the reset's

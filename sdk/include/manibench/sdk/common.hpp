@@ -4,6 +4,7 @@
 #pragma once
 
 #include <manibench/abi.h>
+#include <manibench/sdk/guard.hpp>
 #include <manibench/sdk/numbers.hpp>
 
 #include <yaml-cpp/yaml.h>
@@ -38,27 +39,7 @@
 
 namespace manibench::sdk {
 
-// Thrown by plugin code (or by SceneView when the host reports a failure);
-// the trampolines turn it into a status and a message for the host.
-class Error : public std::runtime_error {
- public:
-  explicit Error(const std::string& message, mb_status status = MB_ERROR)
-      : std::runtime_error(message), status_(status) {}
-  mb_status status() const { return status_; }
-
- private:
-  mb_status status_;
-};
-
 namespace detail {
-
-inline void writeError(mb_error* err, const char* message) noexcept {
-  if (err == nullptr || err->message == nullptr || err->capacity == 0) return;
-  std::size_t n = std::strlen(message);
-  if (n >= err->capacity) n = err->capacity - 1;
-  std::memcpy(err->message, message, n);
-  err->message[n] = '\0';
-}
 
 // Copies a filled output struct into the caller's, which may be older and
 // smaller: only the fields below the caller's struct_size are written.
@@ -69,26 +50,17 @@ void writeOutputStruct(Info* out, const Info& filled) noexcept {
   out->struct_size = n;
 }
 
-// Runs `body`, converting every exception into a status and a message:
-// nothing thrown inside a plugin may unwind into the host.
+// Runs `body` as guardBoundary does, a YAML error (a plugin reading its
+// configuration) becoming MB_INVALID_ARGUMENT with "configuration: ".
 template <class Body>
 mb_status guard(mb_error* err, Body&& body) noexcept {
-  try {
-    body();
-    return MB_OK;
-  } catch (const Error& e) {
-    writeError(err, e.what());
-    return e.status() == MB_OK ? MB_ERROR : e.status();
-  } catch (const YAML::Exception& e) {
-    writeError(err, (std::string("configuration: ") + e.what()).c_str());
-    return MB_INVALID_ARGUMENT;
-  } catch (const std::exception& e) {
-    writeError(err, e.what());
-    return MB_ERROR;
-  } catch (...) {
-    writeError(err, "unknown exception (not derived from std::exception)");
-    return MB_ERROR;
-  }
+  return guardBoundary(err, [&] {
+    try {
+      body();
+    } catch (const YAML::Exception& e) {
+      throw Error(std::string("configuration: ") + e.what(), MB_INVALID_ARGUMENT);
+    }
+  });
 }
 
 }  // namespace detail

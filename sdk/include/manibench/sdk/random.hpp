@@ -1,4 +1,5 @@
-// Fully specified pseudo-random numbers for plugins: the same seed gives
+// Fully specified pseudo-random numbers for plugins and the host (the
+// point-cloud sampling): the same seed gives
 // the same numbers with every compiler and standard library (the output
 // of std::*_distribution is left open by the standard, so generated
 // objects and resets must not use them). Header-only, no dependencies.
@@ -22,6 +23,10 @@ class Random {
   // Uniform in [lo, hi), from the top 53 bits.
   double uniform(double lo, double hi) { return lo + (hi - lo) * double(next() >> 11) * 0x1.0p-53; }
   int integer(int lo, int hi) { return lo + int(next() % uint64_t(hi - lo + 1)); }  // inclusive
+  // In [0, bound): multiply-shift; the bias (bound / 2^64) is negligible.
+  uint64_t below(uint64_t bound) {
+    return static_cast<uint64_t>((static_cast<unsigned __int128>(next()) * bound) >> 64);
+  }
   bool chance(double p) { return uniform(0, 1) < p; }
 
  private:

@@ -19,4 +19,11 @@ using sdk::SceneView;
 using sdk::Segment;
 using sdk::Twist;
 
+// Writes `pose` at `at` of a state vector: position, then the quaternion
+// w, x, y, z (the observations' order).
+inline void putPose(Eigen::Ref<Eigen::VectorXd> out, uint32_t at, const Pose& pose) {
+  out.segment<3>(at) = pose.position;
+  out.segment<4>(at + 3) << pose.orientation.w(), pose.orientation.x(), pose.orientation.y(), pose.orientation.z();
+}
+
 }  // namespace manibench::kit

@@ -3,13 +3,22 @@
 // their YAML facts (joints, initial configuration with the task's lift
 // height, head cameras at the task's height) and the robot's own part of
 // a state observation (ManiSkill's agent vector with every joint, then each
-// arm's TCP pose). Header-only; include <manibench/kit/mobile_panda.hpp>.
+// arm's TCP pose); what every task on them does the same way (describing
+// the robot, adding it to the scene, placing it facing a target) and what
+// their scripted experts read (the robot's observation segments and the
+// mobile_panda_ee controller's action segments, both by name).
 #pragma once
 
 #include <manibench/kit/common.hpp>
+#include <manibench/kit/policy_math.hpp>
+#include <manibench/sdk/policy.hpp>
+#include <manibench/sdk/random.hpp>
+#include <manibench/sdk/task.hpp>
 
 #include <yaml-cpp/yaml.h>
 
+#include <array>
+#include <cmath>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -93,6 +102,18 @@ inline Facts loadFacts(const std::string& robot_dir, const std::string& robot, c
 class AgentState {
  public:
   explicit AgentState(Facts facts) : facts_(std::move(facts)) {}
+  // The facts of <robot_dir>/<robot>.yaml for `task` (loadFacts), which
+  // must describe `arms` arms and `joints` joints (what the task's
+  // observation layout and expert assume); errors name the file.
+  AgentState(const std::string& robot_dir, const std::string& robot, const std::string& task, std::size_t arms,
+             std::size_t joints)
+      : AgentState(loadFacts(robot_dir, robot, task)) {
+    if (facts_.tcp_links.size() != arms || facts_.joints.size() != joints)
+      throw Error(task + ": " + robot_dir + "/" + robot + ".yaml: expected " + std::to_string(joints) +
+                      " joints and " + std::to_string(arms) + (arms == 1 ? " arm" : " arms") + ", got " +
+                      std::to_string(facts_.joints.size()) + " and " + std::to_string(facts_.tcp_links.size()),
+                  MB_ERROR);
+  }
 
   const Facts& getFacts() const { return facts_; }
 
@@ -121,6 +142,55 @@ class AgentState {
                    (one ? std::string("gripper") : side + " gripper") +
                        " TCP (between the pads): position, quaternion wxyz, world"});
     return s;
+  }
+
+  // What every task on the robot describes alike: the robot's part of the
+  // state observation (the task appends its own segments), the robot
+  // (articulation "robot", every joint actuated), the mobile_panda
+  // controller at 100 Hz with frame skip 5, and 200 steps an episode.
+  sdk::TaskSpec describeTask() const {
+    sdk::TaskSpec spec;
+    spec.observation = describe();
+    spec.agent_state_dim = getDim();
+    spec.robot_articulation = "robot";
+    spec.actuated_joints = facts_.joints;
+    spec.default_controller = "mobile_panda";
+    spec.control_frequency = 100;
+    spec.frame_skip = 5;
+    spec.max_episode_steps = 200;
+    return spec;
+  }
+
+  // The finger pads' contact entries of a task's configuration layer
+  // (ManiSkill v1: friction 2), one line per pad, under `bodies:`.
+  std::string getFingerFrictionYaml() const {
+    std::string yaml;
+    for (const std::string& finger : facts_.finger_links)
+      yaml += "      - {articulation: robot, link: " + finger + ", static_friction: 2.0, dynamic_friction: 2.0}\n";
+    return yaml;
+  }
+
+  // While building: adds the robot (articulation "robot", fixed base: the
+  // base moves on its planar joints) and binds it.
+  mb_id addTo(SceneView& scene) {
+    const mb_id robot = scene.addUrdfFile(facts_.urdf, "robot", Pose(), /*fixed_base=*/true);
+    bind(scene, robot);
+    return robot;
+  }
+
+  // At reset (supplement B.2): the robot in its initial configuration,
+  // `distance` from `target` (x, y) at `bearing` (rad), its heading
+  // bearing + `turn` (+-pi: facing the target) plus U(-0.05 pi, 0.05 pi)
+  // drawn from `rng`, at rest.
+  void placeFacing(SceneView& scene, sdk::Random& rng, const Eigen::Vector2d& target, double distance,
+                   double bearing, double turn) const {
+    const double heading = bearing + turn + rng.uniform(-0.05 * kPi, 0.05 * kPi);
+    Eigen::VectorXd q = facts_.initial;
+    q[0] = target.x() + distance * std::cos(bearing);
+    q[1] = target.y() + distance * std::sin(bearing);
+    q[2] = std::remainder(heading, 2 * kPi);
+    scene.setJointPositions(robot_, q);
+    scene.setJointVelocities(robot_, Eigen::VectorXd::Zero(q.size()));
   }
 
   // While building: finds the links and checks that the scene's joint
@@ -172,9 +242,7 @@ class AgentState {
     out.segment(at + q.size(), qd.size()) = qd;
     at += 2 * q.size();
     for (const mb_id tcp : tcps_) {
-      const Pose p = scene.getLinkPose(tcp);
-      out.segment<3>(at) = p.position;
-      out.segment<4>(at + 3) << p.orientation.w(), p.orientation.x(), p.orientation.y(), p.orientation.z();
+      putPose(out, uint32_t(at), scene.getLinkPose(tcp));
       at += 7;
     }
   }
@@ -183,6 +251,147 @@ class AgentState {
   Facts facts_;
   mb_id robot_ = -1;
   std::vector<mb_id> fingers_, tcps_;
+};
+
+// ---- what the experts read -------------------------------------------------
+
+// The robot's segments of a state observation, looked up by name in the
+// policy's layout (AgentState::describe() names them): the base, the
+// joints and each arm's TCP pose (right arm first).
+struct AgentOffsets {
+  uint32_t base_position = 0, base_yaw = 0, joint_positions = 0;
+  std::vector<uint32_t> tcp_poses;
+
+  AgentOffsets() = default;
+  // `policy` names the policy in errors.
+  AgentOffsets(const sdk::Layout& observation, std::size_t arms, const std::string& policy) {
+    auto find = [&](const std::string& name, uint32_t size) {
+      const sdk::SegmentInfo* s = observation.find(name);
+      if (s == nullptr || s->size != size)
+        throw Error(policy + " needs the mobile Panda's state observation (segment '" + name + "' of size " +
+                        std::to_string(size) + " is missing)",
+                    MB_INVALID_ARGUMENT);
+      return s->offset;
+    };
+    base_position = find("base_position", 2);
+    base_yaw = find("base_yaw", 1);
+    const sdk::SegmentInfo* joints = observation.find("joint_positions");
+    if (joints == nullptr) find("joint_positions", 0);  // throws
+    joint_positions = joints->offset;
+    if (arms == 1)
+      tcp_poses = {find("tcp_pose", 7)};
+    else
+      tcp_poses = {find("right_tcp_pose", 7), find("left_tcp_pose", 7)};
+  }
+
+  // The robot as a step's state observation shows it.
+  struct Reading {
+    Eigen::Vector2d base;  // x, y, world
+    double yaw = 0, lift = 0;
+    Eigen::Matrix3d base_rotation;  // base frame -> world: about z by yaw
+    std::vector<Eigen::Vector3d> tcp;  // per arm (right first), world
+    std::vector<Eigen::Matrix3d> tcp_rotation;
+  };
+  Reading read(const Eigen::VectorXd& state) const {
+    Reading r;
+    r.base = Eigen::Vector2d(state[base_position], state[base_position + 1]);
+    r.yaw = state[base_yaw];
+    r.lift = state[joint_positions + 3];
+    r.base_rotation = Eigen::AngleAxisd(r.yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    for (const uint32_t at : tcp_poses) {
+      r.tcp.push_back(getVector3(state, at));
+      r.tcp_rotation.push_back(getQuaternion(state, at + 3).toRotationMatrix());
+    }
+    return r;
+  }
+};
+
+// The mobile_panda_ee controller's action, its segments bound by name:
+// base_forward, base_left, base_yaw and lift (consecutive, from `base`),
+// and per arm (right first) the end effector's linear and angular
+// velocities and the gripper.
+struct EeAction {
+  struct Arm {
+    uint32_t linear = 0, angular = 0, gripper = 0;
+  };
+  Eigen::Index dim = 0;
+  uint32_t base = 0;
+  std::vector<Arm> arms;
+
+  EeAction() = default;
+  // `arms`: 1 (the single-arm robot, whose arm is the right one) or 2.
+  // Errors name `policy` and say how to run it.
+  EeAction(const sdk::Layout& action, std::size_t arms, const std::string& policy) : dim(action.dim) {
+    const std::vector<const char*> sides = arms == 1 ? std::vector<const char*>{"right"}
+                                                     : std::vector<const char*>{"right", "left"};
+    std::vector<std::pair<std::string, uint32_t>> wanted = {
+        {"base_forward", 1}, {"base_left", 1}, {"base_yaw", 1}, {"lift", 1}};
+    for (const char* side : sides)
+      for (const auto& [part, size] : {std::pair<const char*, uint32_t>{"_ee_linear", 3}, {"_ee_angular", 3}, {"_gripper", 1}})
+        wanted.emplace_back(side + std::string(part), size);
+    for (const auto& [name, size] : wanted) {
+      const sdk::SegmentInfo* s = action.find(name);
+      if (s == nullptr || s->size != size)
+        throw Error(policy + " needs the mobile_panda_ee controller" + (arms == 1 ? "" : " on the dual-arm robot") +
+                        " (action segment '" + name + "' of size " + std::to_string(size) +
+                        " is missing); run it with --controller mobile_panda_ee",
+                    MB_INVALID_ARGUMENT);
+    }
+    base = action.get("base_forward").offset;
+    if (action.get("base_left").offset != base + 1 || action.get("base_yaw").offset != base + 2 ||
+        action.get("lift").offset != base + 3)
+      throw Error(policy + ": base_forward, base_left, base_yaw, lift must be consecutive", MB_INVALID_ARGUMENT);
+    for (const char* side : sides)
+      this->arms.push_back({action.get(side + std::string("_ee_linear")).offset,
+                            action.get(side + std::string("_ee_angular")).offset,
+                            action.get(side + std::string("_gripper")).offset});
+  }
+};
+
+// An expert's checks of what it is given: one of `tasks`, and the state
+// observation (its privileged part is what it reads).
+inline void requireStateObservation(const sdk::PolicyContext& context, const std::string& policy,
+                                    const std::vector<std::string>& tasks, uint32_t dim) {
+  bool known = false;
+  std::string names;
+  for (const std::string& t : tasks) {
+    known = known || t == context.task_name;
+    names += (names.empty() ? "" : " and ") + t;
+  }
+  if (!known)
+    throw Error(policy + " drives " + names + ", not '" + context.task_name + "'", MB_INVALID_ARGUMENT);
+  if (context.observation_mode != "state" || context.observation.dim != dim)
+    throw Error(policy + " needs the state observation (" + std::to_string(dim) + " values), got mode '" +
+                    context.observation_mode + "' with " + std::to_string(context.observation.dim),
+                MB_INVALID_ARGUMENT);
+}
+
+// A scripted expert over mobile_panda_ee on the state observation: what
+// every one checks and binds alike, and its phase (an enum whose first
+// value is where an episode starts) with the steps spent in it.
+template <class Phase>
+class Expert : public sdk::Policy {
+ public:
+  // Checks the task (one of `tasks`) and the state observation (`dim`
+  // values), binds the robot's observation segments and the action of
+  // `arms` arms; errors name the policy `name`.
+  Expert(const sdk::PolicyContext& context, const std::string& name, const std::vector<std::string>& tasks,
+         uint32_t dim, std::size_t arms) {
+    requireStateObservation(context, name, tasks, dim);
+    agent_ = AgentOffsets(context.observation, arms, name);
+    action_ = EeAction(context.action, arms, name);
+  }
+  void reset(uint64_t) override { enter(Phase{}); }
+
+ protected:
+  void enter(Phase phase) {
+    phase_ = phase;
+    phase_steps_ = 0;
+  }
+  Phase phase_{};
+  uint32_t phase_steps_ = 0;
+  AgentOffsets agent_;  // the robot's observation segments
+  EeAction action_;     // mobile_panda_ee's action segments
 };
 
 }  // namespace manibench::kit::mobile_panda

@@ -1,0 +1,21 @@
+// Mass properties of the URDF builder (urdf_model.cpp): a solid shape's
+// mass and inertia at a density (links without <inertial>), and summing
+// rigid parts into a body (links merged over fixed joints).
+#pragma once
+
+#include "Simbody.h"
+#include "contact/contact_geometry.hpp"
+#include "urdf_model.hpp"
+
+namespace manibench {
+namespace scene_detail {
+
+// Mass, centre of mass and central inertia (shape frame) of a solid shape.
+void calcShapeMass(const ShapeGeometry& g, double density, double& m, SimTK::Vec3& com, SimTK::Mat33& Ic);
+
+// Adds a rigid part of mass m, centre of mass com_B and central inertia
+// Ic_B (both in the body frame) to the body's mass properties.
+void addMass(BodyModel& body, double m, const SimTK::Vec3& com_B, const SimTK::Mat33& Ic_B);
+
+}  // namespace scene_detail
+}  // namespace manibench

@@ -1,0 +1,100 @@
+// The kit's object ids and catalog (manibench/kit/object_ids.hpp,
+// catalog.hpp): numbered splits, models made once, and a PartNet folder's
+// unusable objects skipped with one warning each.
+#include <manibench/kit/catalog.hpp>
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "test_support.hpp"
+
+namespace {
+
+namespace kit = manibench::kit;
+using manibench::testing::catchMessage;
+using manibench::testing::expectMentions;
+
+TEST(NumberedIds, SplitsAreRangesOfPlainNumbers) {
+  const kit::NumberedIds ids{{3000, 3}, {3100, 2}};
+  EXPECT_EQ(ids.list("train"), (std::vector<std::string>{"3000", "3001", "3002"}));
+  EXPECT_EQ(ids.list("test"), (std::vector<std::string>{"3100", "3101"}));
+  EXPECT_EQ(ids.classify("3001"), std::optional<bool>(false));
+  EXPECT_EQ(ids.classify("3101"), std::optional<bool>(true));
+  for (const char* bad : {"3003", "3102", "03001", "3001 ", "+3001", "", "abc", "99999999999"})
+    EXPECT_EQ(ids.classify(bad), std::nullopt) << bad;
+  EXPECT_EQ(ids.describe(), "train 3000-3002, test 3100-3101");
+  expectMentions(catchMessage<kit::Error>([&] { ids.list("val"); }), {"unknown split 'val'", "train or test"});
+}
+
+struct Model {
+  std::string id;
+  bool usable = true;
+  int finished = 0;
+};
+
+kit::ObjectCatalog<Model>::Source makeSource(int& made) {
+  return {[](const std::string& split) { return kit::NumberedIds{{1, 2}, {5, 1}}.list(split); },
+          [&made](const std::string& id) {
+            ++made;
+            return Model{id};
+          },
+          [&made](const std::string& folder, const std::string& id) {
+            ++made;
+            if (!std::filesystem::exists(folder + "/" + id + "/semantics.txt"))
+              throw kit::Error("cannot read " + folder + "/" + id + "/semantics.txt");
+            return Model{id, id != "100002"};
+          },
+          [](const Model& m) { return m.usable ? std::string() : std::string("no handle"); },
+          [](Model& m) { ++m.finished; }};
+}
+
+TEST(ObjectCatalog, GeneratedModelsAreMadeOnceAndFinished) {
+  int made = 0;
+  const kit::ObjectCatalog<Model> catalog("Test", "thing", "", makeSource(made));
+  EXPECT_FALSE(catalog.isPartNet());
+  EXPECT_EQ(catalog.list("train"), (std::vector<std::string>{"1", "2"}));
+  EXPECT_EQ(made, 0) << "listing a generator's split makes nothing";
+  const auto a = catalog.get("2");
+  EXPECT_EQ(catalog.get("2"), a);
+  EXPECT_EQ(made, 1);
+  EXPECT_EQ(a->finished, 1);
+}
+
+// One unreadable object and one the family refuses: both skipped, each
+// named once per process with its folder and the reason; the rest listed.
+TEST(ObjectCatalog, UnusablePartNetObjectsAreSkippedWithOneWarningEach) {
+  const std::filesystem::path dir = ::testing::TempDir() + "catalog_" + std::to_string(::getpid());
+  std::filesystem::remove_all(dir);
+  std::filesystem::copy(std::string(MANIBENCH_TEST_SOURCE_DIR) + "/tests/fixtures/partnet_mini", dir,
+                        std::filesystem::copy_options::recursive);
+  std::filesystem::remove(dir / "test.txt");
+  std::filesystem::create_directories(dir / "100003");
+  std::ofstream(dir / "100003" / "mobility.urdf") << "<robot name=\"broken\">\n";
+  int made = 0;
+  const kit::ObjectCatalog<Model> catalog("Test", "thing", dir.string(), makeSource(made));
+  ::testing::internal::CaptureStderr();
+  EXPECT_EQ(catalog.list("train"), std::vector<std::string>{"100001"});
+  EXPECT_EQ(catalog.list("train"), std::vector<std::string>{"100001"});
+  const std::string warnings = ::testing::internal::GetCapturedStderr();
+  expectMentions(warnings, {"manibench: warning: Test: skipping PartNet thing 100003 (" + (dir / "100003").string() +
+                                "): cannot read",
+                            "skipping PartNet thing 100002 (" + (dir / "100002").string() + "): no handle"});
+  EXPECT_EQ(warnings.find("100003"), warnings.rfind("100003 (")) << "warned once: " << warnings;
+  EXPECT_EQ(warnings.find("100001"), std::string::npos) << warnings;
+  // The skipped object itself still says why.
+  expectMentions(catchMessage<kit::Error>([&] { catalog.get("100003"); }), {"cannot read"});
+  std::filesystem::remove_all(dir);
+}
+
+TEST(ObjectCatalog, PartNetDirMustBeAFolder) {
+  const kit::Config none("{}");
+  EXPECT_EQ(kit::readPartNetDir(none, "Test"), "");
+  const kit::Config bad("partnet_dir: /no/such/folder");
+  expectMentions(catchMessage<kit::Error>([&] { kit::readPartNetDir(bad, "Test"); }),
+                 {"Test: task.partnet_dir '/no/such/folder' is not a folder"});
+}
+
+}  // namespace
