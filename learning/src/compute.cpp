@@ -32,6 +32,11 @@ void setComputeThreads(int threads) {
   }
 }
 
+void setFlushDenormals() {
+  // False on a CPU without DAZ: nothing to set there; training only runs slower.
+  at::globalContext().setFlushDenormal(true);
+}
+
 ComputeInfo calcComputeInfo() {
   ComputeInfo info;
   info.torch_threads = torch::get_num_threads();

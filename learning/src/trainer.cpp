@@ -133,6 +133,7 @@ class Trainer {
   Trainer(const PluginRegistry& registry, const TrainOptions& options, const TrainHooks& hooks)
       : options_(options), hooks_(hooks), dir_(options.out_dir), device_(parseDevice(options.device)) {
     setComputeThreads(options.threads);
+    setFlushDenormals();
     say(describeCompute(calcComputeInfo(), device_));
     dataset_ = std::make_unique<DemoDataset>(options.data);
     spec_ = calcDemoSpec(registry, *dataset_);

@@ -26,6 +26,15 @@ struct ComputeInfo {
 // OPENBLAS_NUM_THREADS=1 made batch-256 MLP training 4.5x faster on a
 // loaded machine, and 2 torch threads were slower than 1 at batch 128).
 void setComputeThreads(int threads);
+// Flushes denormal floats to zero (FTZ/DAZ) in this thread and the threads it
+// starts afterwards (they inherit the floating-point environment). Why: a
+// state-mode BC run slows down as it trains, as denormals appear in its
+// weights and Adam's moments: the door's MLP without --normalize-state went
+// from 350 iterations/s fresh to 36 at 75k iterations (resumed alone from
+// that checkpoint: 36-40 it/s), and FTZ/DAZ restores the fresh speed. For
+// training only: the policy plugin runs inside the environment's process,
+// whose physics must not change with the policy.
+void setFlushDenormals();
 ComputeInfo calcComputeInfo();
 // "BLAS: OpenBLAS 0.3.21 (…/openblas-pthread/libblas.so.3), 1 thread; libtorch 1.13.1: 1 intra-op thread; device cpu"
 std::string describeCompute(const ComputeInfo& info, const torch::Device& device);
