@@ -212,6 +212,9 @@ class OpenCabinetExpert : public mobile_panda::Expert<ExpertPhase> {
   void pull(const View& v, Command& c);
   // The whole robot servos the TCP to the goal.
   Eigen::VectorXd calcAction(const View& v, const Command& c) const;
+  bool calcGraspTurned(const View& v) const;  // which of the hand's two grasps is nearer
+
+  bool grasp_turned_ = false;  // grasps with the hand turned half a turn about its axis
 
   bool nominal_ready_ = false;
   Eigen::Vector2d nominal_offset_ = Eigen::Vector2d::Zero();  // TCP from the base, base frame

@@ -32,6 +32,7 @@ OpenCabinetExpert::OpenCabinetExpert(const sdk::PolicyContext& context)
 void OpenCabinetExpert::reset(uint64_t seed) {
   Expert::reset(seed);
   nominal_ready_ = false;
+  grasp_turned_ = false;
 }
 
 struct OpenCabinetExpert::View {
@@ -44,6 +45,7 @@ struct OpenCabinetExpert::View {
   double qdot = 0;               // its speed
   double fingers = 0;            // opening, m
   Eigen::Vector3d motion;        // the handle's direction of motion as the joint opens
+  Eigen::Matrix3d grasp_rotation;       // the TCP's at the grasp
   Eigen::AngleAxisd orientation_error;  // from the TCP to the grasp orientation
 };
 
@@ -72,9 +74,27 @@ OpenCabinetExpert::View OpenCabinetExpert::read(const sdk::Observation& observat
   v.fingers = s[agent_.joint_positions + 11] + s[agent_.joint_positions + 12];
   const Eigen::Vector3d motion = v.door ? v.axis.cross(v.handle - v.origin) : v.axis;
   v.motion = motion.norm() > 1e-9 ? Eigen::Vector3d(motion.normalized()) : Eigen::Vector3d(hx);
-  const Eigen::Matrix3d grasp_rotation = (Eigen::Matrix3d() << hz, hy, -hx).finished();
-  v.orientation_error = Eigen::AngleAxisd(grasp_rotation * v.robot.tcp_rotation[0].transpose());
+  v.grasp_rotation = (Eigen::Matrix3d() << hz, hy, -hx).finished();
+  if (grasp_turned_) v.grasp_rotation = v.grasp_rotation * Eigen::Vector3d(-1, -1, 1).asDiagonal();
+  v.orientation_error = Eigen::AngleAxisd(v.grasp_rotation * v.robot.tcp_rotation[0].transpose());
   return v;
+}
+
+// The Panda's hand is symmetric under half a turn about its own axis, so
+// either of two TCP rotations grasps the handle. Taking always the first
+// drove the wrist (joint 7) into its limit on most objects: on a drawer the
+// hand stopped 0.5 rad short and the approach waited out its 90-step
+// timeout at the pre-grasp pose, a pause the state does not explain (so a
+// policy cloned from it learned to stay there). Chosen once per episode,
+// in the base's frame with the base facing the handle as it will.
+bool OpenCabinetExpert::calcGraspTurned(const View& v) const {
+  const double yaw_goal = std::atan2(-v.hx.y(), -v.hx.x());
+  const Eigen::Matrix3d base_goal = Eigen::AngleAxisd(yaw_goal, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Matrix3d tcp_in_base = v.robot.base_rotation.transpose() * v.robot.tcp_rotation[0];
+  const Eigen::Matrix3d grasp_in_base = base_goal.transpose() * v.grasp_rotation;
+  const Eigen::Matrix3d turned_in_base = grasp_in_base * Eigen::Vector3d(-1, -1, 1).asDiagonal();
+  const auto angle = [&](const Eigen::Matrix3d& r) { return Eigen::AngleAxisd(r * tcp_in_base.transpose()).angle(); };
+  return angle(turned_in_base) < angle(grasp_in_base);
 }
 
 // To 12 cm in front of the grip (after a slip: open in place first).
@@ -168,8 +188,10 @@ Eigen::VectorXd OpenCabinetExpert::calcAction(const View& v, const Command& c) c
 }
 
 Eigen::VectorXd OpenCabinetExpert::act(const sdk::Observation& observation) {
-  const View v = read(observation);
+  View v = read(observation);
   if (!nominal_ready_) {  // the canonical arm pose's TCP, relative to the base
+    grasp_turned_ = calcGraspTurned(v);
+    if (grasp_turned_) v = read(observation);
     const Eigen::Vector3d offset =
         v.robot.base_rotation.transpose() * (v.tcp - Eigen::Vector3d(v.robot.base.x(), v.robot.base.y(), 0));
     nominal_offset_ = Eigen::Vector2d(offset.x(), offset.y());
