@@ -87,14 +87,14 @@ TEST(PartNet, ReadsTheUrdfAsAKinematicModel) {
   }
   const partnet::Joint* door = o.findJoint("joint_0");
   ASSERT_NE(door, nullptr);
-  EXPECT_EQ(door->type, "revolute");
+  EXPECT_EQ(door->type, partnet::JointType::kRevolute);
   EXPECT_EQ(door->parent, "link_2");
   EXPECT_EQ(door->child, "link_0");
   EXPECT_TRUE(door->axis.isApprox(Eigen::Vector3d(0, -1, 0)));
   EXPECT_TRUE(door->limited);
   EXPECT_DOUBLE_EQ(door->upper, 1.57);
   EXPECT_TRUE(door->origin.translation().isApprox(Eigen::Vector3d(-0.295, 0, 0.22)));
-  EXPECT_EQ(o.findJoint("joint_1")->type, "prismatic");
+  EXPECT_EQ(o.findJoint("joint_1")->type, partnet::JointType::kPrismatic);
   EXPECT_DOUBLE_EQ(o.findJoint("joint_1")->upper, 0.3);
   EXPECT_FALSE(o.findJoint("joint_2")->isMovable());
   // Y-up turned Z-up by the base joint: the body link's y axis is world z.
