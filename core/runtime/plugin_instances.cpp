@@ -60,10 +60,10 @@ void callSetState(const Descriptor& d, Handle* handle, const char* kind, const s
   callPlugin(kind, name, "set_state", d.set_state, handle, bytes.data(), uint64_t(bytes.size()));
 }
 
-std::vector<SegmentDescription> toSegments(const mb_segment* segments, uint32_t count,
+std::vector<sdk::Segment> toSegments(const mb_segment* segments, uint32_t count,
                                            uint32_t dim, const char* what,
                                            const std::string& owner) {
-  std::vector<SegmentDescription> out;
+  std::vector<sdk::Segment> out;
   for (uint32_t i = 0; i < count; ++i) {
     const mb_segment& s = segments[i];
     if (s.offset + s.size > dim)
@@ -72,7 +72,7 @@ std::vector<SegmentDescription> toSegments(const mb_segment* segments, uint32_t 
                                 std::to_string(s.offset + s.size) + ") exceeds the dimension " +
                                 std::to_string(dim),
                             MB_ERROR);
-    out.push_back({s.name ? s.name : "", s.offset, s.size, s.description ? s.description : ""});
+    out.push_back(sdk::Segment::fromC(s));
   }
   return out;
 }
@@ -83,10 +83,9 @@ std::vector<std::string> toStrings(const char* const* strings, uint32_t count) {
   return out;
 }
 
-std::vector<mb_segment> toCSegments(const std::vector<SegmentDescription>& segments) {
+std::vector<mb_segment> toCSegments(const std::vector<sdk::Segment>& segments) {
   std::vector<mb_segment> out;
-  for (const SegmentDescription& s : segments)
-    out.push_back({s.name.c_str(), s.offset, s.size, s.description.c_str()});
+  for (const sdk::Segment& s : segments) out.push_back(s.toC());
   return out;
 }
 
@@ -129,7 +128,7 @@ TaskDescription describeTask(const std::string& name, const mb_task_info& info) 
   d.agent_state_dim = d.observation_dim;
   if (MB_HAS_FIELD(mb_task_info, agent_state_dim, info.struct_size) && info.agent_state_dim > 0) {
     bool on_boundary = false;
-    for (const SegmentDescription& s : d.observation_segments)
+    for (const sdk::Segment& s : d.observation_segments)
       on_boundary = on_boundary || s.offset + s.size == info.agent_state_dim;
     if (info.agent_state_dim > info.observation_dim || !on_boundary)
       throw PluginCallError("task '" + name + "': agent_state_dim " +
