@@ -27,27 +27,8 @@ const std::string kMini = std::string(MANIBENCH_TEST_SOURCE_DIR) + "/tests/fixtu
 using manibench::testing::readFile;
 
 // A copy of partnet_mini in a fresh temporary folder, to break.
-class BrokenCopy {
- public:
-  BrokenCopy() {
-    root_ = fs::temp_directory_path() / ("partnet_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter_++));
-    fs::remove_all(root_);
-    fs::copy(kMini, root_, fs::copy_options::recursive);
-  }
-  ~BrokenCopy() { fs::remove_all(root_); }
-  std::string folder() const { return root_.string(); }
-  std::string file(const std::string& name) const { return (root_ / name).string(); }
-  void replace(const std::string& name, const std::string& from, const std::string& to) {
-    std::string text = readFile(file(name));
-    const std::size_t at = text.find(from);
-    ASSERT_NE(at, std::string::npos) << from;
-    text.replace(at, from.size(), to);
-    std::ofstream(file(name)) << text;
-  }
-
- private:
-  fs::path root_;
-  static inline int counter_ = 0;
+struct BrokenCopy : manibench::testing::FixtureCopy {
+  BrokenCopy() : FixtureCopy("partnet_mini") {}
 };
 
 std::string errorOf(const std::function<void()>& f) {
