@@ -135,7 +135,7 @@ std::unique_ptr<mb::Environment> makeEnvironment(const mb::PluginRegistry& regis
   }
 }
 
-void printSegments(const std::vector<mb::SegmentDescription>& segments) {
+void printSegments(const std::vector<mb::sdk::Segment>& segments) {
   for (const auto& s : segments) {
     std::ostringstream range;
     range << "[" << s.offset << ", " << s.offset + s.size << ")";

@@ -89,7 +89,7 @@ std::unique_ptr<mb::Environment> makeEnvironment(const mb::PluginRegistry& regis
                                                  const std::string& task_name,
                                                  const mb::ConfigSources& sources,
                                                  bool stop_on_success);
-void printSegments(const std::vector<mb::SegmentDescription>& segments);
+void printSegments(const std::vector<mb::sdk::Segment>& segments);
 // The YAML of --policy-config FILE handed to the policy's create ("" when
 // not given); an unreadable file is an error naming it.
 std::string readPolicyConfig(const Arguments& args);

@@ -36,8 +36,8 @@ Options:
 
 // Column names of a layout: segment[i] (segment alone when it has one value).
 void appendColumns(std::vector<std::string>& columns, const std::string& prefix,
-                   const std::vector<mb::SegmentDescription>& segments) {
-  for (const mb::SegmentDescription& s : segments)
+                   const std::vector<mb::sdk::Segment>& segments) {
+  for (const mb::sdk::Segment& s : segments)
     for (uint32_t i = 0; i < s.size; ++i)
       columns.push_back(prefix + s.name + (s.size > 1 ? "[" + std::to_string(i) + "]" : ""));
 }

@@ -150,27 +150,36 @@ Eigen::Vector3d calcVector3(const ConfigNode& node) {
                          *calcNumber(node.items[2]));
 }
 
+// The entries of a light list (none when `path` is absent): `start` reads
+// what is the kind's own (a direction and shadow, a position), then the
+// color. The schema has checked every entry already.
+template <class Light, class Start>
+std::vector<Light> calcLights(const ConfigNode& config, const char* path, Start start) {
+  std::vector<Light> lights;
+  if (const ConfigNode* list = config.findPath(path))
+    for (const ConfigNode& item : list->items) {
+      Light light = start(item);
+      light.color = calcVector3(*item.find("color")).cast<float>();
+      lights.push_back(light);
+    }
+  return lights;
+}
+
 // Cameras and lights, for the renderer of the visual observation modes.
 void calcRenderOptions(const ConfigNode& config, ObservationOptions& options) {
   LightingSpec& lighting = options.lighting;
   lighting.ambient = calcVector3(getPath(config, "lights.ambient")).cast<float>();
-  lighting.directional.clear();
-  if (const ConfigNode* list = config.findPath("lights.directional"))
-    for (const ConfigNode& item : list->items) {
-      DirectionalLight light;
-      light.direction = calcVector3(*item.find("direction")).cast<float>();
-      light.color = calcVector3(*item.find("color")).cast<float>();
-      light.shadow = *calcBool(*item.find("shadow"));
-      lighting.directional.push_back(light);
-    }
-  lighting.point.clear();
-  if (const ConfigNode* list = config.findPath("lights.point"))
-    for (const ConfigNode& item : list->items) {
-      PointLight light;
-      light.position = calcVector3(*item.find("position")).cast<float>();
-      light.color = calcVector3(*item.find("color")).cast<float>();
-      lighting.point.push_back(light);
-    }
+  lighting.directional = calcLights<DirectionalLight>(config, "lights.directional", [](const ConfigNode& item) {
+    DirectionalLight light;
+    light.direction = calcVector3(*item.find("direction")).cast<float>();
+    light.shadow = *calcBool(*item.find("shadow"));
+    return light;
+  });
+  lighting.point = calcLights<PointLight>(config, "lights.point", [](const ConfigNode& item) {
+    PointLight light;
+    light.position = calcVector3(*item.find("position")).cast<float>();
+    return light;
+  });
   for (const char* kind : {"directional", "point"}) {
     const ConfigNode* list = config.findPath(std::string("lights.") + kind);
     if (list != nullptr && list->items.size() > std::size_t(LightingSpec::kMaxLights))

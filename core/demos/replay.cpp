@@ -27,14 +27,14 @@ long findDifference(const T* a, const T* b, std::size_t n) {
 
 // "observation[5] (segment 'tcp_pose' [3]): a vs b", or "".
 std::string compareStates(const Eigen::VectorXd& replayed, const Eigen::VectorXd& recorded,
-                          const std::vector<SegmentDescription>& segments) {
+                          const std::vector<sdk::Segment>& segments) {
   if (replayed.size() != recorded.size())
     return "observation has " + std::to_string(replayed.size()) + " values, the recording " +
            std::to_string(recorded.size());
   const long i = findDifference(replayed.data(), recorded.data(), std::size_t(replayed.size()));
   if (i < 0) return "";
   std::string where;
-  for (const SegmentDescription& s : segments)
+  for (const sdk::Segment& s : segments)
     if (uint32_t(i) >= s.offset && uint32_t(i) < s.offset + s.size)
       where = " (segment '" + s.name + "' [" + std::to_string(uint32_t(i) - s.offset) + "])";
   return "observation[" + std::to_string(i) + "]" + where + ": replayed " +
@@ -77,7 +77,7 @@ ReplayResult replayTrajectory(Environment& env, const Trajectory& t, bool check,
                     std::to_string(t.steps) + " steps");
   env.restoreState(t.getEnvState(0));
   if (on_step) on_step(0);
-  const std::vector<SegmentDescription>& segments = env.calcPolicyLayout().observation_segments;
+  const std::vector<sdk::Segment>& segments = env.calcPolicyLayout().observation_segments;
   auto differ = [&](uint32_t step, const std::string& what) {
     result.matches = false;
     result.divergence = "step " + std::to_string(step) + ": " + what;

@@ -365,33 +365,38 @@ const ShaderProgram& SceneRenderer::Impl::getProgram() {
   return programs.emplace(counts, program).first->second;
 }
 
+namespace {
+
+// Uploads one kind of light: a vector per light (`vectorOf`: the view-frame
+// direction towards it, or its view-frame position) and its color.
+template <class Light, class VectorOf>
+void setLightArray(int vector_uniform, int color_uniform, const std::vector<Light>& lights, VectorOf vectorOf) {
+  if (lights.empty()) return;
+  std::vector<float> vectors, colors;
+  for (const Light& light : lights) {
+    const Eigen::Vector3f v = vectorOf(light);
+    vectors.insert(vectors.end(), {v.x(), v.y(), v.z()});
+    colors.insert(colors.end(), {light.color.x(), light.color.y(), light.color.z()});
+  }
+  const auto count = static_cast<GLsizei>(lights.size());
+  glUniform3fv(vector_uniform, count, vectors.data());
+  glUniform3fv(color_uniform, count, colors.data());
+}
+
+}  // namespace
+
 void SceneRenderer::Impl::setLightUniforms(const ShaderProgram& uniforms,
                                            const Eigen::Isometry3d& world_to_view) const {
   glUniform3fv(uniforms.ambient, 1, lighting.ambient.data());
   const Eigen::Matrix3f rotation = world_to_view.linear().cast<float>();
-  std::vector<float> directions, colors;
-  for (const DirectionalLight& light : lighting.directional) {
-    const Eigen::Vector3f to_light = -(rotation * light.direction.normalized());
-    directions.insert(directions.end(), {to_light.x(), to_light.y(), to_light.z()});
-    colors.insert(colors.end(), {light.color.x(), light.color.y(), light.color.z()});
-  }
-  const auto directional_count = static_cast<GLsizei>(lighting.directional.size());
-  if (directional_count > 0) {
-    glUniform3fv(uniforms.directional_to_light, directional_count, directions.data());
-    glUniform3fv(uniforms.directional_color, directional_count, colors.data());
-  }
-  directions.clear();
-  colors.clear();
-  for (const PointLight& light : lighting.point) {
-    const Eigen::Vector3f p = (world_to_view * light.position.cast<double>()).cast<float>();
-    directions.insert(directions.end(), {p.x(), p.y(), p.z()});
-    colors.insert(colors.end(), {light.color.x(), light.color.y(), light.color.z()});
-  }
-  const auto point_count = static_cast<GLsizei>(lighting.point.size());
-  if (point_count > 0) {
-    glUniform3fv(uniforms.point_position, point_count, directions.data());
-    glUniform3fv(uniforms.point_color, point_count, colors.data());
-  }
+  setLightArray(uniforms.directional_to_light, uniforms.directional_color, lighting.directional,
+                [&](const DirectionalLight& light) -> Eigen::Vector3f {
+                  return -(rotation * light.direction.normalized());
+                });
+  setLightArray(uniforms.point_position, uniforms.point_color, lighting.point,
+                [&](const PointLight& light) -> Eigen::Vector3f {
+                  return (world_to_view * light.position.cast<double>()).cast<float>();
+                });
 }
 
 SceneRenderer::SceneRenderer(const Scene& scene, LightingSpec lighting,

@@ -73,8 +73,8 @@ PolicyLayout Environment::calcPolicyLayout(std::optional<ObservationMode> mode) 
   if (isVisualMode(layout.observation_mode)) {
     // Visual modes carry only the robot's own state (as ManiSkill's).
     layout.observation_dim = getTaskDescription().agent_state_dim;
-    std::vector<SegmentDescription> agent;
-    for (const SegmentDescription& s : layout.observation_segments)
+    std::vector<sdk::Segment> agent;
+    for (const sdk::Segment& s : layout.observation_segments)
       if (s.offset + s.size <= layout.observation_dim) agent.push_back(s);
     layout.observation_segments = std::move(agent);
   }

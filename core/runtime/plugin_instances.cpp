@@ -60,10 +60,10 @@ void callSetState(const Descriptor& d, Handle* handle, const char* kind, const s
   callPlugin(kind, name, "set_state", d.set_state, handle, bytes.data(), uint64_t(bytes.size()));
 }
 
-std::vector<SegmentDescription> toSegments(const mb_segment* segments, uint32_t count,
+std::vector<sdk::Segment> toSegments(const mb_segment* segments, uint32_t count,
                                            uint32_t dim, const char* what,
                                            const std::string& owner) {
-  std::vector<SegmentDescription> out;
+  std::vector<sdk::Segment> out;
   for (uint32_t i = 0; i < count; ++i) {
     const mb_segment& s = segments[i];
     if (s.offset + s.size > dim)
@@ -72,7 +72,7 @@ std::vector<SegmentDescription> toSegments(const mb_segment* segments, uint32_t 
                                 std::to_string(s.offset + s.size) + ") exceeds the dimension " +
                                 std::to_string(dim),
                             MB_ERROR);
-    out.push_back({s.name ? s.name : "", s.offset, s.size, s.description ? s.description : ""});
+    out.push_back(sdk::Segment::fromC(s));
   }
   return out;
 }
@@ -83,11 +83,67 @@ std::vector<std::string> toStrings(const char* const* strings, uint32_t count) {
   return out;
 }
 
-std::vector<mb_segment> toCSegments(const std::vector<SegmentDescription>& segments) {
+std::vector<mb_segment> toCSegments(const std::vector<sdk::Segment>& segments) {
   std::vector<mb_segment> out;
-  for (const SegmentDescription& s : segments)
-    out.push_back({s.name.c_str(), s.offset, s.size, s.description.c_str()});
+  for (const sdk::Segment& s : segments) out.push_back(s.toC());
   return out;
+}
+
+// A plugin's info record through get_info, struct_size set first (a
+// plugin older than this host fills only the fields it knows).
+template <class Info, class Descriptor, class Handle>
+Info fetchInfo(const char* kind, const std::string& name, const Descriptor& d, Handle* handle) {
+  Info info{};
+  info.struct_size = sizeof(info);
+  callPlugin(kind, name, "get_info", d.get_info, handle, &info);
+  return info;
+}
+
+// A task's description from its info record, checked: the host refuses,
+// naming the task, what it cannot run. Fields of a plugin older than this
+// host stay zero-initialized.
+TaskDescription describeTask(const std::string& name, const mb_task_info& info) {
+  TaskDescription d;
+  d.name = name;
+  d.observation_dim = info.observation_dim;
+  d.observation_segments =
+      toSegments(info.observation_segments, info.observation_segment_count,
+                 info.observation_dim, "observation", "task '" + name + "'");
+  d.success_conditions =
+      toStrings(info.success_conditions, info.success_condition_count);
+  if (d.success_conditions.empty() ||
+      d.success_conditions.back() != "success")
+    throw PluginCallError("task '" + name + "': its last success condition must be \"success\"",
+                          MB_ERROR);
+  d.masks = toStrings(info.masks, info.mask_count);
+  d.robot_articulation = info.robot_articulation ? info.robot_articulation : "";
+  d.actuated_joints = toStrings(info.actuated_joints, info.actuated_joint_count);
+  d.default_controller = info.default_controller ? info.default_controller : "";
+  d.controller_config = info.controller_config ? info.controller_config : "";
+  d.control_frequency = info.control_frequency;
+  d.frame_skip = info.frame_skip;
+  d.max_episode_steps = info.max_episode_steps;
+  if (MB_HAS_FIELD(mb_task_info, default_config, info.struct_size) && info.default_config)
+    d.default_config = info.default_config;
+  d.agent_state_dim = d.observation_dim;
+  if (MB_HAS_FIELD(mb_task_info, agent_state_dim, info.struct_size) && info.agent_state_dim > 0) {
+    bool on_boundary = false;
+    for (const sdk::Segment& s : d.observation_segments)
+      on_boundary = on_boundary || s.offset + s.size == info.agent_state_dim;
+    if (info.agent_state_dim > info.observation_dim || !on_boundary)
+      throw PluginCallError("task '" + name + "': agent_state_dim " +
+                                std::to_string(info.agent_state_dim) +
+                                " must end an observation segment within the " +
+                                std::to_string(info.observation_dim) + " state values",
+                            MB_ERROR);
+    d.agent_state_dim = info.agent_state_dim;
+  }
+  if (!(d.control_frequency > 0) || d.frame_skip == 0 ||
+      d.max_episode_steps == 0)
+    throw PluginCallError("task '" + name +
+                              "': control_frequency, frame_skip and max_episode_steps must be positive",
+                          MB_ERROR);
+  return d;
 }
 
 }  // namespace
@@ -101,50 +157,9 @@ TaskInstance::TaskInstance(const PluginRegistry& registry, const std::string& na
   callPlugin("task", name, "create", descriptor_->create, config_yaml.c_str(), &handle_);
   if (handle_ == nullptr) throw PluginCallError("task '" + name + "' create returned no task", MB_ERROR);
 
-  mb_task_info info{};
-  info.struct_size = sizeof(info);
   try {
-    callPlugin("task", name, "get_info", descriptor_->get_info, handle_, &info);
-    // Fields of a plugin older than this host stay zero-initialized.
-    description_.name = name;
-    description_.observation_dim = info.observation_dim;
-    description_.observation_segments =
-        toSegments(info.observation_segments, info.observation_segment_count,
-                   info.observation_dim, "observation", "task '" + name + "'");
-    description_.success_conditions =
-        toStrings(info.success_conditions, info.success_condition_count);
-    if (description_.success_conditions.empty() ||
-        description_.success_conditions.back() != "success")
-      throw PluginCallError("task '" + name + "': its last success condition must be \"success\"",
-                            MB_ERROR);
-    description_.masks = toStrings(info.masks, info.mask_count);
-    description_.robot_articulation = info.robot_articulation ? info.robot_articulation : "";
-    description_.actuated_joints = toStrings(info.actuated_joints, info.actuated_joint_count);
-    description_.default_controller = info.default_controller ? info.default_controller : "";
-    description_.controller_config = info.controller_config ? info.controller_config : "";
-    description_.control_frequency = info.control_frequency;
-    description_.frame_skip = info.frame_skip;
-    description_.max_episode_steps = info.max_episode_steps;
-    if (MB_HAS_FIELD(mb_task_info, default_config, info.struct_size) && info.default_config)
-      description_.default_config = info.default_config;
-    description_.agent_state_dim = description_.observation_dim;
-    if (MB_HAS_FIELD(mb_task_info, agent_state_dim, info.struct_size) && info.agent_state_dim > 0) {
-      bool on_boundary = false;
-      for (const SegmentDescription& s : description_.observation_segments)
-        on_boundary = on_boundary || s.offset + s.size == info.agent_state_dim;
-      if (info.agent_state_dim > info.observation_dim || !on_boundary)
-        throw PluginCallError("task '" + name + "': agent_state_dim " +
-                                  std::to_string(info.agent_state_dim) +
-                                  " must end an observation segment within the " +
-                                  std::to_string(info.observation_dim) + " state values",
-                              MB_ERROR);
-      description_.agent_state_dim = info.agent_state_dim;
-    }
-    if (!(description_.control_frequency > 0) || description_.frame_skip == 0 ||
-        description_.max_episode_steps == 0)
-      throw PluginCallError("task '" + name +
-                                "': control_frequency, frame_skip and max_episode_steps must be positive",
-                            MB_ERROR);
+    const auto info = fetchInfo<mb_task_info>("task", name, *descriptor_, handle_);
+    description_ = describeTask(name, info);
   } catch (...) {
     descriptor_->destroy(handle_);
     throw;
@@ -218,10 +233,8 @@ ControllerInstance::ControllerInstance(const PluginRegistry& registry, const std
              &handle_);
   if (handle_ == nullptr)
     throw PluginCallError("controller '" + name + "' create returned no controller", MB_ERROR);
-  mb_controller_info info{};
-  info.struct_size = sizeof(info);
   try {
-    callPlugin("controller", name, "get_info", descriptor_->get_info, handle_, &info);
+    const auto info = fetchInfo<mb_controller_info>("controller", name, *descriptor_, handle_);
     description_.name = name;
     description_.action_dim = info.action_dim;
     description_.action_segments = toSegments(info.action_segments, info.action_segment_count,

@@ -156,21 +156,22 @@ mb_status getTime(mb_scene* s, double* out, mb_error* err) {
     *out = m.scene->getTime();
   });
 }
-mb_status getJointPositions(mb_scene* s, mb_id articulation, double* out, uint32_t count,
-                            mb_error* err) {
+// get_joint_positions and get_joint_velocities: one value per joint.
+mb_status getJointValues(mb_scene* s, mb_id articulation, double* out, uint32_t count, mb_error* err,
+                         Eigen::VectorXd (Scene::*get)(int) const) {
   return guarded(s, err, [&](mb_scene& m) {
     requireCount(*m.scene, articulation, count);
     requireArray(out, count, "output array");
-    Eigen::Map<Eigen::VectorXd>(out, count) = m.scene->getJointPositions(articulation);
+    Eigen::Map<Eigen::VectorXd>(out, count) = (m.scene->*get)(articulation);
   });
+}
+mb_status getJointPositions(mb_scene* s, mb_id articulation, double* out, uint32_t count,
+                            mb_error* err) {
+  return getJointValues(s, articulation, out, count, err, &Scene::getJointPositions);
 }
 mb_status getJointVelocities(mb_scene* s, mb_id articulation, double* out, uint32_t count,
                              mb_error* err) {
-  return guarded(s, err, [&](mb_scene& m) {
-    requireCount(*m.scene, articulation, count);
-    requireArray(out, count, "output array");
-    Eigen::Map<Eigen::VectorXd>(out, count) = m.scene->getJointVelocities(articulation);
-  });
+  return getJointValues(s, articulation, out, count, err, &Scene::getJointVelocities);
 }
 mb_status getRootPose(mb_scene* s, mb_id articulation, mb_pose* out, mb_error* err) {
   return guarded(s, err, [&](mb_scene& m) {
@@ -201,23 +202,25 @@ mb_status calcContactForce(mb_scene* s, mb_id a, mb_id b, double out[3], mb_erro
     for (int i = 0; i < 3; ++i) out[i] = f[i];
   });
 }
+// set_joint_positions and set_joint_velocities: one value per joint.
+mb_status setJointValues(mb_scene* s, mb_id articulation, const double* values, uint32_t count, mb_error* err,
+                         void (Scene::*set)(int, const Eigen::VectorXd&), const char* call, const char* what) {
+  return guarded(s, err, [&](mb_scene& m) {
+    requireStateChanges(m, call);
+    requireCount(*m.scene, articulation, count);
+    requireArray(values, count, what);
+    (m.scene->*set)(articulation, Eigen::Map<const Eigen::VectorXd>(values, count));
+  });
+}
 mb_status setJointPositions(mb_scene* s, mb_id articulation, const double* q, uint32_t count,
                             mb_error* err) {
-  return guarded(s, err, [&](mb_scene& m) {
-    requireStateChanges(m, "set_joint_positions");
-    requireCount(*m.scene, articulation, count);
-    requireArray(q, count, "positions");
-    m.scene->setJointPositions(articulation, Eigen::Map<const Eigen::VectorXd>(q, count));
-  });
+  return setJointValues(s, articulation, q, count, err, &Scene::setJointPositions, "set_joint_positions",
+                        "positions");
 }
 mb_status setJointVelocities(mb_scene* s, mb_id articulation, const double* v, uint32_t count,
                              mb_error* err) {
-  return guarded(s, err, [&](mb_scene& m) {
-    requireStateChanges(m, "set_joint_velocities");
-    requireCount(*m.scene, articulation, count);
-    requireArray(v, count, "velocities");
-    m.scene->setJointVelocities(articulation, Eigen::Map<const Eigen::VectorXd>(v, count));
-  });
+  return setJointValues(s, articulation, v, count, err, &Scene::setJointVelocities, "set_joint_velocities",
+                        "velocities");
 }
 mb_status setRootPose(mb_scene* s, mb_id articulation, const mb_pose* pose, mb_error* err) {
   return guarded(s, err, [&](mb_scene& m) {

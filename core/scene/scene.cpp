@@ -236,23 +236,11 @@ double Scene::getTime() const {
 }
 
 Eigen::VectorXd Scene::getJointPositions(int articulation) const {
-  impl_->requireFinalized("getJointPositions");
-  const Impl::Articulation& art = impl_->getArticulation(articulation, "getJointPositions");
-  const SimTK::State& s = impl_->getState();
-  Eigen::VectorXd q(art.model.joints.size());
-  for (Eigen::Index j = 0; j < q.size(); ++j)
-    q[j] = impl_->matter.getMobilizedBody(impl_->joint_mobods[art.first_joint + j]).getOneQ(s, 0);
-  return q;
+  return impl_->getJointValues(articulation, false, "getJointPositions");
 }
 
 Eigen::VectorXd Scene::getJointVelocities(int articulation) const {
-  impl_->requireFinalized("getJointVelocities");
-  const Impl::Articulation& art = impl_->getArticulation(articulation, "getJointVelocities");
-  const SimTK::State& s = impl_->getState();
-  Eigen::VectorXd u(art.model.joints.size());
-  for (Eigen::Index j = 0; j < u.size(); ++j)
-    u[j] = impl_->matter.getMobilizedBody(impl_->joint_mobods[art.first_joint + j]).getOneU(s, 0);
-  return u;
+  return impl_->getJointValues(articulation, true, "getJointVelocities");
 }
 
 Pose Scene::getRootPose(int articulation) const {
@@ -334,23 +322,11 @@ Eigen::Matrix<double, 6, Eigen::Dynamic> Scene::calcLinkJacobian(
 }
 
 void Scene::setJointPositions(int articulation, const Eigen::VectorXd& q) {
-  impl_->requireFinalized("setJointPositions");
-  const Impl::Articulation& art = impl_->getArticulation(articulation, "setJointPositions");
-  impl_->checkJointVector(art, q, "setJointPositions");
-  SimTK::State& s = impl_->updStateAndRestart();
-  for (Eigen::Index j = 0; j < q.size(); ++j)
-    impl_->matter.getMobilizedBody(impl_->joint_mobods[art.first_joint + j]).setOneQ(s, 0, q[j]);
-  impl_->applyMimics(art, s);
+  impl_->setJointValues(articulation, q, false, "setJointPositions");
 }
 
 void Scene::setJointVelocities(int articulation, const Eigen::VectorXd& qdot) {
-  impl_->requireFinalized("setJointVelocities");
-  const Impl::Articulation& art = impl_->getArticulation(articulation, "setJointVelocities");
-  impl_->checkJointVector(art, qdot, "setJointVelocities");
-  SimTK::State& s = impl_->updStateAndRestart();
-  for (Eigen::Index j = 0; j < qdot.size(); ++j)
-    impl_->matter.getMobilizedBody(impl_->joint_mobods[art.first_joint + j]).setOneU(s, 0, qdot[j]);
-  impl_->applyMimics(art, s);
+  impl_->setJointValues(articulation, qdot, true, "setJointVelocities");
 }
 
 void Scene::setRootPose(int articulation, const Pose& pose) {
@@ -442,12 +418,7 @@ IntegratorStatistics Scene::getIntegratorStatistics() const {
 }
 
 SceneState Scene::saveState() {
-  impl_->requireFinalized("saveState");
-  SceneState saved;
-  saved.data = std::make_unique<SceneState::Data>();
-  saved.data->scene_id = impl_->id;
-  saved.data->state = impl_->getState();
-  saved.data->controls = impl_->joint_forces->getControls();
+  SceneState saved = impl_->captureState("saveState");
   // A restored state starts a fresh integrator; where the integrator has a
   // history, restart it here too, so that both continue alike.
   if (impl_->settings.integrator != Integrator::ImplicitEuler) impl_->updStateAndRestart();

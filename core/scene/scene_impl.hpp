@@ -206,6 +206,45 @@ struct Scene::Impl {
     s.invalidateAllCacheAtOrAbove(SimTK::Stage::Dynamics);
   }
   JointControls& updControls() { return joint_forces->updControls(); }
+  // A copy of the current state and joint controls: what saveState keeps,
+  // and what decodeState starts from before the bytes overwrite it.
+  SceneState captureState(const char* method) const {
+    requireFinalized(method);
+    SceneState saved;
+    saved.data = std::make_unique<SceneState::Data>();
+    saved.data->scene_id = id;
+    saved.data->state = getState();
+    saved.data->controls = joint_forces->getControls();
+    return saved;
+  }
+  // One articulation's joint positions (q) or velocities (u), in joint order.
+  Eigen::VectorXd getJointValues(int articulation, bool velocities, const char* method) const {
+    requireFinalized(method);
+    const Articulation& art = getArticulation(articulation, method);
+    const SimTK::State& s = getState();
+    Eigen::VectorXd values(art.model.joints.size());
+    for (Eigen::Index j = 0; j < values.size(); ++j) {
+      const SimTK::MobilizedBody& body = matter.getMobilizedBody(joint_mobods[art.first_joint + j]);
+      values[j] = velocities ? body.getOneU(s, 0) : body.getOneQ(s, 0);
+    }
+    return values;
+  }
+  // Sets them; the integrator restarts from the new state, and mimic joints
+  // follow their leaders.
+  void setJointValues(int articulation, const Eigen::VectorXd& values, bool velocities, const char* method) {
+    requireFinalized(method);
+    const Articulation& art = getArticulation(articulation, method);
+    checkJointVector(art, values, method);
+    SimTK::State& s = updStateAndRestart();
+    for (Eigen::Index j = 0; j < values.size(); ++j) {
+      const SimTK::MobilizedBody& body = matter.getMobilizedBody(joint_mobods[art.first_joint + j]);
+      if (velocities)
+        body.setOneU(s, 0, values[j]);
+      else
+        body.setOneQ(s, 0, values[j]);
+    }
+    applyMimics(art, s);
+  }
 
   // --- building ---
   int addArticulation(const std::string& xml, const std::string& source,

@@ -80,12 +80,7 @@ std::vector<std::uint8_t> Scene::encodeState(const SceneState& saved) const {
 }
 
 SceneState Scene::decodeState(const std::uint8_t* data, std::size_t size) const {
-  impl_->requireFinalized("decodeState");
-  SceneState saved;
-  saved.data = std::make_unique<SceneState::Data>();
-  saved.data->scene_id = impl_->id;
-  saved.data->state = impl_->getState();
-  saved.data->controls = impl_->joint_forces->getControls();
+  SceneState saved = impl_->captureState("decodeState");
   SimTK::State& s = saved.data->state;
   scene_detail::JointControls& c = saved.data->controls;
   try {

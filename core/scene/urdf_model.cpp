@@ -162,51 +162,69 @@ struct Builder {
     }
   }
 
-  std::vector<CollisionShape> makeLinkShapes(const urdf::Link& link, int link_index,
-                                             const Transform& X_BL) {
-    std::vector<CollisionShape> shapes;
-    int ordinal = -1;
-    for (const urdf::CollisionSharedPtr& collision : link.collision_array) {
-      ++ordinal;
-      if (!collision || !collision->geometry) continue;
-      const urdf::Geometry& g = *collision->geometry;
-      const std::string what =
-          "link '" + link.name + "': collision '" +
-          (collision->name.empty() ? "#" + std::to_string(ordinal + 1) : collision->name) + "'";
-      CollisionShape shape;
-      shape.link = link_index;
-      shape.X_BS = X_BL * toTransform(collision->origin);
-      if (g.type == urdf::Geometry::SPHERE) {
-        const double r = static_cast<const urdf::Sphere&>(g).radius;
-        if (!(r > 0) || !std::isfinite(r))
-          failUrdf(source, what + " is a sphere of radius " + std::to_string(r));
-        shape.geometry = ShapeGeometry::makeSphere(r);
-      } else if (g.type == urdf::Geometry::BOX) {
-        const urdf::Vector3& d = static_cast<const urdf::Box&>(g).dim;
-        if (!(d.x > 0 && d.y > 0 && d.z > 0) || !std::isfinite(d.x + d.y + d.z))
-          failUrdf(source, what + " is a box of size " + std::to_string(d.x) + " " +
-                           std::to_string(d.y) + " " + std::to_string(d.z));
-        shape.geometry = ShapeGeometry::makeBox(Vec3(d.x / 2, d.y / 2, d.z / 2));
-      } else if (g.type == urdf::Geometry::CYLINDER) {
-        const auto& c = static_cast<const urdf::Cylinder&>(g);
-        const bool capsule = capsules.count({link.name, ordinal}) > 0;
-        if (!(c.radius > 0) || !std::isfinite(c.radius) || !std::isfinite(c.length) ||
-            (capsule ? !(c.length >= 0) : !(c.length > 0)))
-          failUrdf(source, what + " is a " + (capsule ? "capsule" : "cylinder") + " of radius " +
-                           std::to_string(c.radius) + " and length " + std::to_string(c.length));
-        shape.geometry = capsule ? ShapeGeometry::makeCapsule(c.radius, c.length / 2)
-                                 : ShapeGeometry::makeCylinder(c.radius, c.length / 2);
-      } else if (g.type == urdf::Geometry::MESH) {
-        std::shared_ptr<const ConvexHull> hull =
-            loadMeshHull(link, static_cast<const urdf::Mesh&>(g), what);
-        if (!hull) continue;
-        shape.geometry = ShapeGeometry::makeConvex(std::move(hull));
-      } else {
-        model.unsimulated.push_back(what + " (unknown geometry type)");
-        continue;
-      }
-      shapes.push_back(std::move(shape));
+  // visit(element, geometry, capsule, what) for each <collision> or <visual>
+  // (`kind`) with a geometry, its sizes checked. `capsule`: in `capsule_set`;
+  // `what`, for errors: "link 'L': collision 'name'" ('#N' from 1 unnamed).
+  template <class Element, class Visit>
+  void forEachShape(const urdf::Link& link, const std::vector<std::shared_ptr<Element>>& elements, const char* kind,
+                    const std::set<std::pair<std::string, int>>& capsule_set, Visit&& visit) const {
+    for (std::size_t i = 0; i < elements.size(); ++i) {
+      const Element* element = elements[i].get();
+      if (!element || !element->geometry) continue;
+      const std::string what = "link '" + link.name + "': " + kind + " '" +
+                               (element->name.empty() ? "#" + std::to_string(i + 1) : element->name) + "'";
+      const bool capsule = capsule_set.count({link.name, static_cast<int>(i)}) > 0;
+      checkPrimitiveSize(*element->geometry, capsule, what);
+      visit(*element, *element->geometry, capsule, what);
     }
+  }
+
+  // A primitive's sizes must be positive and finite (a capsule's length may
+  // be 0): one rule for collisions and visuals.
+  void checkPrimitiveSize(const urdf::Geometry& g, bool capsule, const std::string& what) const {
+    if (g.type == urdf::Geometry::SPHERE) {
+      const double r = static_cast<const urdf::Sphere&>(g).radius;
+      if (!(r > 0) || !std::isfinite(r)) failUrdf(source, what + " is a sphere of radius " + std::to_string(r));
+    } else if (g.type == urdf::Geometry::BOX) {
+      const urdf::Vector3& d = static_cast<const urdf::Box&>(g).dim;
+      if (!(d.x > 0 && d.y > 0 && d.z > 0) || !std::isfinite(d.x + d.y + d.z))
+        failUrdf(source, what + " is a box of size " + std::to_string(d.x) + " " + std::to_string(d.y) + " " +
+                             std::to_string(d.z));
+    } else if (g.type == urdf::Geometry::CYLINDER) {
+      const auto& c = static_cast<const urdf::Cylinder&>(g);
+      if (!(c.radius > 0) || !std::isfinite(c.radius) || !std::isfinite(c.length) ||
+          (capsule ? !(c.length >= 0) : !(c.length > 0)))
+        failUrdf(source, what + " is a " + (capsule ? "capsule" : "cylinder") + " of radius " +
+                             std::to_string(c.radius) + " and length " + std::to_string(c.length));
+    }
+  }
+
+  std::vector<CollisionShape> makeLinkShapes(const urdf::Link& link, int link_index, const Transform& X_BL) {
+    std::vector<CollisionShape> shapes;
+    forEachShape(link, link.collision_array, "collision", capsules,
+                 [&](const urdf::Collision& collision, const urdf::Geometry& g, bool capsule, const std::string& what) {
+                   CollisionShape shape;
+                   shape.link = link_index;
+                   shape.X_BS = X_BL * toTransform(collision.origin);
+                   if (g.type == urdf::Geometry::SPHERE) {
+                     shape.geometry = ShapeGeometry::makeSphere(static_cast<const urdf::Sphere&>(g).radius);
+                   } else if (g.type == urdf::Geometry::BOX) {
+                     const urdf::Vector3& d = static_cast<const urdf::Box&>(g).dim;
+                     shape.geometry = ShapeGeometry::makeBox(Vec3(d.x / 2, d.y / 2, d.z / 2));
+                   } else if (g.type == urdf::Geometry::CYLINDER) {
+                     const auto& c = static_cast<const urdf::Cylinder&>(g);
+                     shape.geometry = capsule ? ShapeGeometry::makeCapsule(c.radius, c.length / 2)
+                                              : ShapeGeometry::makeCylinder(c.radius, c.length / 2);
+                   } else if (g.type == urdf::Geometry::MESH) {
+                     std::shared_ptr<const ConvexHull> hull = loadMeshHull(link, static_cast<const urdf::Mesh&>(g), what);
+                     if (!hull) return;
+                     shape.geometry = ShapeGeometry::makeConvex(std::move(hull));
+                   } else {
+                     model.unsimulated.push_back(what + " (unknown geometry type)");
+                     return;
+                   }
+                   shapes.push_back(std::move(shape));
+                 });
     return shapes;
   }
 
@@ -251,56 +269,39 @@ struct Builder {
   }
 
   void addLinkVisuals(const urdf::Link& link, int link_index) {
-    int ordinal = -1;
-    for (const urdf::VisualSharedPtr& visual : link.visual_array) {
-      ++ordinal;
-      if (!visual || !visual->geometry) continue;
-      const urdf::Geometry& g = *visual->geometry;
-      const std::string what =
-          "link '" + link.name + "': visual '" +
-          (visual->name.empty() ? "#" + std::to_string(ordinal + 1) : visual->name) + "'";
-      VisualShape shape;
-      shape.link = link_index;
-      shape.name = visual->name;
-      const urdf::Pose& origin = visual->origin;
-      double qx, qy, qz, qw;
-      origin.rotation.getQuaternion(qx, qy, qz, qw);
-      shape.pose_in_link.position = Eigen::Vector3d(origin.position.x, origin.position.y,
-                                                    origin.position.z);
-      shape.pose_in_link.orientation = Eigen::Quaterniond(qw, qx, qy, qz).normalized();
-      if (g.type == urdf::Geometry::SPHERE) {
-        const double r = static_cast<const urdf::Sphere&>(g).radius;
-        if (!(r > 0) || !std::isfinite(r))
-          failUrdf(source, what + " is a sphere of radius " + std::to_string(r));
-        shape.kind = VisualShape::Kind::Sphere;
-        shape.size = Eigen::Vector3d(r, 0, 0);
-      } else if (g.type == urdf::Geometry::BOX) {
-        const urdf::Vector3& d = static_cast<const urdf::Box&>(g).dim;
-        if (!(d.x > 0 && d.y > 0 && d.z > 0) || !std::isfinite(d.x + d.y + d.z))
-          failUrdf(source, what + " is a box of size " + std::to_string(d.x) + " " +
-                           std::to_string(d.y) + " " + std::to_string(d.z));
-        shape.kind = VisualShape::Kind::Box;
-        shape.size = Eigen::Vector3d(d.x, d.y, d.z);
-      } else if (g.type == urdf::Geometry::CYLINDER) {
-        const auto& c = static_cast<const urdf::Cylinder&>(g);
-        const bool capsule = visual_capsules.count({link.name, ordinal}) > 0;
-        if (!(c.radius > 0) || !std::isfinite(c.radius) || !std::isfinite(c.length) ||
-            (capsule ? !(c.length >= 0) : !(c.length > 0)))
-          failUrdf(source, what + " is a " + (capsule ? "capsule" : "cylinder") + " of radius " +
-                           std::to_string(c.radius) + " and length " + std::to_string(c.length));
-        shape.kind = capsule ? VisualShape::Kind::Capsule : VisualShape::Kind::Cylinder;
-        shape.size = Eigen::Vector3d(c.radius, c.length, 0);
-      } else if (g.type == urdf::Geometry::MESH) {
-        const auto& mesh = static_cast<const urdf::Mesh&>(g);
-        shape.kind = VisualShape::Kind::Mesh;
-        shape.mesh_scale = Eigen::Vector3d(mesh.scale.x, mesh.scale.y, mesh.scale.z);
-        shape.meshes = loadVisualMesh(mesh, what, shape.mesh_file);
-      } else {
-        continue;  // nothing a renderer could draw
-      }
-      setVisualMaterial(*visual, shape);
-      model.visuals.push_back(std::move(shape));
-    }
+    forEachShape(link, link.visual_array, "visual", visual_capsules,
+                 [&](const urdf::Visual& visual, const urdf::Geometry& g, bool capsule, const std::string& what) {
+                   VisualShape shape;
+                   shape.link = link_index;
+                   shape.name = visual.name;
+                   const urdf::Pose& origin = visual.origin;
+                   double qx, qy, qz, qw;
+                   origin.rotation.getQuaternion(qx, qy, qz, qw);
+                   shape.pose_in_link.position =
+                       Eigen::Vector3d(origin.position.x, origin.position.y, origin.position.z);
+                   shape.pose_in_link.orientation = Eigen::Quaterniond(qw, qx, qy, qz).normalized();
+                   if (g.type == urdf::Geometry::SPHERE) {
+                     shape.kind = VisualShape::Kind::Sphere;
+                     shape.size = Eigen::Vector3d(static_cast<const urdf::Sphere&>(g).radius, 0, 0);
+                   } else if (g.type == urdf::Geometry::BOX) {
+                     const urdf::Vector3& d = static_cast<const urdf::Box&>(g).dim;
+                     shape.kind = VisualShape::Kind::Box;
+                     shape.size = Eigen::Vector3d(d.x, d.y, d.z);
+                   } else if (g.type == urdf::Geometry::CYLINDER) {
+                     const auto& c = static_cast<const urdf::Cylinder&>(g);
+                     shape.kind = capsule ? VisualShape::Kind::Capsule : VisualShape::Kind::Cylinder;
+                     shape.size = Eigen::Vector3d(c.radius, c.length, 0);
+                   } else if (g.type == urdf::Geometry::MESH) {
+                     const auto& mesh = static_cast<const urdf::Mesh&>(g);
+                     shape.kind = VisualShape::Kind::Mesh;
+                     shape.mesh_scale = Eigen::Vector3d(mesh.scale.x, mesh.scale.y, mesh.scale.z);
+                     shape.meshes = loadVisualMesh(mesh, what, shape.mesh_file);
+                   } else {
+                     return;  // nothing a renderer could draw
+                   }
+                   setVisualMaterial(visual, shape);
+                   model.visuals.push_back(std::move(shape));
+                 });
   }
 
   // Adds `link` (reached with the link frame at X_BL in body `body_index`)

@@ -2,6 +2,8 @@
 // position. The smallest useful task: one joint, three observation values.
 #include <manibench/sdk.hpp>
 
+#include "rail.hpp"
+
 #include <cmath>
 #include <random>
 
@@ -9,18 +11,7 @@ namespace {
 
 namespace sdk = manibench::sdk;
 
-const char* kRailUrdf = R"(<?xml version="1.0"?>
-<robot name="rail">
-  <link name="rail"/>
-  <link name="block">
-    <inertial><mass value="0.5"/>
-      <inertia ixx="1e-3" ixy="0" ixz="0" iyy="1e-3" iyz="0" izz="1e-3"/></inertial>
-  </link>
-  <joint name="slide" type="prismatic">
-    <parent link="rail"/><child link="block"/><axis xyz="1 0 0"/>
-    <limit lower="-0.5" upper="0.5" velocity="0.5" effort="20"/>
-  </joint>
-</robot>)";
+using hello_task::kRailUrdf;
 
 class HelloSlider : public sdk::Task {
  public:

@@ -303,10 +303,10 @@ ObservationSpec calcDemoSpec(const PluginRegistry& registry, const DemoDataset& 
   }
   const PolicyLayout layout = env->calcPolicyLayout();
   spec.state_dim = layout.observation_dim;
-  for (const SegmentDescription& s : layout.observation_segments)
+  for (const sdk::Segment& s : layout.observation_segments)
     spec.state_segments.push_back({s.name, s.offset, s.size});
   spec.action_dim = layout.action_dim;
-  for (const SegmentDescription& s : layout.action_segments)
+  for (const sdk::Segment& s : layout.action_segments)
     spec.action_segments.push_back({s.name, s.offset, s.size});
   spec.point_count = dataset.getPointCount();
   spec.mask_count = dataset.getMaskCount();

@@ -190,6 +190,20 @@ std::unique_ptr<Environment> makeEnvironmentOf(const std::string& demos) {
   return makeDemoEnvironment(getBuildTreeRegistry(), reader.getInfo());
 }
 
+// The torch_policy plugin on TorchScript file `model`, acting on the first
+// three recorded observations of `demos`: check(recorded, action) each.
+template <class Check>
+void actOnRecorded(const std::string& demos, const std::string& model, Check check) {
+  const auto env = makeEnvironmentOf(demos);
+  PolicyInstance policy(getBuildTreeRegistry(), "torch_policy", "torchscript: '" + model + "'",
+                        env->calcPolicyLayout());
+  for (const Recorded& r : readObservations(demos, 3)) {
+    Eigen::VectorXd action(2);
+    policy.act(r.state, 0, action, r.visual);
+    check(r, action);
+  }
+}
+
 TEST_F(LearningTraining, ThePolicyPluginActsAsTheNetwork) {
   for (const std::string data : {"reach.h5", "reach_pc.h5", "history"}) {
     SCOPED_TRACE(data);
@@ -267,36 +281,21 @@ torch.jit.save(torch.jit.script(Cloud()), sys.argv[2])
 )";
   const std::string command = "/usr/bin/python3 " + script + " " + state + " " + cloud;
   ASSERT_EQ(std::system(command.c_str()), 0) << command << ": python3-torch is needed (scripts/install-deps)";
-  {
-    const auto env = makeEnvironmentOf(file("reach.h5"));
-    PolicyInstance policy(getBuildTreeRegistry(), "torch_policy", "torchscript: '" + state + "'",
-                          env->calcPolicyLayout());
-    for (const Recorded& r : readObservations(file("reach.h5"), 3)) {
-      Eigen::VectorXd action(2);
-      policy.act(r.state, 0, action, r.visual);
-      for (int j = 0; j < 2; ++j)
-        EXPECT_NEAR(action[j], std::tanh(0.5 * float(r.state[j]) + 0.1), 1e-6);
-    }
-  }
-  {
-    const auto env = makeEnvironmentOf(file("reach_pc.h5"));
-    PolicyInstance policy(getBuildTreeRegistry(), "torch_policy", "torchscript: '" + cloud + "'",
-                          env->calcPolicyLayout());
-    for (const Recorded& r : readObservations(file("reach_pc.h5"), 3)) {
-      Eigen::VectorXd action(2);
-      policy.act(r.state, 0, action, r.visual);
-      double sum = 0, count = 0;
-      const std::size_t n = r.visual.points.size();
-      for (std::size_t p = 0; p < n; ++p)
-        if (r.visual.points.masks[p * r.visual.points.mask_count] != 0) {
-          sum += r.visual.points.xyz[3 * p];
-          ++count;
-        }
-      ASSERT_GT(count, 0) << n << " points, " << r.visual.points.mask_count << " masks, " << r.visual.points.masks.size() << " mask bytes";
-      EXPECT_NEAR(action[0], sum / count, 1e-5);
-      EXPECT_EQ(action[1], 0.25);
-    }
-  }
+  actOnRecorded(file("reach.h5"), state, [](const Recorded& r, const Eigen::VectorXd& action) {
+    for (int j = 0; j < 2; ++j) EXPECT_NEAR(action[j], std::tanh(0.5 * float(r.state[j]) + 0.1), 1e-6);
+  });
+  actOnRecorded(file("reach_pc.h5"), cloud, [](const Recorded& r, const Eigen::VectorXd& action) {
+    double sum = 0, count = 0;
+    const std::size_t n = r.visual.points.size();
+    for (std::size_t p = 0; p < n; ++p)
+      if (r.visual.points.masks[p * r.visual.points.mask_count] != 0) {
+        sum += r.visual.points.xyz[3 * p];
+        ++count;
+      }
+    ASSERT_GT(count, 0) << n << " points, " << r.visual.points.mask_count << " masks, " << r.visual.points.masks.size() << " mask bytes";
+    EXPECT_NEAR(action[0], sum / count, 1e-5);
+    EXPECT_EQ(action[1], 0.25);
+  });
   // And an evaluation through the kit: workers load libtorch after their fork.
   std::ofstream(file("script_policy.yaml")) << "torchscript: '" << state << "'\n";
   const auto r = runCli({"eval", "Reach-v0", "--policy", "torch_policy", "--policy-config", file("script_policy.yaml"),

@@ -40,7 +40,7 @@ std::set<std::string> findBodyLinks(const partnet::Object& object) {
   std::set<std::string> body = {object.getRoot().name};
   for (const partnet::Link& link : object.links) {  // parents come first
     const partnet::Joint* joint = object.findParentJoint(link.name);
-    if (joint != nullptr && joint->type == "fixed" && body.count(joint->parent) > 0) body.insert(link.name);
+    if (joint != nullptr && joint->type == partnet::JointType::kFixed && body.count(joint->parent) > 0) body.insert(link.name);
   }
   return body;
 }
@@ -48,7 +48,7 @@ std::set<std::string> findBodyLinks(const partnet::Object& object) {
 const partnet::Joint* findBail(const partnet::Object& object) {
   const partnet::Joint* first = nullptr;
   for (const partnet::Joint& j : object.joints) {
-    if (j.type != "revolute" && j.type != "continuous") continue;
+    if (j.type != partnet::JointType::kRevolute && j.type != partnet::JointType::kContinuous) continue;
     const partnet::Semantic* s = object.findSemantic(j.child);
     if (s != nullptr && s->label.find("handle") != std::string::npos) return &j;
     if (first == nullptr) first = &j;
@@ -193,7 +193,7 @@ BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, 
 
   if (const partnet::Joint* bail = findBail(object)) {
     model.bail_joint = bail->name;
-    if (bail->limited && bail->type == "revolute") {
+    if (bail->limited && bail->type == partnet::JointType::kRevolute) {
       model.bail_lower = bail->lower;
       model.bail_upper = bail->upper;
     }

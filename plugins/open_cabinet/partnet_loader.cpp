@@ -33,8 +33,8 @@ CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id
     TargetLink t;
     t.link = link.name;
     t.joint = joint->name;
-    const bool revolute = joint->type == "revolute" || joint->type == "continuous";
-    const bool prismatic = joint->type == "prismatic";
+    const bool revolute = joint->type == partnet::JointType::kRevolute || joint->type == partnet::JointType::kContinuous;
+    const bool prismatic = joint->type == partnet::JointType::kPrismatic;
     // semantics.txt says what the part is (a handled lid or a sliding door
     // is no target); without an entry for the link, its joint decides.
     if (const partnet::Semantic* semantic = object.findSemantic(link.name)) {

@@ -126,27 +126,30 @@ std::string geometry(const Part& p) {
 // One link: the combined inertia of its colliding parts about their centre
 // of mass, then a visual and a collision per part.
 std::string writeLink(const std::string& name, const std::vector<Part>& parts) {
+  struct PartMass {
+    const Part* part;
+    double m;
+    Eigen::Matrix3d i;  // about the part's centre, in its frame
+  };
+  std::vector<PartMass> colliding;
+  for (const Part& p : parts)
+    if (p.collision) {
+      colliding.push_back({&p, 0, Eigen::Matrix3d::Zero()});
+      calcMass(p, colliding.back().m, colliding.back().i);
+    }
   double mass = 0;
   Eigen::Vector3d com = Eigen::Vector3d::Zero();
-  for (const Part& p : parts) {
-    if (!p.collision) continue;
-    double m;
-    Eigen::Matrix3d i;
-    calcMass(p, m, i);
-    mass += m;
-    com += m * p.pose.translation();
+  for (const PartMass& c : colliding) {
+    mass += c.m;
+    com += c.m * c.part->pose.translation();
   }
   if (!(mass > 0)) throw Error("chair generator: link '" + name + "' has no mass", MB_ERROR);  // a generator bug
   com /= mass;
   Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
-  for (const Part& p : parts) {
-    if (!p.collision) continue;
-    double m;
-    Eigen::Matrix3d i;
-    calcMass(p, m, i);
-    const Eigen::Matrix3d r = p.pose.linear();
-    const Eigen::Vector3d d = p.pose.translation() - com;
-    inertia += r * i * r.transpose() + m * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose());
+  for (const PartMass& c : colliding) {
+    const Eigen::Matrix3d r = c.part->pose.linear();
+    const Eigen::Vector3d d = c.part->pose.translation() - com;
+    inertia += r * c.i * r.transpose() + c.m * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose());
   }
   std::ostringstream x;
   x << "  <link name=\"" << name << "\">\n    <inertial><origin xyz=\"" << vec(com) << "\"/><mass value=\""

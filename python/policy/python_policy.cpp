@@ -79,7 +79,7 @@ py::array copyMasks(const std::uint8_t* data, std::vector<py::ssize_t> shape) {
 
 py::list toSegments(const sdk::Layout& layout) {
   py::list out;
-  for (const sdk::SegmentInfo& s : layout.segments)
+  for (const sdk::Segment& s : layout.segments)
     out.append(py::dict(py::arg("name") = s.name, py::arg("offset") = s.offset,
                         py::arg("size") = s.size));
   return out;

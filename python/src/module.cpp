@@ -78,9 +78,9 @@ py::array copyMasks(const std::vector<std::uint8_t>& bytes, std::vector<py::ssiz
   return out;
 }
 
-py::list toSegments(const std::vector<mb::SegmentDescription>& segments) {
+py::list toSegments(const std::vector<mb::sdk::Segment>& segments) {
   py::list out;
-  for (const mb::SegmentDescription& s : segments)
+  for (const mb::sdk::Segment& s : segments)
     out.append(py::dict(py::arg("name") = s.name, py::arg("offset") = s.offset,
                         py::arg("size") = s.size, py::arg("description") = s.description));
   return out;

@@ -22,6 +22,7 @@ using testing::getBuildTreeRegistry;
 using testing::runCli;
 
 using testing::contains;
+using testing::expectMentions;
 
 // A file with `text`, removed with the object.
 class TempYaml {
@@ -65,14 +66,10 @@ TEST(Cli, BenchReportsSpeedResetsAndTheIntegratorsWork) {
   // Reach-v0: 3 episodes of 100 steps over its train objects.
   const auto r = runCli({"bench", "Reach-v0", "--policy", "zero", "--steps", "300"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(contains(r.out, "integrator implicit_euler")) << r.out;
-  EXPECT_TRUE(contains(r.out, "300 env steps in 3 episodes")) << r.out;
-  EXPECT_TRUE(contains(r.out, "env steps/s")) << r.out;
-  EXPECT_TRUE(contains(r.out, "resets: the first ")) << r.out;
-  EXPECT_TRUE(contains(r.out, "ms per reset (2, a new object each)")) << r.out;
   // A fixed step: 5 control ticks of 2 ms steps, one evaluation each.
-  EXPECT_TRUE(contains(r.out, "physics per env step: 25.0 integrator steps")) << r.out;
-  EXPECT_TRUE(contains(r.out, "25.0 evaluations of the dynamics")) << r.out;
+  expectMentions(r.out, {"integrator implicit_euler", "300 env steps in 3 episodes", "env steps/s",
+                         "resets: the first ", "ms per reset (2, a new object each)",
+                         "physics per env step: 25.0 integrator steps", "25.0 evaluations of the dynamics"});
   const auto cpodes = runCli({"bench", "Reach-v0", "--policy", "zero", "--steps", "20", "--set",
                               "physics.integrator=cpodes"});
   ASSERT_EQ(cpodes.exit_code, 0) << cpodes.err;
@@ -100,12 +97,8 @@ TEST(Cli, ListReportsBrokenLibrariesAndKeepsWorking) {
 TEST(Cli, InfoPrintsLayouts) {
   const auto r = runCli({"info", "Reach-v0"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(contains(r.out, "observation (state), 15 values")) << r.out;
-  EXPECT_TRUE(contains(r.out, "joint_positions")) << r.out;
-  EXPECT_TRUE(contains(r.out, "action, 2 values")) << r.out;
-  EXPECT_TRUE(contains(r.out, "shoulder")) << r.out;
-  EXPECT_TRUE(contains(r.out, "success conditions: reached static success")) << r.out;
-  EXPECT_TRUE(contains(r.out, "objects: 8 train, 4 test")) << r.out;
+  expectMentions(r.out, {"observation (state), 15 values", "joint_positions", "action, 2 values", "shoulder",
+                         "success conditions: reached static success", "objects: 8 train, 4 test"});
 }
 
 TEST(Cli, RunPrintsStepsReturnAndFlags) {

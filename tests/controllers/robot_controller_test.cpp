@@ -173,13 +173,8 @@ TEST(MobilePandaController, RejectsNaNActions) {
   t.env.step(t.zero());
   Eigen::VectorXd bad = t.zero();
   bad[5] = std::nan("");
-  try {
-    t.env.step(bad);
-    FAIL() << "a NaN action was accepted";
-  } catch (const InvalidAction& e) {
-    EXPECT_NE(std::string(e.what()).find("step 1"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("action[5] is NaN"), std::string::npos) << e.what();
-  }
+  testing::expectMentions(testing::catchMessage<InvalidAction>([&] { t.env.step(bad); }),
+                          {"step 1", "action[5] is NaN"});
 }
 
 // Issue 4: the joint_position controller (chosen in the options, no
@@ -389,13 +384,8 @@ TEST(MobilePandaEeController, RejectsBadActionsNamingStepAndIndex) {
   for (int i = 0; i < 3; ++i) t.env.step(t.zero());
   Eigen::VectorXd bad = t.zero();
   bad[8] = -INFINITY;
-  try {
-    t.env.step(bad);
-    FAIL() << "an infinite action was accepted";
-  } catch (const InvalidAction& e) {
-    EXPECT_NE(std::string(e.what()).find("step 3"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("action[8] is infinite"), std::string::npos) << e.what();
-  }
+  testing::expectMentions(testing::catchMessage<InvalidAction>([&] { t.env.step(bad); }),
+                          {"step 3", "action[8] is infinite"});
   try {
     t.env.step(Eigen::VectorXd::Zero(12));  // mobile_panda's size
     FAIL() << "a 12-value action was accepted";

@@ -27,27 +27,8 @@ const std::string kMini = std::string(MANIBENCH_TEST_SOURCE_DIR) + "/tests/fixtu
 using manibench::testing::readFile;
 
 // A copy of partnet_mini in a fresh temporary folder, to break.
-class BrokenCopy {
- public:
-  BrokenCopy() {
-    root_ = fs::temp_directory_path() / ("partnet_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter_++));
-    fs::remove_all(root_);
-    fs::copy(kMini, root_, fs::copy_options::recursive);
-  }
-  ~BrokenCopy() { fs::remove_all(root_); }
-  std::string folder() const { return root_.string(); }
-  std::string file(const std::string& name) const { return (root_ / name).string(); }
-  void replace(const std::string& name, const std::string& from, const std::string& to) {
-    std::string text = readFile(file(name));
-    const std::size_t at = text.find(from);
-    ASSERT_NE(at, std::string::npos) << from;
-    text.replace(at, from.size(), to);
-    std::ofstream(file(name)) << text;
-  }
-
- private:
-  fs::path root_;
-  static inline int counter_ = 0;
+struct BrokenCopy : manibench::testing::FixtureCopy {
+  BrokenCopy() : FixtureCopy("partnet_mini") {}
 };
 
 std::string errorOf(const std::function<void()>& f) {
@@ -87,14 +68,14 @@ TEST(PartNet, ReadsTheUrdfAsAKinematicModel) {
   }
   const partnet::Joint* door = o.findJoint("joint_0");
   ASSERT_NE(door, nullptr);
-  EXPECT_EQ(door->type, "revolute");
+  EXPECT_EQ(door->type, partnet::JointType::kRevolute);
   EXPECT_EQ(door->parent, "link_2");
   EXPECT_EQ(door->child, "link_0");
   EXPECT_TRUE(door->axis.isApprox(Eigen::Vector3d(0, -1, 0)));
   EXPECT_TRUE(door->limited);
   EXPECT_DOUBLE_EQ(door->upper, 1.57);
   EXPECT_TRUE(door->origin.translation().isApprox(Eigen::Vector3d(-0.295, 0, 0.22)));
-  EXPECT_EQ(o.findJoint("joint_1")->type, "prismatic");
+  EXPECT_EQ(o.findJoint("joint_1")->type, partnet::JointType::kPrismatic);
   EXPECT_DOUBLE_EQ(o.findJoint("joint_1")->upper, 0.3);
   EXPECT_FALSE(o.findJoint("joint_2")->isMovable());
   // Y-up turned Z-up by the base joint: the body link's y axis is world z.

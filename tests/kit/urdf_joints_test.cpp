@@ -17,15 +17,6 @@ namespace {
 using testing::catchMessage;
 using testing::expectMentions;
 
-const char* typeName(JointType type) {
-  switch (type) {
-    case JointType::Revolute: return "revolute";
-    case JointType::Continuous: return "continuous";
-    case JointType::Prismatic: return "prismatic";
-  }
-  return "?";
-}
-
 // The SDK's reading of `path` equals the host's joint vector of it.
 void expectSameAsTheHost(const kit::urdf::UrdfJoints& inspected, Scene& scene, int articulation) {
   const std::vector<JointDescription>& host = scene.getJoints(articulation);
@@ -33,7 +24,9 @@ void expectSameAsTheHost(const kit::urdf::UrdfJoints& inspected, Scene& scene, i
   for (std::size_t i = 0; i < host.size(); ++i) {
     SCOPED_TRACE("joint " + std::to_string(i) + " " + host[i].name);
     EXPECT_EQ(inspected.joints[i].name, host[i].name);
-    EXPECT_EQ(inspected.joints[i].type, typeName(host[i].type));
+    // Both number joint types as abi.h's MB_JOINT_*.
+    EXPECT_EQ(static_cast<int>(inspected.joints[i].type), static_cast<int>(host[i].type))
+        << kit::urdf::toString(inspected.joints[i].type);
     EXPECT_EQ(inspected.joints[i].lower, host[i].lower);
     EXPECT_EQ(inspected.joints[i].upper, host[i].upper);
   }
@@ -93,6 +86,12 @@ TEST(UrdfJoints, BadFilesAreRefusedNamingThem) {
                    kit::urdf::inspectUrdf("<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/></robot>", "two.urdf");
                  }),
                  {"two.urdf", "expected one root link, found 2"});
+  expectMentions(catchMessage<sdk::Error>([] {
+                   kit::urdf::inspectUrdf("<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/><joint name=\"j\" "
+                                          "type=\"floating\"><parent link=\"a\"/><child link=\"b\"/></joint></robot>",
+                                          "float.urdf");
+                 }),
+                 {"float.urdf", "joint 'j'", "'floating'"});
   expectMentions(
       catchMessage<sdk::Error>([] {
         kit::urdf::inspectUrdf("<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/><joint name=\"j\" type=\"revolute\">"

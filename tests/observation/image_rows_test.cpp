@@ -19,22 +19,18 @@ namespace {
 
 using image_rows::InstructionSet;
 
-std::vector<InstructionSet> getRunnableSets() {
-  std::vector<InstructionSet> sets = {InstructionSet::Scalar};
-  const InstructionSet best = image_rows::getBestInstructionSet();
-  if (best == InstructionSet::Sse2 || best == InstructionSet::Avx2)
-    sets.push_back(InstructionSet::Sse2);
-  if (best == InstructionSet::Avx2) sets.push_back(InstructionSet::Avx2);
-  return sets;
-}
+// An instruction set this processor runs, named for the test's trace.
+struct NamedSet {
+  InstructionSet set;
+  std::string name;
+};
 
-std::string getName(InstructionSet set) {
-  switch (set) {
-    case InstructionSet::Scalar: return "scalar";
-    case InstructionSet::Sse2: return "sse2";
-    case InstructionSet::Avx2: return "avx2";
-  }
-  return "?";
+std::vector<NamedSet> getRunnableSets() {
+  std::vector<NamedSet> sets = {{InstructionSet::Scalar, "scalar"}};
+  const InstructionSet best = image_rows::getBestInstructionSet();
+  if (best == InstructionSet::Sse2 || best == InstructionSet::Avx2) sets.push_back({InstructionSet::Sse2, "sse2"});
+  if (best == InstructionSet::Avx2) sets.push_back({InstructionSet::Avx2, "avx2"});
+  return sets;
 }
 
 constexpr std::uint32_t kVisualCount = 20;
@@ -78,8 +74,8 @@ bool isHitByDefinition(std::uint32_t segment, float depth) {
 // corrects instead of dividing, which is exact only because it is for each
 // of these 256 inputs.
 TEST(ImageRows, RgbOfEveryByteValueIsTheQuotient) {
-  for (InstructionSet set : getRunnableSets()) {
-    SCOPED_TRACE(getName(set));
+  for (const auto& [set, name] : getRunnableSets()) {
+    SCOPED_TRACE(name);
     std::vector<std::uint8_t> rgba(4 * 256);
     for (std::size_t col = 0; col < 256; ++col)
       for (std::size_t i = 0; i < 4; ++i) rgba[4 * col + i] = std::uint8_t(col + 85 * i);
@@ -95,10 +91,10 @@ TEST(ImageRows, RgbOfEveryByteValueIsTheQuotient) {
 TEST(ImageRows, RgbIsEachByteOver255InEveryVariant) {
   std::mt19937 random(1);
   const float kCanary = -7.0f;
-  for (InstructionSet set : getRunnableSets())
+  for (const auto& [set, name] : getRunnableSets())
     for (std::size_t width : kWidths)
       for (bool pad : {false, true}) {
-        SCOPED_TRACE(getName(set) + " width " + std::to_string(width) + (pad ? " pad" : ""));
+        SCOPED_TRACE(name + " width " + std::to_string(width) + (pad ? " pad" : ""));
         const Row row = makeRow(width, random);
         const std::size_t stride = 9;  // three cameras' rgb
         std::vector<float> rgb(stride * width + 4, kCanary);
@@ -148,9 +144,9 @@ TEST(ImageRows, DepthIsTheLinearDepthOfHitPixelsInEveryVariant) {
   const double near = 0.01, far = 10.0;
   const float kCanary = -7.0f;
   std::size_t hits = 0, misses = 0;
-  for (InstructionSet set : getRunnableSets())
+  for (const auto& [set, name] : getRunnableSets())
     for (std::size_t width : kWidths) {
-      SCOPED_TRACE(getName(set) + " width " + std::to_string(width));
+      SCOPED_TRACE(name + " width " + std::to_string(width));
       const Row row = makeRow(width, random);
       const std::size_t stride = 3;
       std::vector<float> out(stride * width, kCanary);

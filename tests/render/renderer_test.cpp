@@ -1,5 +1,6 @@
 // The headless renderer against real EGL (llvmpipe on CI) and real Scenes:
-// metric depth, point clouds, segmentation, lighting, fork safety, memory.
+// metric depth, point clouds, segmentation, lighting, threads, memory.
+// EGL across fork() is renderer_fork_test.cpp.
 #include <manibench/config.hpp>
 #include <manibench/environment.hpp>
 #include <manibench/renderer.hpp>
@@ -9,19 +10,18 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <csignal>
-#include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <string>
-#include <sys/wait.h>
 #include <thread>
-#include <unistd.h>
 
+#include "render_scenes.hpp"
 #include "test_support.hpp"
 
 namespace manibench {
 namespace {
+
+using namespace render_test;
 
 CameraSpec makeCamera(const std::string& name, int width, int height,
                       double fovy = CameraSpec().fovy) {
@@ -31,22 +31,6 @@ CameraSpec makeCamera(const std::string& name, int width, int height,
   camera.height = height;
   camera.fovy = fovy;
   return camera;
-}
-
-std::string inertial() {
-  return "<inertial><mass value='1'/><inertia ixx='0.01' iyy='0.01' izz='0.01' ixy='0' "
-         "ixz='0' iyz='0'/></inertial>";
-}
-
-// One link with one box visual of full extents (x, y, z) and color.
-std::string boxUrdf(const std::string& name, double x, double y, double z,
-                    const std::string& rgba = "0.8 0.8 0.8 1") {
-  std::ostringstream s;
-  s << "<robot name='" << name << "'><link name='" << name << "'>" << inertial()
-    << "<visual><geometry><box size='" << x << " " << y << " " << z
-    << "'/></geometry><material name='" << name << "_color'><color rgba='" << rgba
-    << "'/></material></visual></link></robot>";
-  return s.str();
 }
 
 // A base with a box on a prismatic joint along y (the moving link).
@@ -60,18 +44,6 @@ std::string sliderUrdf() {
          "</robot>";
 }
 
-Pose at(double x, double y, double z, double yaw = 0) {
-  Pose p;
-  p.position = Eigen::Vector3d(x, y, z);
-  p.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
-  return p;
-}
-
-int countHits(const CameraImages& images) {
-  return static_cast<int>(std::count_if(images.visual.begin(), images.visual.end(),
-                                        [](int v) { return v >= 0; }));
-}
-
 // Signed distance-like measure of p (box frame) to the surface of a box of
 // half extents h: 0 on the surface.
 double boxSurfaceDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& h) {
@@ -81,169 +53,7 @@ double boxSurfaceDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& h) {
   return std::abs(outside + inside);
 }
 
-// Waits for a child up to `seconds`, killing it on timeout; returns the
-// exit code, 128 + signal if signalled, or -1 on timeout.
-int waitChild(pid_t pid, double seconds) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
-  int status = 0;
-  while (waitpid(pid, &status, WNOHANG) == 0) {
-    if (std::chrono::steady_clock::now() > deadline) {
-      kill(pid, SIGKILL);
-      waitpid(pid, &status, 0);
-      return -1;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  if (WIFEXITED(status)) return WEXITSTATUS(status);
-  return 128 + WTERMSIG(status);
-}
-
 using testing::readRssKb;
-
-// Runs first (declaration order) so that, when this program runs all its
-// tests in one process, no context exists yet; ctest runs each test alone.
-TEST(RendererFork, WorkerForkedBeforeEglRendersWithItsOwnContext) {
-  if (RenderContext::exists()) {
-    GTEST_SKIP() << "this process already created its EGL context; run this test alone";
-  }
-  std::fflush(nullptr);
-  const pid_t pid = fork();
-  ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    alarm(60);
-    int code = 0;
-    try {
-      Scene scene;
-      scene.addUrdfString(boxUrdf("plate", 0.02, 10, 10), "", "plate", at(2, 0, 0), true);
-      scene.finalize();
-      SceneRenderer renderer(scene);
-      CameraImages images;
-      CameraSpec camera;
-      camera.name = "front";
-      renderer.render(camera, Pose(), images);
-      code = countHits(images) == camera.width * camera.height ? 0 : 2;
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "child: %s\n", e.what());
-      code = 3;
-    }
-    _exit(code);
-  }
-  EXPECT_EQ(waitChild(pid, 90), 0) << "the forked worker could not render (or hung)";
-  EXPECT_FALSE(RenderContext::exists()) << "the child's context must not appear in the parent";
-}
-
-// Runs `body` in a forked child of a process without EGL state (skips when
-// this process already has it) and returns the child's exit code.
-template <typename Body>
-int runInFreshChild(Body body) {
-  std::fflush(nullptr);
-  const pid_t pid = fork();
-  if (pid < 0) return -2;
-  if (pid == 0) {
-    alarm(60);
-    int code = 99;
-    try {
-      code = body();
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "child: %s\n", e.what());
-    }
-    _exit(code);
-  }
-  return waitChild(pid, 90);
-}
-
-TEST(RendererFork, RefusingSoftwareRenderingSaysWhatWasFound) {
-  if (RenderContext::exists()) GTEST_SKIP() << "needs a process without EGL; run alone";
-  const int code = runInFreshChild([] {
-    RenderOptions options;
-    options.allow_software = false;
-    try {
-      const RenderContext& context = RenderContext::get(options);
-      return context.getInfo().software ? 1 : 0;  // a GPU machine: fine
-    } catch (const RenderError& e) {
-      const std::string message = e.what();
-      std::fprintf(stderr, "child: %s\n", e.what());
-      return message.find("software rendering refused") != std::string::npos &&
-                     message.find("EGL_MESA_device_software") != std::string::npos &&
-                     message.find("NVIDIA") != std::string::npos
-                 ? 0
-                 : 2;
-    }
-  });
-  EXPECT_EQ(code, 0);
-}
-
-TEST(RendererFork, EglFailureNamesWhatWasTriedAndTheFix) {
-  if (RenderContext::exists()) GTEST_SKIP() << "needs a process without EGL; run alone";
-  const int code = runInFreshChild([] {
-    // GLVND reads this on the process's first EGL call: no vendor at all.
-    setenv("__EGL_VENDOR_LIBRARY_FILENAMES", "/nonexistent/none.json", 1);
-    try {
-      RenderContext::get();
-      return 1;
-    } catch (const RenderError& e) {
-      const std::string message = e.what();
-      for (const char* expected : {"EGL_EXT_platform_device", "EGL_MESA_platform_surfaceless",
-                                   "/nonexistent/none.json", "50_mesa.json", "libegl-mesa0",
-                                   "libgl1-mesa-dri", "NVIDIA"}) {
-        if (message.find(expected) == std::string::npos) {
-          std::fprintf(stderr, "child: '%s' missing from: %s\n", expected, e.what());
-          return 2;
-        }
-      }
-      return 0;
-    }
-  });
-  EXPECT_EQ(code, 0);
-}
-
-TEST(RendererFork, ChildUsingTheParentsContextGetsAClearError) {
-  Scene scene;
-  scene.addUrdfString(boxUrdf("plate", 0.02, 10, 10), "", "plate", at(2, 0, 0), true);
-  scene.finalize();
-  SceneRenderer renderer(scene);
-  CameraSpec camera;
-  camera.name = "front";
-  CameraImages images;
-  renderer.render(camera, Pose(), images);
-  ASSERT_GT(countHits(images), 0);
-
-  std::fflush(nullptr);
-  const pid_t pid = fork();
-  ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    alarm(30);
-    int code = 10;
-    try {
-      renderer.render(camera, Pose(), images);
-      code = 11;  // must not render
-    } catch (const RenderError& e) {
-      const std::string message = e.what();
-      code = message.find("fork") != std::string::npos &&
-                     message.find(std::to_string(getppid())) != std::string::npos
-                 ? 0
-                 : 12;
-      if (code != 0) std::fprintf(stderr, "child: unclear message: %s\n", e.what());
-    }
-    if (code == 0) {
-      try {
-        RenderContext::get();
-        code = 13;
-      } catch (const RenderError&) {
-      }
-      try {
-        SceneRenderer other(scene);
-        code = 14;
-      } catch (const RenderError&) {
-      }
-    }
-    _exit(code);  // no destructors: the renderer belongs to the parent
-  }
-  EXPECT_EQ(waitChild(pid, 60), 0) << "exit 11: rendered in the child; -1: hung";
-  // The parent is unaffected.
-  renderer.render(camera, Pose(), images);
-  EXPECT_EQ(countHits(images), camera.width * camera.height);
-}
 
 TEST(Renderer, DescribesTheDeviceAndRendererOnce) {
   RenderContext& context = RenderContext::get();
@@ -547,10 +357,8 @@ TEST(Renderer, LightingIsAmbientPlusLambert) {
 }
 
 TEST(Renderer, AnyThreadMayRenderOneAtATime) {
-  Scene scene;
-  scene.addUrdfString(boxUrdf("plate", 0.02, 10, 10), "", "plate", at(2, 0, 0), true);
-  scene.finalize();
-  SceneRenderer first(scene), second(scene);
+  PlateScene plate;
+  SceneRenderer first(plate.scene), second(plate.scene);
   CameraSpec camera = makeCamera("front", 32, 32);
   std::vector<int> hits(4, 0);
   std::vector<std::thread> threads;
@@ -587,10 +395,8 @@ TEST(Renderer, TessellatesPrimitivesCoarselyAndCountsTriangles) {
 }
 
 TEST(Renderer, RejectsBadCamerasByName) {
-  Scene scene;
-  scene.addUrdfString(boxUrdf("plate", 0.02, 10, 10), "", "plate", at(2, 0, 0), true);
-  scene.finalize();
-  SceneRenderer renderer(scene);
+  PlateScene plate;
+  SceneRenderer renderer(plate.scene);
   CameraImages images;
   CameraSpec camera;
   camera.name = "hand";

@@ -142,6 +142,18 @@ TEST(SceneTest, NaNDriveForceDivergesNamingTheLink) {
   EXPECT_TRUE(scene.getJointPositions(s).allFinite());
 }
 
+// The spinner alone, finalized, its drive pulling to q = 1 with stiffness
+// 1e30 (h^2 k / I = 4e25 at 10 ms); returns its articulation.
+int addAbsurdlyDrivenSpinner(Scene& scene) {
+  const int s = scene.addUrdfString(spinnerUrdf(0.1, ""), "", "spinner", Pose(), true);
+  scene.finalize();
+  DriveCommand absurd;
+  absurd.position_target = 1;
+  absurd.stiffness = 1e30;
+  scene.setDriveCommands(s, {0}, {absurd});
+  return s;
+}
+
 TEST(SceneTest, AbsurdDriveStiffnessDivergesNamingTheLink) {
   // implicit_euler takes drive stiffness into its step and stays stable at
   // any stiffness (ImplicitEulerIsStableAtAbsurdStiffness below).
@@ -149,12 +161,7 @@ TEST(SceneTest, AbsurdDriveStiffnessDivergesNamingTheLink) {
     PhysicsSettings settings;
     settings.integrator = parseIntegrator(integrator);
     Scene scene(settings);
-    const int s = scene.addUrdfString(spinnerUrdf(0.1, ""), "", "spinner", Pose(), true);
-    scene.finalize();
-    DriveCommand absurd;
-    absurd.position_target = 1;
-    absurd.stiffness = 1e30;
-    scene.setDriveCommands(s, {0}, {absurd});
+    const int s = addAbsurdlyDrivenSpinner(scene);
     try {
       scene.advance(0.01);
       FAIL() << integrator << ": no SimulationDiverged";
@@ -174,14 +181,8 @@ TEST(SceneTest, ImplicitEulerIsStableAtAbsurdStiffnessAndDivergesOnAbsurdForce) 
   PhysicsSettings settings;
   settings.integrator = Integrator::ImplicitEuler;
   Scene scene(settings);
-  const int s = scene.addUrdfString(spinnerUrdf(0.1, ""), "", "spinner", Pose(), true);
-  scene.finalize();
-  // Stiffness 1e30 (h^2 k / I = 4e25): the drive lands on its target in
-  // one step and holds it.
-  DriveCommand absurd;
-  absurd.position_target = 1;
-  absurd.stiffness = 1e30;
-  scene.setDriveCommands(s, {0}, {absurd});
+  // The drive lands on its target in one step and holds it.
+  const int s = addAbsurdlyDrivenSpinner(scene);
   for (int k = 0; k < 10; ++k) scene.advance(0.01);
   EXPECT_NEAR(scene.getJointPositions(s)[0], 1.0, 1e-9);
   EXPECT_NEAR(scene.getJointVelocities(s)[0], 0.0, 1e-6);

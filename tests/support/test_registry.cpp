@@ -25,7 +25,7 @@ const PluginRegistry& getRobotTestbedRegistry() {
 }
 
 uint32_t getObservationOffset(const Environment& env, const std::string& name) {
-  for (const SegmentDescription& s : env.getTaskDescription().observation_segments)
+  for (const sdk::Segment& s : env.getTaskDescription().observation_segments)
     if (s.name == name) return s.offset;
   throw std::invalid_argument("no observation segment '" + name + "'");
 }

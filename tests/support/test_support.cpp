@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -24,6 +25,33 @@ std::string readFile(const std::string& path) {
   std::stringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+FixtureCopy::FixtureCopy(const std::string& fixture) {
+  static int counter = 0;
+  const std::filesystem::path root = std::filesystem::temp_directory_path() /
+                                     ("manibench_" + fixture + "_" + std::to_string(::getpid()) + "_" +
+                                      std::to_string(counter++));
+  std::filesystem::remove_all(root);
+  std::filesystem::copy(std::string(MANIBENCH_TEST_SOURCE_DIR) + "/tests/fixtures/" + fixture, root,
+                        std::filesystem::copy_options::recursive);
+  folder_ = root.string();
+}
+
+FixtureCopy::~FixtureCopy() {
+  std::error_code ignored;
+  std::filesystem::remove_all(folder_, ignored);
+}
+
+void FixtureCopy::replace(const std::string& name, const std::string& from, const std::string& to) {
+  std::string text = readFile(file(name));
+  const std::size_t at = text.find(from);
+  if (at == std::string::npos) {
+    ADD_FAILURE() << "'" << from << "' is not in " << file(name);
+    return;
+  }
+  text.replace(at, from.size(), to);
+  std::ofstream(file(name)) << text;
 }
 
 CommandResult runCli(const std::vector<std::string>& arguments,

@@ -33,6 +33,24 @@ void expectMentions(const std::string& message, const std::vector<std::string>& 
 // The bytes of a file ("" when it cannot be read).
 std::string readFile(const std::string& path);
 
+// A copy of tests/fixtures/<fixture> in a fresh temporary folder, to
+// change or break; removed with the object.
+class FixtureCopy {
+ public:
+  explicit FixtureCopy(const std::string& fixture);
+  ~FixtureCopy();
+  const std::string& folder() const { return folder_; }
+  std::string file(const std::string& name) const { return folder_ + "/" + name; }
+  // Replaces the first `from` in file `name` by `to`; a test failure when
+  // `from` is not there.
+  void replace(const std::string& name, const std::string& from, const std::string& to);
+  FixtureCopy(const FixtureCopy&) = delete;  // one owner removes the folder
+  FixtureCopy& operator=(const FixtureCopy&) = delete;
+
+ private:
+  std::string folder_;
+};
+
 // This process's resident memory (VmRSS), kB; -1 if unknown.
 long readRssKb();
 

@@ -25,7 +25,7 @@ constexpr MotionKey kMotionKeys[] = {
 };
 
 int findSegment(const ControllerDescription& controller, const std::string& name, uint32_t size) {
-  for (const SegmentDescription& s : controller.action_segments)
+  for (const sdk::Segment& s : controller.action_segments)
     if (s.name == name) {
       if (s.size != size)
         throw InvalidArgument("teleoperation: the controller '" + controller.name +

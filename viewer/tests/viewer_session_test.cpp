@@ -33,7 +33,7 @@ ControllerDescription makeEeController(bool dual) {
   c.name = "mobile_panda_ee";
   uint32_t offset = 0;
   const auto add = [&](const std::string& name, uint32_t size) {
-    c.action_segments.push_back({name, offset, size, ""});
+    c.action_segments.push_back({name, size, "", offset});
     offset += size;
   };
   for (const char* base : {"base_forward", "base_left", "base_yaw", "lift"}) add(base, 1);
@@ -107,7 +107,7 @@ TEST(Teleop, AControllerWithoutEndEffectorSegmentsIsRefusedNamingTheFix) {
   ControllerDescription joints;
   joints.name = "joint_velocity";
   joints.action_dim = 2;
-  joints.action_segments = {{"shoulder", 0, 1, ""}, {"elbow", 1, 1, ""}};
+  joints.action_segments = {{"shoulder", 1, "", 0}, {"elbow", 1, "", 1}};
   expectMentions(catchMessage<InvalidArgument>([&] { findTeleopLayout(joints); }),
                  {"joint_velocity", "base_forward", "--controller mobile_panda_ee", "--policy"});
 }

@@ -35,21 +35,29 @@ ShapeGeometry ShapeGeometry::makeBox(const Vec3& half) {
   return g;
 }
 
-ShapeGeometry ShapeGeometry::makeCapsule(double radius, double half_length) {
+namespace {
+
+// A capsule or a cylinder: a radius about the local z axis, a half length
+// along it.
+ShapeGeometry makeAxial(ShapeKind kind, double radius, double half_length) {
   ShapeGeometry g;
-  g.kind = ShapeKind::Capsule;
+  g.kind = kind;
   g.radius = radius;
   g.half_length = half_length;
+  return g;
+}
+
+}  // namespace
+
+ShapeGeometry ShapeGeometry::makeCapsule(double radius, double half_length) {
+  ShapeGeometry g = makeAxial(ShapeKind::Capsule, radius, half_length);
   g.fcl_geometry = std::make_shared<fcl::Capsuled>(radius, 2 * half_length);
   g.fcl_core = std::make_shared<fcl::Capsuled>(0.0, 2 * half_length);
   return g;
 }
 
 ShapeGeometry ShapeGeometry::makeCylinder(double radius, double half_length) {
-  ShapeGeometry g;
-  g.kind = ShapeKind::Cylinder;
-  g.radius = radius;
-  g.half_length = half_length;
+  ShapeGeometry g = makeAxial(ShapeKind::Cylinder, radius, half_length);
   g.fcl_geometry = std::make_shared<fcl::Cylinderd>(radius, 2 * half_length);
   return g;
 }

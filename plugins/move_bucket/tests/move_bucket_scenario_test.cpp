@@ -36,7 +36,7 @@ mb::Pose getPose(const Eigen::VectorXd& s, uint32_t at) {
 }
 
 uint32_t findAction(const mb::Environment& env, const std::string& name) {
-  for (const mb::SegmentDescription& a : env.getControllerDescription().action_segments)
+  for (const mb::sdk::Segment& a : env.getControllerDescription().action_segments)
     if (a.name == name) return a.offset;
   ADD_FAILURE() << "no action " << name;
   return 0;

@@ -78,28 +78,21 @@ TEST(OpenCabinetScenario, PartNetFolderReplacesTheGenerator) {
 // A user's folder with test objects only (every id in test.txt): the test
 // split runs; only the train split is empty.
 TEST(OpenCabinetScenario, APartNetFolderOfTestObjectsOnlyRuns) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("manibench_partnet_test_only_" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::copy(std::string(MANIBENCH_TEST_SOURCE_DIR) + "/tests/fixtures/partnet_mini", dir,
-                        std::filesystem::copy_options::recursive);
+  const mb::testing::FixtureCopy copy("partnet_mini");
+  const std::filesystem::path dir = copy.folder();
   std::ofstream(dir / "test.txt") << "100001\n100002\n";
   ExpertSetup s = makeExpertSetup("OpenCabinetDrawer-v0", {"task.partnet_dir=" + dir.string()});
   EXPECT_TRUE(s.env->listObjects("train").empty());
   EXPECT_EQ(s.env->listObjects("test"), (std::vector<std::string>{"100001_link_1", "100002_link_1"}));
   s.env->reset("100002_link_1", 0);
   EXPECT_EQ(s.env->getObjectId(), "100002_link_1");
-  std::filesystem::remove_all(dir);
 }
 
 // A user's folder: semantics.txt decides what a handled part is, and a
 // malformed object is skipped with its reason while the others load.
 TEST(OpenCabinetScenario, PartNetSemanticsDecideTargetsAndABrokenObjectIsSkipped) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("manibench_partnet_skip_" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::copy(std::string(MANIBENCH_TEST_SOURCE_DIR) + "/tests/fixtures/partnet_mini", dir,
-                        std::filesystem::copy_options::recursive);
+  const mb::testing::FixtureCopy copy("partnet_mini");
+  const std::filesystem::path dir = copy.folder();
   // 100001's hinged part is a lid now (it keeps its handle): no door.
   std::ofstream(dir / "100001" / "semantics.txt") << "link_0 hinge lid\nlink_1 slider drawer\nlink_2 heavy cabinet_body\n";
   std::filesystem::create_directories(dir / "100003");
@@ -122,7 +115,6 @@ TEST(OpenCabinetScenario, PartNetSemanticsDecideTargetsAndABrokenObjectIsSkipped
   EXPECT_EQ(warnings.find("100001"), std::string::npos) << "100001 has a drawer: " << warnings;
   // The skipped object's fixed-object environment says why.
   EXPECT_THROW(drawer.env->reset("100003_link_1", 0), std::exception);
-  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

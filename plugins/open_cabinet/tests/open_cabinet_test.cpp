@@ -269,7 +269,7 @@ TEST(OpenCabinet, VisualModesPassOnlyTheRobotState) {
   EXPECT_EQ(layout.observation_dim, agent_dim);
   ASSERT_EQ(cloud_env->getObservation().size(), Eigen::Index(agent_dim));
   EXPECT_EQ(cloud_env->getObservation(), state_env->getObservation().head(agent_dim));
-  for (const mb::SegmentDescription& s : layout.observation_segments) {
+  for (const mb::sdk::Segment& s : layout.observation_segments) {
     EXPECT_LE(s.offset + s.size, agent_dim) << s.name;
     EXPECT_EQ(s.name.find("target"), std::string::npos) << s.name;
     EXPECT_EQ(s.name.find("handle"), std::string::npos) << s.name;

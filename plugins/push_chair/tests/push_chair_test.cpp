@@ -321,7 +321,7 @@ TEST(PushChair, InfoPrintsTheStateLayoutAndObjectsListsTheSplits) {
   EXPECT_EQ(fixed.out, "3100\n");
   const auto env = makeEnv();
   uint32_t total = 0;
-  for (const mb::SegmentDescription& s : env->calcPolicyLayout(mb::ObservationMode::State).observation_segments)
+  for (const mb::sdk::Segment& s : env->calcPolicyLayout(mb::ObservationMode::State).observation_segments)
     total += s.size;
   EXPECT_EQ(total, L::kDim);
   EXPECT_EQ(env->getTaskDescription().agent_state_dim, L::kAgentDim);

@@ -9,6 +9,7 @@
 #include <manibench/observation_mode.hpp>
 #include <manibench/plugin_registry.hpp>
 #include <manibench/scene_bridge.hpp>
+#include <manibench/sdk/segment.hpp>
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -27,17 +28,10 @@ class PluginCallError : public Error {
   mb_status status_;
 };
 
-struct SegmentDescription {
-  std::string name;
-  uint32_t offset = 0;
-  uint32_t size = 0;
-  std::string description;
-};
-
 struct TaskDescription {
   std::string name;
   uint32_t observation_dim = 0;
-  std::vector<SegmentDescription> observation_segments;
+  std::vector<sdk::Segment> observation_segments;
   std::vector<std::string> success_conditions;  // "success" is last
   std::vector<std::string> masks;
   std::string robot_articulation;
@@ -56,7 +50,7 @@ struct TaskDescription {
 struct ControllerDescription {
   std::string name;
   uint32_t action_dim = 0;
-  std::vector<SegmentDescription> action_segments;
+  std::vector<sdk::Segment> action_segments;
   uint32_t flags = 0;
 };
 
@@ -128,9 +122,9 @@ struct PolicyLayout {
   std::string task_name;
   ObservationMode observation_mode = ObservationMode::State;
   uint32_t observation_dim = 0;
-  std::vector<SegmentDescription> observation_segments;
+  std::vector<sdk::Segment> observation_segments;
   uint32_t action_dim = 0;
-  std::vector<SegmentDescription> action_segments;
+  std::vector<sdk::Segment> action_segments;
 };
 
 class PolicyInstance {

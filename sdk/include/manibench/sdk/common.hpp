@@ -6,6 +6,7 @@
 #include <manibench/abi.h>
 #include <manibench/sdk/guard.hpp>
 #include <manibench/sdk/numbers.hpp>
+#include <manibench/sdk/segment.hpp>
 
 #include <yaml-cpp/yaml.h>
 
@@ -148,14 +149,6 @@ class Config {
   YAML::Node node_;
 };
 
-// A named slice of a flat vector, described by its size; offsets follow
-// from the order.
-struct Segment {
-  std::string name;
-  uint32_t size = 0;
-  std::string description;
-};
-
 // Holds segments and the C records pointing into them.
 class SegmentTable {
  public:
@@ -163,8 +156,9 @@ class SegmentTable {
   explicit SegmentTable(std::vector<Segment> segments)
       : segments_(std::move(segments)) {
     uint32_t offset = 0;
-    for (const Segment& s : segments_) {
-      records_.push_back({s.name.c_str(), offset, s.size, s.description.c_str()});
+    for (Segment& s : segments_) {
+      s.offset = offset;  // offsets follow from the order
+      records_.push_back(s.toC());
       offset += s.size;
     }
     total_ = offset;

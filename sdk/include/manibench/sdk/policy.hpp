@@ -16,33 +16,29 @@
 
 namespace manibench::sdk {
 
-struct SegmentInfo {
-  std::string name;
-  uint32_t offset = 0;
-  uint32_t size = 0;
-};
+// SDK 1.x's name for a layout's segment, kept for policies written
+// against it: one type now (segment.hpp).
+using SegmentInfo [[deprecated("use sdk::Segment")]] = Segment;
 
 // A vector's layout as the host describes it.
 struct Layout {
   uint32_t dim = 0;
-  std::vector<SegmentInfo> segments;
+  std::vector<Segment> segments;
 
-  const SegmentInfo* find(const std::string& name) const {
-    for (const SegmentInfo& s : segments)
+  const Segment* find(const std::string& name) const {
+    for (const Segment& s : segments)
       if (s.name == name) return &s;
     return nullptr;
   }
-  const SegmentInfo& get(const std::string& name) const {
-    if (const SegmentInfo* s = find(name)) return *s;
+  const Segment& get(const std::string& name) const {
+    if (const Segment* s = find(name)) return *s;
     throw Error("no segment named '" + name + "' in this layout",
                 MB_INVALID_ARGUMENT);
   }
   static Layout fromC(uint32_t dim, uint32_t count, const mb_segment* segments) {
     Layout out;
     out.dim = dim;
-    for (uint32_t i = 0; i < count; ++i)
-      out.segments.push_back({segments[i].name ? segments[i].name : "",
-                              segments[i].offset, segments[i].size});
+    for (uint32_t i = 0; i < count; ++i) out.segments.push_back(Segment::fromC(segments[i]));
     return out;
   }
 };
@@ -107,7 +103,7 @@ struct Observation {
   }
 
   // A named segment of the state vector.
-  Eigen::Map<const Eigen::VectorXd> segment(const SegmentInfo& s) const {
+  Eigen::Map<const Eigen::VectorXd> segment(const Segment& s) const {
     return Eigen::Map<const Eigen::VectorXd>(state.data() + s.offset, s.size);
   }
   // Color channel `channel` (0 r, 1 g, 2 b) of camera `camera` at (row, col).

@@ -266,7 +266,7 @@ struct AgentOffsets {
   // `policy` names the policy in errors.
   AgentOffsets(const sdk::Layout& observation, std::size_t arms, const std::string& policy) {
     auto find = [&](const std::string& name, uint32_t size) {
-      const sdk::SegmentInfo* s = observation.find(name);
+      const sdk::Segment* s = observation.find(name);
       if (s == nullptr || s->size != size)
         throw Error(policy + " needs the mobile Panda's state observation (segment '" + name + "' of size " +
                         std::to_string(size) + " is missing)",
@@ -275,7 +275,7 @@ struct AgentOffsets {
     };
     base_position = find("base_position", 2);
     base_yaw = find("base_yaw", 1);
-    const sdk::SegmentInfo* joints = observation.find("joint_positions");
+    const sdk::Segment* joints = observation.find("joint_positions");
     if (joints == nullptr) find("joint_positions", 0);  // throws
     joint_positions = joints->offset;
     if (arms == 1)
@@ -330,7 +330,7 @@ struct EeAction {
       for (const auto& [part, size] : {std::pair<const char*, uint32_t>{"_ee_linear", 3}, {"_ee_angular", 3}, {"_gripper", 1}})
         wanted.emplace_back(side + std::string(part), size);
     for (const auto& [name, size] : wanted) {
-      const sdk::SegmentInfo* s = action.find(name);
+      const sdk::Segment* s = action.find(name);
       if (s == nullptr || s->size != size)
         throw Error(policy + " needs the mobile_panda_ee controller" + (arms == 1 ? "" : " on the dual-arm robot") +
                         " (action segment '" + name + "' of size " + std::to_string(size) +

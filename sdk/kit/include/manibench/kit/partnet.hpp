@@ -18,6 +18,7 @@
 #pragma once
 
 #include <manibench/kit/common.hpp>
+#include <manibench/kit/urdf.hpp>
 
 #include <boost/property_tree/ptree.hpp>
 #include <boost/property_tree/xml_parser.hpp>
@@ -78,15 +79,17 @@ struct Link {
   int parent_joint = -1;  // index into Object::joints; -1 for the root
 };
 
+using urdf::JointType;
+
 struct Joint {
   std::string name;
-  std::string type;  // revolute, continuous, prismatic, fixed, floating, planar
+  JointType type = JointType::kFixed;
   std::string parent, child;
   Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();  // child frame in the parent's at q = 0
   Eigen::Vector3d axis = Eigen::Vector3d::UnitX();           // URDF's default
   bool limited = false;  // a <limit> element was there
   double lower = 0, upper = 0;
-  bool isMovable() const { return type != "fixed"; }
+  bool isMovable() const { return type != JointType::kFixed; }
 };
 
 // One line of semantics.txt: 'link_N <hinge|slider|free|heavy|static> <label>'.
@@ -435,125 +438,75 @@ inline Object loadObject(const std::string& folder, const std::string& id, doubl
   const std::string path = (dir / "mobility.urdf").string();
   std::ifstream in(path);
   if (!in) throw Error("PartNet: no object '" + id + "' (" + path + " is missing)", MB_NOT_FOUND);
-  ptree tree;
-  try {
-    boost::property_tree::read_xml(in, tree, boost::property_tree::xml_parser::no_comments);
-  } catch (const boost::property_tree::xml_parser_error& e) {
-    throw Error("PartNet: " + path + ":" + std::to_string(e.line()) + ": not valid XML (" + e.message() + ")",
-                MB_INVALID_ARGUMENT);
-  }
-  const auto robot = tree.get_child_optional("robot");
-  if (!robot) throw Error("PartNet: " + path + " has no <robot> element", MB_INVALID_ARGUMENT);
+  urdf::Tree tree = urdf::readTree(in, "PartNet: " + path);
 
   Object object;
   object.id = id;
   object.dir = dir.string();
   object.scale = scale;
-  std::map<std::string, Link> links;
-  std::vector<std::string> link_order;
-  for (auto& [tag, element] : *robot) {
-    if (tag == "link") {
-      Link link;
-      link.name = detail::getAttribute(element, "name");
-      if (link.name.empty()) throw Error("PartNet: " + path + ": a <link> has no name", MB_INVALID_ARGUMENT);
-      if (links.count(link.name) > 0)
-        throw Error("PartNet: " + path + ": link '" + link.name + "' appears twice", MB_INVALID_ARGUMENT);
-      for (auto& [child_tag, child] : element) {
-        const bool visual = child_tag == "visual", collision = child_tag == "collision";
-        const std::string what = path + ": link '" + link.name + "' <" + child_tag + ">";
-        if (child_tag == "inertial" && scale != 1) {
-          if (auto origin = child.get_child_optional("origin")) detail::scaleAttribute(*origin, "xyz", scale, what);
-          if (auto mass = child.get_child_optional("mass"))
-            detail::scaleAttribute(*mass, "value", scale * scale * scale, what + " <mass>");
-          if (auto inertia = child.get_child_optional("inertia"))
-            for (const char* k : {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"})
-              detail::scaleAttribute(*inertia, k, std::pow(scale, 5), what + " <inertia>");
-        }
-        if (!visual && !collision) continue;
-        if (scale != 1) detail::scaleGeometry(child, scale, what);
-        Shape shape;
-        shape.name = detail::getAttribute(child, "name");
-        shape.origin = detail::parseOrigin(child, what);
-        shape.geometry = detail::parseGeometry(child, what);
-        (visual ? link.visuals : link.collisions).push_back(shape);
-      }
-      link_order.push_back(link.name);
-      links[link.name] = std::move(link);
-    } else if (tag == "joint") {
-      Joint joint;
-      joint.name = detail::getAttribute(element, "name");
-      joint.type = detail::getAttribute(element, "type");
-      const std::string what = path + ": joint '" + joint.name + "'";
-      static const std::set<std::string> types = {"revolute", "continuous", "prismatic", "fixed", "floating", "planar"};
-      if (joint.name.empty() || types.count(joint.type) == 0)
-        throw Error("PartNet: " + what + " has type '" + joint.type +
-                        "' (expected revolute, continuous, prismatic, fixed, floating or planar)",
-                    MB_INVALID_ARGUMENT);
-      joint.parent = element.get<std::string>("parent.<xmlattr>.link", "");
-      joint.child = element.get<std::string>("child.<xmlattr>.link", "");
-      if (joint.parent.empty() || joint.child.empty())
-        throw Error("PartNet: " + what + " lacks <parent link> or <child link>", MB_INVALID_ARGUMENT);
-      if (scale != 1)
-        if (auto origin = element.get_child_optional("origin")) detail::scaleAttribute(*origin, "xyz", scale, what);
-      joint.origin = detail::parseOrigin(element, what);
-      if (const auto axis = element.get_child_optional("axis")) {
-        const std::string xyz = detail::getAttribute(*axis, "xyz");
-        if (!xyz.empty()) joint.axis = detail::parseVector(xyz, what + " <axis xyz>");
-        if (!(joint.axis.norm() > 0)) throw Error("PartNet: " + what + " has a zero axis", MB_INVALID_ARGUMENT);
-        joint.axis.normalize();
-      }
-      if (auto limit = element.get_child_optional("limit")) {
-        joint.limited = true;
-        if (limit->find("<xmlattr>") == limit->not_found()) limit->add_child("<xmlattr>", ptree());
-        ptree& a = limit->get_child("<xmlattr>");
-        const double length_scale = joint.type == "prismatic" ? scale : 1.0;
-        for (const char* bound : {"lower", "upper"}) {
-          const auto text = a.get_optional<std::string>(bound);
-          if (!text) continue;
-          const double x = length_scale * detail::parseNumber(*text, what + " <limit " + bound + ">");
-          a.put(bound, detail::formatNumber(x));
-          (std::string(bound) == "lower" ? joint.lower : joint.upper) = x;
-        }
-        if (!a.get_optional<std::string>("effort")) a.put("effort", "100");
-        if (!a.get_optional<std::string>("velocity")) a.put("velocity", "1");
-      }
-      object.joints.push_back(joint);
+  for (const urdf::Tree::Joint& j : tree.joints) {
+    Joint joint;
+    joint.name = j.name;
+    joint.type = j.type;
+    joint.parent = j.parent;
+    joint.child = j.child;
+    ptree& element = *j.element;
+    const std::string what = path + ": joint '" + joint.name + "'";
+    if (scale != 1)
+      if (auto origin = element.get_child_optional("origin")) detail::scaleAttribute(*origin, "xyz", scale, what);
+    joint.origin = detail::parseOrigin(element, what);
+    if (const auto axis = element.get_child_optional("axis")) {
+      const std::string xyz = detail::getAttribute(*axis, "xyz");
+      if (!xyz.empty()) joint.axis = detail::parseVector(xyz, what + " <axis xyz>");
+      if (!(joint.axis.norm() > 0)) throw Error("PartNet: " + what + " has a zero axis", MB_INVALID_ARGUMENT);
+      joint.axis.normalize();
     }
+    if (auto limit = element.get_child_optional("limit")) {
+      joint.limited = true;
+      if (limit->find("<xmlattr>") == limit->not_found()) limit->add_child("<xmlattr>", ptree());
+      ptree& a = limit->get_child("<xmlattr>");
+      const double length_scale = joint.type == JointType::kPrismatic ? scale : 1.0;
+      for (const char* bound : {"lower", "upper"}) {
+        const auto text = a.get_optional<std::string>(bound);
+        if (!text) continue;
+        const double x = length_scale * detail::parseNumber(*text, what + " <limit " + bound + ">");
+        a.put(bound, detail::formatNumber(x));
+        (std::string(bound) == "lower" ? joint.lower : joint.upper) = x;
+      }
+      if (!a.get_optional<std::string>("effort")) a.put("effort", "100");
+      if (!a.get_optional<std::string>("velocity")) a.put("velocity", "1");
+    }
+    object.joints.push_back(joint);
   }
-  if (links.empty()) throw Error("PartNet: " + path + " has no <link>", MB_INVALID_ARGUMENT);
-
-  // Parents before children, from the one link that is nobody's child.
-  std::map<std::string, int> parent_joint;
-  for (std::size_t j = 0; j < object.joints.size(); ++j) {
-    const Joint& joint = object.joints[j];
-    for (const std::string& name : {joint.parent, joint.child})
-      if (links.count(name) == 0)
-        throw Error("PartNet: " + path + ": joint '" + joint.name + "' names link '" + name + "', which is not there",
-                    MB_INVALID_ARGUMENT);
-    if (!parent_joint.emplace(joint.child, int(j)).second)
-      throw Error("PartNet: " + path + ": link '" + joint.child + "' has two parent joints", MB_INVALID_ARGUMENT);
-  }
-  std::vector<std::string> roots;
-  for (const std::string& name : link_order)
-    if (parent_joint.count(name) == 0) roots.push_back(name);
-  if (roots.size() != 1)
-    throw Error("PartNet: " + path + ": expected one root link, found " + std::to_string(roots.size()),
-                MB_INVALID_ARGUMENT);
-  std::vector<std::string> order{roots.front()};
-  for (std::size_t i = 0; i < order.size(); ++i)
-    for (const Joint& j : object.joints)
-      if (j.parent == order[i]) order.push_back(j.child);
-  if (order.size() != links.size())
-    throw Error("PartNet: " + path + ": the joints form a loop", MB_INVALID_ARGUMENT);
-  for (const std::string& name : order) {
-    Link link = links.at(name);
-    const auto p = parent_joint.find(name);
-    link.parent_joint = p == parent_joint.end() ? -1 : p->second;
+  // Parents before children.
+  for (const std::size_t l : tree.listBreadthFirst()) {
+    Link link;
+    link.name = tree.links[l].name;
+    link.parent_joint = tree.links[l].parent_joint;
+    for (auto& [child_tag, child] : *tree.links[l].element) {
+      const bool visual = child_tag == "visual", collision = child_tag == "collision";
+      const std::string what = path + ": link '" + link.name + "' <" + child_tag + ">";
+      if (child_tag == "inertial" && scale != 1) {
+        if (auto origin = child.get_child_optional("origin")) detail::scaleAttribute(*origin, "xyz", scale, what);
+        if (auto mass = child.get_child_optional("mass"))
+          detail::scaleAttribute(*mass, "value", scale * scale * scale, what + " <mass>");
+        if (auto inertia = child.get_child_optional("inertia"))
+          for (const char* k : {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"})
+            detail::scaleAttribute(*inertia, k, std::pow(scale, 5), what + " <inertia>");
+      }
+      if (!visual && !collision) continue;
+      if (scale != 1) detail::scaleGeometry(child, scale, what);
+      Shape shape;
+      shape.name = detail::getAttribute(child, "name");
+      shape.origin = detail::parseOrigin(child, what);
+      shape.geometry = detail::parseGeometry(child, what);
+      (visual ? link.visuals : link.collisions).push_back(shape);
+    }
     object.links.push_back(std::move(link));
   }
 
   std::ostringstream text;
-  boost::property_tree::write_xml(text, tree, boost::property_tree::xml_writer_make_settings<std::string>(' ', 1));
+  boost::property_tree::write_xml(text, *tree.document, boost::property_tree::xml_writer_make_settings<std::string>(' ', 1));
   object.urdf = text.str();
   object.semantics = readSemantics((dir / "semantics.txt").string());
   for (const Semantic& s : object.semantics)

@@ -4,5 +4,5 @@
 // removes (sdk/kit/README.md has the history).
 #pragma once
 
-#define MANIBENCH_KIT_VERSION_MAJOR 1
+#define MANIBENCH_KIT_VERSION_MAJOR 2
 #define MANIBENCH_KIT_VERSION_MINOR 0
