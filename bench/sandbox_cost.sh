@@ -5,7 +5,7 @@
 # the same episodes; environment steps per second of each run from its
 # summary.json (episodes x mean steps / seconds, the whole run: worker and
 # policy process start included).
-# Usage: bench/sandbox_cost.sh [BUILD_DIR] [ROUNDS] [TASK] [OBS] [POLICY] [EPISODES_PER_OBJECT]
+# Usage: bench/sandbox_cost.sh [BUILD_DIR] [ROUNDS] [TASK] [OBS] [POLICY] [EPISODES_PER_OBJECT] [OBJECTS]
 set -euo pipefail
 build=${1:-build}
 rounds=${2:-3}
@@ -13,6 +13,7 @@ task=${3:-Reach-v0}
 obs=${4:-state}
 policy=${5:-zero}
 per_object=${6:-25}
+objects=${7:-}
 cli="$build/bin/manibench"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -29,6 +30,7 @@ EOF
 run() {  # sandboxed|trusted -> env steps/s
   local extra=()
   [[ $1 == trusted ]] && extra=(--trusted-policy)
+  [[ -n $objects ]] && extra+=(--objects "$objects")
   "$cli" eval "$task" --obs "$obs" --policy "$policy" --episodes-per-object "$per_object" \
     --workers 1 --no-progress --out "$work/$1" "${extra[@]}" >/dev/null
   steps_per_second "$work/$1"

@@ -7,6 +7,7 @@
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/syscall.h>
 #include <ucontext.h>
@@ -142,7 +143,7 @@ void restrictCalls() {
   const uint64_t self = uint64_t(getpid());
   // Refused whatever their arguments.
   for (const char* name :
-       {"socket", "fork", "vfork", "execve", "execveat", "tkill", "pidfd_open",
+       {"fork", "vfork", "execve", "execveat", "tkill", "pidfd_open",
         "pidfd_send_signal", "pidfd_getfd", "ptrace", "process_vm_readv", "process_vm_writev",
         "process_madvise", "setsid", "setpgid", "unshare", "setns", "mount", "umount2",
         "pivot_root", "chroot", "bpf", "perf_event_open", "keyctl", "add_key", "request_key",
@@ -155,6 +156,12 @@ void restrictCalls() {
     const int number = seccomp_syscall_resolve_name(name);
     if (number != __NR_SCMP_ERROR) addRule(ctx, number, {});
   }
+  // No network: a socket of any family but AF_UNIX traps. A Unix socket
+  // fails with EACCES instead of trapping: the C library's name service
+  // tries one (nscd) when a library asks for a user's home (libtorch does,
+  // at load) and goes on without it; a policy gets no socket either way.
+  addRule(ctx, SCMP_SYS(socket), {SCMP_A0(SCMP_CMP_NE, AF_UNIX)});
+  addRule(ctx, SCMP_SYS(socket), {SCMP_A0(SCMP_CMP_EQ, AF_UNIX)}, SCMP_ACT_ERRNO(EACCES));
   // A thread is a clone with CLONE_THREAD; anything else is a process.
   addRule(ctx, SCMP_SYS(clone), {SCMP_A0(SCMP_CMP_MASKED_EQ, CLONE_THREAD, 0)});
   // clone3's flags are in memory, out of a filter's reach: "not
@@ -166,7 +173,9 @@ void restrictCalls() {
     addRule(ctx, number, {SCMP_A0(SCMP_CMP_NE, self)});
   // Raising a limit (as root it could) or catching the refusal's signal.
   addRule(ctx, SCMP_SYS(prlimit64), {SCMP_A2(SCMP_CMP_NE, 0)});
-  addRule(ctx, SCMP_SYS(rt_sigaction), {SCMP_A0(SCMP_CMP_EQ, SIGSYS)});
+  // (Asking for the handler, with no new one, is fine: Python's signal
+  // module asks for every signal's.)
+  addRule(ctx, SCMP_SYS(rt_sigaction), {SCMP_A0(SCMP_CMP_EQ, SIGSYS), SCMP_A1(SCMP_CMP_NE, 0)});
   const int rc = seccomp_load(ctx);
   seccomp_release(ctx);
   if (rc != 0) fail("seccomp filter", -rc);

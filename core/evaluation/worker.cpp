@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <manibench/episode.hpp>
 #include <manibench/sdk/random.hpp>
 #include <manibench/trajectory.hpp>
@@ -211,6 +212,14 @@ std::unique_ptr<ActingPolicy> makePolicy(const WorkerContext& context, Environme
   settings.policy_config = options.policy_config;
   settings.layout = layout;
   settings.read_paths = options.policy_read_paths;
+  // The policy's library, its folder and the folder above: the host's
+  // private libraries, which a plugin may load from beside itself
+  // (torch_policy its learning runtime: lib/manibench/ above plugins/).
+  const std::filesystem::path library =
+      context.registry->getLibraries()[context.registry->getEntry(PluginKind::Policy, options.policy).library].path;
+  for (const std::filesystem::path& path :
+       {library, library.parent_path(), library.parent_path().parent_path()})
+    settings.read_paths.push_back(path.string());
   settings.call_timeout = options.step_timeout;
   settings.create_timeout = options.environment_timeout;
   settings.cpu_limit = options.policy_cpu_limit;

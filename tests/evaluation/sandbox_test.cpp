@@ -170,5 +170,26 @@ TEST(Sandbox, ResultsEqualTheTrustedPathBitForBit) {
   }
 }
 
+// The visual observations cross the block whole: a policy that acts from a
+// hash of every byte of them gives the same episodes sandboxed and not.
+TEST(Sandbox, VisualObservationsCrossBitForBit) {
+  for (const std::string mode : {"pointcloud", "rgbd"}) {
+    SCOPED_TRACE(mode);
+    TempDir sandboxed, trusted;
+    const std::vector<std::string> args = {
+        "Reach-v0", "--policy", "fixture_observation_digest", "--obs", mode, "--objects", "8",
+        "--levels", "0-1", "--set", "episode.max_steps=5"};
+    std::vector<std::string> trusted_args = args;
+    trusted_args.push_back("--trusted-policy");
+    const auto a = runEval(sandboxed, args, {kFixturePath});
+    const auto b = runEval(trusted, trusted_args, {kFixturePath});
+    ASSERT_EQ(a.exit_code, 0) << a.err;
+    ASSERT_EQ(b.exit_code, 0) << b.err;
+    const std::string episodes = readFile(sandboxed / "episodes.csv");
+    EXPECT_EQ(episodes, readFile(trusted / "episodes.csv"));
+    EXPECT_FALSE(contains(episodes, "policy_error")) << episodes;
+  }
+}
+
 }  // namespace
 }  // namespace manibench
