@@ -66,17 +66,6 @@ std::size_t getDataOffset(uint32_t action_dim) {
   return getActionOffset() + roundUp(std::size_t(action_dim) * sizeof(double));
 }
 
-// Spins until `word` differs from `old` or `spin_ns` passed; the value.
-uint32_t spinWhileEqual(const std::atomic<uint32_t>& word, uint32_t old, int64_t spin_ns) {
-  const int64_t start = getMonotonicNs();
-  for (unsigned i = 1;; ++i) {
-    const uint32_t now = word.load(std::memory_order_acquire);
-    if (now != old) return now;
-    cpuRelax();
-    if (i % 32 == 0 && getMonotonicNs() - start > spin_ns) return now;
-  }
-}
-
 // The array's bytes and element count in the observation.
 struct ArrayView {
   const void* data = nullptr;
@@ -190,7 +179,7 @@ void assignFrom(std::vector<T>& out, const std::byte* data, uint64_t count) {
   // it sees the answer.
   uint32_t seen = 1;
   for (;;) {
-    uint32_t seq = spinWhileEqual(header.command_seq, seen, 20000);
+    uint32_t seq = header.command_seq.load();
     while (seq == seen) {
       header.policy_sleeping.store(1);
       seq = header.command_seq.load();
@@ -382,9 +371,13 @@ void SandboxedPolicy::call(uint32_t command, double timeout) {
   const int64_t start = getMonotonicNs();
   clockid_t cpu_clock{};
   const bool has_cpu_clock = clock_getcpuclockid(pid_, &cpu_clock) == 0;
-  // A short spin first: a state policy answers within microseconds, and a
-  // futex round trip costs more than that.
-  uint32_t seen = spinWhileEqual(h.done_seq, seq_ - 1, command != 0 ? 50000 : 0);
+  // No spinning, on either side: a futex round trip per call. Spinning
+  // (the worker 50 us for the answer, the policy 20 us for the next
+  // command, as make_vec's block does) cost 10-16 % more CPU time per step
+  // of Reach-v0 with a machine's load at 8 on 2 cores (bench/sandbox_cost.sh:
+  // 221 -> 244-258 CPU ms per 1000 steps), the futex alone 3-7 %
+  // (docs/evaluation.md, "Sandbox").
+  uint32_t seen = h.done_seq.load();
   while (seen != seq_) {
     h.worker_sleeping.store(1);
     seen = h.done_seq.load();
