@@ -202,7 +202,10 @@ int commandEval(int argc, char** argv) {
 
   std::cout << "evaluating policy " << options.policy << " on " << task << " ("
             << (task_id.isFixed() ? "its fixed objects" : options.split + " split") << "), " << options.levels.size() << " level(s) per object, seed " << options.seed
-            << ", " << options.workers << " worker(s)\n"
+            << ", " << options.workers << " worker(s), the policy "
+            << (options.sandbox_policy ? "sandboxed (" + describeSandbox() + ")"
+                                       : std::string("in the workers (--trusted-policy)"))
+            << "\n"
             << std::flush;
   EvaluationResult baseline, result;
   bool benchmark = args.options.count("benchmark") != 0;

@@ -257,7 +257,7 @@ void writeEvaluationJson(std::ostream& out, const EvaluationResult& result) {
     out << "  \"policy_process\": {\"sandbox\": true, \"cpu_limit_s\": "
         << jsonNumber(o.policy_cpu_limit, 6) << ", \"memory_limit_bytes\": "
         << o.policy_memory_limit << ", \"output_limit_bytes\": " << o.policy_output_limit
-        << "},\n";
+        << ", \"facilities\": " << quote(describeSandbox()) << "},\n";
   else
     out << "  \"policy_process\": {\"sandbox\": false},\n";
   out << "  \"configuration\": " << jsonArray(o.config_notes, quote) << ",\n";

@@ -14,6 +14,8 @@ import pytest
 BINARY = os.environ.get("MANIBENCH_BIN")
 pytestmark = pytest.mark.skipif(not BINARY, reason="needs MANIBENCH_BIN (set by ctest)")
 
+# (A step timeout of 120 s: the spinning policy must reach its CPU limit of
+# 1 s first, also on a loaded machine.)
 # Acts like `zero`; at step 2 of the episodes whose seed is odd, does
 # BEHAVIOR.
 POLICY = """
@@ -126,7 +128,8 @@ def evaluate(folder, behavior, secret, escape, tag):
     run = subprocess.run([BINARY, "eval", "Reach-v0", "--policy", str(policy), "--objects", "8,10",
                           "--levels", "0-3", "--workers", "2", "--no-progress", "--out", str(out),
                           "--policy-cpu-limit", "1", "--policy-memory-limit", "1024",
-                          "--policy-output-limit", "1"], capture_output=True, text=True, env=env)
+                          "--policy-output-limit", "1", "--step-timeout", "120"],
+                         capture_output=True, text=True, env=env)
     with open(out / "episodes.csv", newline="") as f:
         episodes = list(csv.DictReader(f))
     return run, episodes, (out / "summary.csv").read_text()

@@ -61,13 +61,16 @@ struct FixtureRun {
 };
 
 // Reach-v0 on two objects, four levels each (odd and even seeds), two
-// workers, tight limits so that the limit fixtures fail fast.
+// workers, tight limits so that the limit fixtures fail fast; a step
+// timeout long enough for the spinning one to reach its CPU limit on a
+// loaded machine (it did not within 10 s under ctest -j2 at a load of 12).
 FixtureRun runFixture(const TempDir& out, const std::string& policy, const std::vector<std::string>& env,
                std::vector<std::string> extra = {}) {
   std::vector<std::string> args = {"Reach-v0",         "--policy",   policy,  "--objects",
                                    "8,10",             "--levels",   "0-3",   "--workers",
                                    "2",                "--policy-cpu-limit", "1",
-                                   "--policy-memory-limit", "256", "--policy-output-limit", "1"};
+                                   "--policy-memory-limit", "256", "--policy-output-limit", "1",
+                                   "--step-timeout",   "120"};
   args.insert(args.end(), extra.begin(), extra.end());
   std::vector<std::string> environment = env;
   environment.push_back(kFixturePath);

@@ -33,6 +33,11 @@ class EvaluationError : public Error {
 // This build's version, as written into result files.
 const char* getManibenchVersion();
 
+// What the policy's sandbox is made of on this machine: "seccomp, Landlock
+// ABI 7, rlimits", or without Landlock "seccomp, rlimits; no file rules
+// (this kernel has no Landlock)" (docs/evaluation.md, "Sandbox").
+std::string describeSandbox();
+
 // One episode to run: episode `level` of `object_id`.
 struct EpisodeSpec {
   std::size_t index = 0;  // position in the episode list
