@@ -176,6 +176,37 @@ std::string makePythonPolicyConfig(const std::string& path) {
   return "file: '" + quoted + "'\n";
 }
 
+void applySandboxOptions(const Arguments& args, mb::EvaluationOptions& options,
+                         const std::vector<std::string>& policy_files, const char* usage) {
+  options.sandbox_policy = !args.options.count(kTrustedPolicyFlag);
+  auto number = [&](const char* key, double fallback) {
+    const auto it = args.options.find(key);
+    if (it == args.options.end()) return fallback;
+    char* end = nullptr;
+    const double value = std::strtod(it->second.c_str(), &end);
+    if (*end || !(value > 0) || !std::isfinite(value))
+      throw UsageError(std::string("--") + key + " needs a positive number, got '" + it->second + "'",
+                       usage);
+    return value;
+  };
+  options.policy_cpu_limit = number("policy-cpu-limit", options.policy_cpu_limit);
+  options.policy_memory_limit =
+      uint64_t(number("policy-memory-limit", double(options.policy_memory_limit >> 20)) * 1048576.0);
+  options.policy_output_limit =
+      uint64_t(number("policy-output-limit", double(options.policy_output_limit >> 20)) * 1048576.0);
+  std::vector<std::string> paths;
+  for (const std::string& file : policy_files) {
+    if (file.empty()) continue;
+    const std::filesystem::path absolute = std::filesystem::absolute(file);
+    paths.push_back(absolute.string());
+    paths.push_back(absolute.parent_path().string());
+  }
+  const auto reads = args.repeated.find("policy-read");
+  if (reads != args.repeated.end())
+    for (const std::string& path : reads->second) paths.push_back(std::filesystem::absolute(path).string());
+  options.policy_read_paths = paths;
+}
+
 bool isPythonPolicy(const std::string& policy) {
   return policy.size() > 3 && policy.compare(policy.size() - 3, 3, ".py") == 0;
 }

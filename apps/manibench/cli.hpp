@@ -7,6 +7,7 @@
 #include <manibench/config.hpp>
 #include <manibench/environment.hpp>
 #include <manibench/episode.hpp>
+#include <manibench/evaluation.hpp>
 #include <manibench/observation.hpp>
 #include <manibench/plugin_registry.hpp>
 
@@ -100,6 +101,28 @@ std::string resolvePolicy(mb::PluginRegistry& registry, const std::string& polic
 // error naming it).
 bool isPythonPolicy(const std::string& policy);
 std::string makePythonPolicyConfig(const std::string& path);
+
+// The policy sandbox's options, shared by eval and demos generate
+// (docs/evaluation.md, "Sandbox"): the flag and the help text.
+inline constexpr const char* kTrustedPolicyFlag = "trusted-policy";
+inline constexpr const char* kSandboxUsage =
+    R"(  --trusted-policy        run the policy in the worker's process, beside the
+                          environment (faster; for your own code only): by
+                          default it runs in a sandboxed process of its own
+  --policy-cpu-limit SEC  CPU seconds a sandboxed policy may use per episode
+                          (default 60)
+  --policy-memory-limit MIB  address space it may add (default 4096)
+  --policy-output-limit MIB  its stdout/stderr log and each file it writes in
+                          its temporary folder (default 16)
+  --policy-read PATH      a file or folder it may read (repeatable); its
+                          library or script folder and its --policy-config
+                          folder are readable anyway
+)";
+// Fills `options`' sandbox fields from the arguments; `policy_files` are the
+// policy's own files (library, script, configuration), readable from the
+// sandbox with their folders.
+void applySandboxOptions(const Arguments& args, mb::EvaluationOptions& options,
+                         const std::vector<std::string>& policy_files, const char* usage);
 // For the descriptions files carry (demonstrations): the command line,
 // the time now as ISO 8601 UTC, and the loaded libraries as JSON.
 std::string joinCommand(int argc, char** argv);

@@ -50,6 +50,9 @@ const char* kDemosUsage = R"(usage: manibench demos generate|replay|convert|info
                                (policy_actions: labels for learning)
         --controller NAME, --config FILE, --set KEY=VALUE
         --step-timeout SEC, --env-timeout SEC   as for eval
+        --trusted-policy, --policy-cpu-limit SEC, --policy-memory-limit MIB,
+        --policy-output-limit MIB, --policy-read PATH   as for eval: the
+                               policy runs sandboxed unless --trusted-policy
         --no-progress          no progress bar
   replay FILE.h5 [--trajectories traj_0,traj_3] [--check] [--video DIR]
       Re-simulates each trajectory from its first state with its actions;
@@ -91,8 +94,9 @@ int generate(int argc, char** argv) {
   const Arguments args = parseArguments(
       argc, argv, 3,
       {"policy", "policy-config", "out", "split", "objects", "per-object", "max-attempts", "workers",
-       "seed", "obs", "controller", "config", "set", "step-timeout", "env-timeout", "action-noise"},
-      {"no-progress"}, kDemosUsage);
+       "seed", "obs", "controller", "config", "set", "step-timeout", "env-timeout", "action-noise",
+       "policy-cpu-limit", "policy-memory-limit", "policy-output-limit", "policy-read"},
+      {"no-progress", kTrustedPolicyFlag}, kDemosUsage, {"config", "set", "policy-read"});
   if (args.positional.size() != 1) throw UsageError("demos generate takes one TASK", kDemosUsage);
   if (!args.options.count("policy")) throw UsageError("demos generate needs --policy", kDemosUsage);
   if (!args.options.count("out")) throw UsageError("demos generate needs --out FILE.h5", kDemosUsage);
@@ -139,6 +143,11 @@ int generate(int argc, char** argv) {
   loadPlugins(registry);
   evaluation.policy = resolvePolicy(registry, args.options.at("policy"));
   const PluginEntry& policy = registry.getEntry(PluginKind::Policy, evaluation.policy);
+  {
+    std::vector<std::string> policy_files = {registry.getLibraries()[policy.library].path};
+    if (args.options.count("policy-config")) policy_files.push_back(args.options.at("policy-config"));
+    applySandboxOptions(args, evaluation, policy_files, kDemosUsage);
+  }
   const TaskId task_id = resolveTaskId(registry, task);
   const ConfigSources sources = getConfigSources(args, parseObservationMode(args, kDemosUsage));
   for (const std::string& file : sources.files) evaluation.config_notes.push_back("--config " + file);

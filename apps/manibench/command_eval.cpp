@@ -22,7 +22,7 @@ namespace manibench::cli {
 
 namespace {
 
-const char* kEvalUsage = R"(usage: manibench eval [TASK] --policy NAME|PATH.so|PATH.py [options]
+const std::string kEvalUsageText = R"(usage: manibench eval [TASK] --policy NAME|PATH.so|PATH.py [options]
 
 Evaluates a policy on a task's objects (ManiSkill's evaluation kit): every
 selected object times every level is one episode, with a seed derived from
@@ -61,9 +61,10 @@ Options:
   --controller NAME       override the task's default controller
   --config FILE           a YAML configuration layer; repeatable, later wins
   --set KEY=VALUE         one key; repeatable
-Exit status: 0 when every episode ran (failed episodes included), 1 on an
+)" + std::string(kSandboxUsage) + R"(Exit status: 0 when every episode ran (failed episodes included), 1 on an
 error, 130 when interrupted (partial results written).
 )";
+const char* const kEvalUsage = kEvalUsageText.c_str();
 
 double parsePositive(const std::string& text, const std::string& option) {
   try {
@@ -104,8 +105,10 @@ int commandEval(int argc, char** argv) {
       parseArguments(argc, argv, 2,
                      {"task", "policy", "policy-config", "obs", "split", "objects",
                       "episodes-per-object", "levels", "seed", "workers", "step-timeout",
-                      "env-timeout", "out", "controller", "config", "set"},
-                     {"no-progress", "benchmark"}, kEvalUsage);
+                      "env-timeout", "out", "controller", "config", "set", "policy-cpu-limit",
+                      "policy-memory-limit", "policy-output-limit", "policy-read"},
+                     {"no-progress", "benchmark", kTrustedPolicyFlag}, kEvalUsage,
+                     {"config", "set", "policy-read"});
   if (args.help) {
     std::cout << kEvalUsage;
     return 0;
@@ -154,6 +157,10 @@ int commandEval(int argc, char** argv) {
   // A Python file is the `python` policy plugin's configuration (its
   // embedded interpreter starts in each worker, after the fork).
   std::string policy_arg = args.options.at("policy");
+  std::vector<std::string> policy_files;
+  if (args.options.count("policy-config")) policy_files.push_back(args.options.at("policy-config"));
+  if (isPythonPolicy(policy_arg) || policy_arg.find('/') != std::string::npos)
+    policy_files.push_back(policy_arg);
   if (isPythonPolicy(policy_arg)) {
     if (args.options.count("policy-config"))
       throw UsageError("--policy FILE.py takes no --policy-config (name the file in a "
@@ -169,7 +176,9 @@ int commandEval(int argc, char** argv) {
   PluginRegistry registry;
   loadPlugins(registry);
   options.policy = resolvePolicy(registry, policy_arg);
-  registry.getEntry(PluginKind::Policy, options.policy);
+  const PluginEntry& policy_entry = registry.getEntry(PluginKind::Policy, options.policy);
+  policy_files.push_back(registry.getLibraries()[policy_entry.library].path);
+  applySandboxOptions(args, options, policy_files, kEvalUsage);
   const TaskId task_id = resolveTaskId(registry, task);
   {
     const ConfigNode config = loadTaskConfig(registry, task, sources);
@@ -193,7 +202,10 @@ int commandEval(int argc, char** argv) {
 
   std::cout << "evaluating policy " << options.policy << " on " << task << " ("
             << (task_id.isFixed() ? "its fixed objects" : options.split + " split") << "), " << options.levels.size() << " level(s) per object, seed " << options.seed
-            << ", " << options.workers << " worker(s)\n"
+            << ", " << options.workers << " worker(s), the policy "
+            << (options.sandbox_policy ? "sandboxed (" + describeSandbox() + ")"
+                                       : std::string("in the workers (--trusted-policy)"))
+            << "\n"
             << std::flush;
   EvaluationResult baseline, result;
   bool benchmark = args.options.count("benchmark") != 0;

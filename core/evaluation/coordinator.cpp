@@ -14,7 +14,9 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <iostream>
 #include <manibench/evaluation.hpp>
 #include <sstream>
@@ -26,47 +28,6 @@ namespace manibench {
 namespace {
 
 using namespace evaluation_detail;
-
-std::string describeSignal(int sig) {
-  const char* name = nullptr;
-  switch (sig) {
-    case SIGSEGV:
-      name = "SIGSEGV";
-      break;
-    case SIGABRT:
-      name = "SIGABRT";
-      break;
-    case SIGBUS:
-      name = "SIGBUS";
-      break;
-    case SIGFPE:
-      name = "SIGFPE";
-      break;
-    case SIGILL:
-      name = "SIGILL";
-      break;
-    case SIGKILL:
-      name = "SIGKILL";
-      break;
-    case SIGTERM:
-      name = "SIGTERM";
-      break;
-    case SIGTRAP:
-      name = "SIGTRAP";
-      break;
-    default:
-      break;
-  }
-  std::string text = "signal " + std::to_string(sig);
-  if (name) text += std::string(" (") + name + ", " + strsignal(sig) + ")";
-  return text;
-}
-
-std::string describeExit(int status) {
-  if (WIFSIGNALED(status)) return "killed by " + describeSignal(WTERMSIG(status));
-  if (WIFEXITED(status)) return "exited with status " + std::to_string(WEXITSTATUS(status));
-  return "stopped (wait status " + std::to_string(status) + ")";
-}
 
 // The coordinator's view of one worker process.
 struct Worker {
@@ -170,6 +131,27 @@ class Pool {
   Slot* slots_ = nullptr;
 };
 
+// The run's temporary folder, for the sandboxed policies' private folders
+// (none with --trusted-policy); removed after the workers are gone, also
+// what a killed worker's policy left.
+struct ScratchDir {
+  std::string path;
+  explicit ScratchDir(const EvaluationOptions& options) {
+    if (!options.sandbox_policy) return;
+    const char* base = std::getenv("TMPDIR");
+    path = std::string(base && *base ? base : "/tmp") + "/manibench-eval-XXXXXX";
+    if (!mkdtemp(path.data()))
+      throw EvaluationError("cannot create the run's temporary folder: " +
+                            std::string(std::strerror(errno)));
+  }
+  ~ScratchDir() {
+    std::error_code ignored;
+    if (!path.empty()) std::filesystem::remove_all(path, ignored);
+  }
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+};
+
 // One evaluation run: the event loop over the workers' sockets and slots.
 class Coordinator {
  public:
@@ -179,7 +161,8 @@ class Coordinator {
       : options_(options),
         hooks_(hooks),
         result_(result),
-        context_{&registry, &options, &make_environment},
+        scratch_(options),
+        context_{&registry, &options, &make_environment, scratch_.path},
         pool_(context_, options.workers) {}
 
   // Runs every planned episode (or until stopped); leaves the records,
@@ -209,6 +192,7 @@ class Coordinator {
   const EvaluationOptions& options_;
   const EvaluationHooks& hooks_;
   EvaluationResult& result_;
+  const ScratchDir scratch_;  // outlives the pool
   const WorkerContext context_;
   Pool pool_;
   std::vector<EpisodeRecord> records_;
@@ -368,8 +352,11 @@ void Coordinator::killOverdue() {
     const Slot& s = pool_.slot(i);
     const uint32_t phase = s.phase.load();
     if (phase == kIdle) continue;
-    const double limit =
-        isPolicyPhase(phase) ? options_.step_timeout : options_.environment_timeout;
+    // A sandboxed policy's calls are timed by its worker, which kills only
+    // the policy's process; this is the backstop.
+    const double limit = isPolicyPhase(phase)
+                             ? options_.step_timeout + (options_.sandbox_policy ? 5 : 0)
+                             : options_.environment_timeout;
     const double elapsed = double(now - s.since_ns.load()) * 1e-9;
     if (elapsed <= limit) continue;
     std::ostringstream message;

@@ -251,6 +251,15 @@ void writeEvaluationJson(std::ostream& out, const EvaluationResult& result) {
   out << "  \"levels\": " << jsonArray(o.levels, [](uint64_t v) { return std::to_string(v); })
       << ",\n";
   out << "  \"step_timeout_s\": " << jsonNumber(o.step_timeout, 6) << ",\n";
+  // Where the policy ran: a sandboxed process with its limits, or the
+  // worker's own process (--trusted-policy).
+  if (o.sandbox_policy)
+    out << "  \"policy_process\": {\"sandbox\": true, \"cpu_limit_s\": "
+        << jsonNumber(o.policy_cpu_limit, 6) << ", \"memory_limit_bytes\": "
+        << o.policy_memory_limit << ", \"output_limit_bytes\": " << o.policy_output_limit
+        << ", \"facilities\": " << quote(describeSandbox()) << "},\n";
+  else
+    out << "  \"policy_process\": {\"sandbox\": false},\n";
   out << "  \"configuration\": " << jsonArray(o.config_notes, quote) << ",\n";
   out << "  \"max_episode_steps\": " << result.task.max_episode_steps << ",\n";
   out << "  \"success_conditions\": " << jsonArray(conditions, quote) << ",\n";

@@ -1,16 +1,21 @@
 #include "worker.hpp"
 
+#include <signal.h>
+#include <string.h>
+#include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <manibench/episode.hpp>
 #include <manibench/sdk/random.hpp>
 #include <manibench/trajectory.hpp>
 #include <memory>
 #include <optional>
 
+#include "policy_process.hpp"
 #include "wire_format.hpp"
 
 namespace manibench::evaluation_detail {
@@ -30,6 +35,47 @@ const char* getPhaseName(uint32_t phase) {
     default:
       return "idle";
   }
+}
+
+std::string describeSignal(int sig) {
+  const char* name = nullptr;
+  switch (sig) {
+    case SIGSEGV:
+      name = "SIGSEGV";
+      break;
+    case SIGABRT:
+      name = "SIGABRT";
+      break;
+    case SIGBUS:
+      name = "SIGBUS";
+      break;
+    case SIGFPE:
+      name = "SIGFPE";
+      break;
+    case SIGILL:
+      name = "SIGILL";
+      break;
+    case SIGKILL:
+      name = "SIGKILL";
+      break;
+    case SIGTERM:
+      name = "SIGTERM";
+      break;
+    case SIGTRAP:
+      name = "SIGTRAP";
+      break;
+    default:
+      break;
+  }
+  std::string text = "signal " + std::to_string(sig);
+  if (name) text += std::string(" (") + name + ", " + strsignal(sig) + ")";
+  return text;
+}
+
+std::string describeExit(int status) {
+  if (WIFSIGNALED(status)) return "killed by " + describeSignal(WTERMSIG(status));
+  if (WIFEXITED(status)) return "exited with status " + std::to_string(WEXITSTATUS(status));
+  return "stopped (wait status " + std::to_string(status) + ")";
 }
 
 int64_t getMonotonicNs() {
@@ -66,7 +112,7 @@ Phase toWorkerPhase(EpisodePhase phase) {
 // never thrown. The slot follows the episode's phases (the coordinator's
 // view of a worker that hangs or dies). With `record_trajectory` the
 // episode is recorded, and kept in the record when it succeeds.
-After runWorkerEpisode(Environment& env, PolicyInstance& policy, Slot& slot,
+After runWorkerEpisode(Environment& env, ActingPolicy& policy, Slot& slot,
                        bool record_trajectory, double action_noise, EpisodeRecord& record) {
   const auto start = getMonotonicNs();
   const std::size_t conditions = env.getTaskDescription().success_conditions.size();
@@ -119,7 +165,9 @@ After runWorkerEpisode(Environment& env, PolicyInstance& policy, Slot& slot,
     record.flags.assign(conditions, 0);
     // The policy object may be in any state after failing: a new one.
     after = After::kNewPolicy;
-    if (dynamic_cast<const InvalidAction*>(&e)) {
+    if (const auto* process = dynamic_cast<const PolicyProcessFailure*>(&e)) {
+      record.failure = process->failure();
+    } else if (dynamic_cast<const InvalidAction*>(&e)) {
       record.failure = failure::kInvalidAction;
     } else if (const auto* call = dynamic_cast<const PluginCallError*>(&e);
                call && isPolicyPhase(phase)) {
@@ -142,10 +190,51 @@ After runWorkerEpisode(Environment& env, PolicyInstance& policy, Slot& slot,
   return after;
 }
 
-std::unique_ptr<PolicyInstance> makePolicy(const WorkerContext& context, const Environment& env) {
-  return std::make_unique<PolicyInstance>(*context.registry, context.options->policy,
-                                          context.options->policy_config,
-                                          env.calcPolicyLayout(env.getObservationMode()));
+// The bytes of the observation's arrays (the sandboxed policy's block is
+// sized from them).
+std::size_t calcObservationBytes(const Environment& env) {
+  const VisualObservation& v = env.getVisualObservation();
+  return std::size_t(env.getObservation().size()) * sizeof(double) +
+         (v.points.xyz.size() + v.points.rgb.size() + v.rgb.size() + v.depth.size()) *
+             sizeof(float) +
+         v.points.masks.size() + v.rgb_bytes.size() + v.masks.size();
+}
+
+std::unique_ptr<ActingPolicy> makePolicy(const WorkerContext& context, Environment& env) {
+  const EvaluationOptions& options = *context.options;
+  const PolicyLayout layout = env.calcPolicyLayout(env.getObservationMode());
+  if (!options.sandbox_policy)
+    return std::make_unique<PolicyInstance>(*context.registry, options.policy,
+                                            options.policy_config, layout);
+  PolicyProcessSettings settings;
+  settings.registry = context.registry;
+  settings.policy = options.policy;
+  settings.policy_config = options.policy_config;
+  settings.layout = layout;
+  settings.read_paths = options.policy_read_paths;
+  // The policy's library, its folder and the folder above: the host's
+  // private libraries, which a plugin may load from beside itself
+  // (torch_policy its learning runtime: lib/manibench/ above plugins/).
+  const std::filesystem::path library =
+      context.registry->getLibraries()[context.registry->getEntry(PluginKind::Policy, options.policy).library].path;
+  for (const std::filesystem::path& path :
+       {library, library.parent_path(), library.parent_path().parent_path()})
+    settings.read_paths.push_back(path.string());
+  settings.call_timeout = options.step_timeout;
+  settings.create_timeout = options.environment_timeout;
+  settings.cpu_limit = options.policy_cpu_limit;
+  settings.memory_bytes = options.policy_memory_limit;
+  settings.output_bytes = options.policy_output_limit;
+  if (env.getObservationMode() != ObservationMode::State && env.getObservation().size() == 0) {
+    // A visual observation's size is known once there is one: a reset
+    // (episodes do not depend on what ran before them).
+    const std::vector<std::string> objects =
+        options.objects.empty() ? env.listObjects(options.split) : options.objects;
+    if (!objects.empty()) env.reset(objects.front(), 0);
+  }
+  settings.observation_bytes = calcObservationBytes(env);
+  settings.scratch_dir = context.scratch_dir;
+  return std::make_unique<SandboxedPolicy>(settings);
 }
 
 // The task as this worker's environment configures it.
@@ -167,7 +256,7 @@ EvaluationTaskInfo describeTask(const Environment& env, const std::string& split
 void runWorker(int fd, Slot& slot, const WorkerContext& context) {
   enterPhase(slot, kSetup);
   std::unique_ptr<Environment> env;
-  std::unique_ptr<PolicyInstance> policy;
+  std::unique_ptr<ActingPolicy> policy;
   {
     Writer w;
     try {
@@ -196,6 +285,7 @@ void runWorker(int fd, Slot& slot, const WorkerContext& context) {
       const After after =
           runWorkerEpisode(*env, *policy, slot, context.options->record_successes,
                            context.options->action_noise, record);
+      if (auto* sandboxed = dynamic_cast<SandboxedPolicy*>(policy.get())) sandboxed->relayOutput();
       Writer w;
       transferResult(w.u8(kResult), record);
       w.u8(record.trajectory ? 1 : 0);
@@ -218,6 +308,7 @@ void runWorker(int fd, Slot& slot, const WorkerContext& context) {
       break;
     }
   }
+  policy.reset();  // a sandboxed policy's process ends, its folder goes
   std::fflush(nullptr);
   _exit(0);
 }

@@ -9,6 +9,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <string>
 
 namespace manibench::evaluation_detail {
 
@@ -33,6 +34,10 @@ static_assert(std::atomic<int64_t>::is_always_lock_free &&
               "the shared slots need lock-free atomics");
 
 int64_t getMonotonicNs();
+// "signal 11 (SIGSEGV, Segmentation fault)"
+std::string describeSignal(int sig);
+// "killed by signal 11 (...)", "exited with status 3": a wait status.
+std::string describeExit(int status);
 // Publishes `phase`, entered now.
 void enterPhase(Slot& slot, Phase phase);
 
@@ -41,6 +46,7 @@ struct WorkerContext {
   const PluginRegistry* registry;
   const EvaluationOptions* options;
   const EnvironmentFactory* make_environment;
+  std::string scratch_dir;  // the run's temporary folder (sandboxed policies' folders)
 };
 
 // The worker process's whole life on socket `fd`: set up, report kReady (or

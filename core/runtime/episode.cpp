@@ -2,7 +2,7 @@
 
 namespace manibench {
 
-EpisodeResult runEpisode(Environment& env, PolicyInstance& policy, const std::string& object_id,
+EpisodeResult runEpisode(Environment& env, ActingPolicy& policy, const std::string& object_id,
                          uint64_t seed, const EpisodeHooks& hooks) {
   auto enter = [&](EpisodePhase phase, uint32_t step) {
     if (hooks.on_phase) hooks.on_phase(phase, step);

@@ -2,6 +2,8 @@
 
 #include <manibench/sdk/numbers.hpp>
 
+#include <sstream>
+
 namespace manibench {
 namespace scene_detail {
 
@@ -70,7 +72,30 @@ void addMass(BodyModel& body, double m, const Vec3& com_B, const Mat33& Ic_B) {
   if (m <= 0) return;
   body.mass += m;
   body.first_moment += m * com_B;
-  body.inertia += Inertia(toSymmetric(Ic_B)).shiftFromMassCenter(com_B, m);
+  // As Inertia(Ic).shiftFromMassCenter(com, m), without its check.
+  body.inertia_sum += toSymmetric(Ic_B) + Inertia::pointMassAt(com_B, m).asSymMat33();
+}
+
+void checkBodyMasses(ArticulationModel& model,
+                     const std::function<void(const std::string&)>& fail) {
+  for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+    BodyModel& body = model.bodies[b];
+    const std::string& link = model.links[std::size_t(body.link)].name;
+    if (!Inertia::isValidInertiaMatrix(body.inertia_sum)) {
+      std::ostringstream s;
+      if (!body.invalid_part.empty())
+        s << body.invalid_part << ", and so has its body with the links welded to it";
+      else
+        s << "the body of link '" << link << "' (with the links welded to it) has an invalid inertia";
+      s << ": moments must be non-negative and obey the triangle inequality";
+      fail(s.str());
+    }
+    body.inertia = Inertia(body.inertia_sum);
+    if (body.joint >= 0 && !body.massless && !(body.mass > 0))
+      fail("link '" + link + "' moves (joint '" + model.joints[std::size_t(body.joint)].name +
+           "') but has no mass, nor any welded to it: give it an <inertial> or collision "
+           "geometry (a moving body without mass is not physical)");
+  }
 }
 
 }  // namespace scene_detail

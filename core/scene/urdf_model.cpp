@@ -117,13 +117,14 @@ struct Builder {
       const Mat33 Ic_I(in.ixx, in.ixy, in.ixz,  //
                        in.ixy, in.iyy, in.iyz,  //
                        in.ixz, in.iyz, in.izz);
-      if (!Inertia::isValidInertiaMatrix(SymMat33().setFromLower(Ic_I))) {
+      // Invalid alone is fine if its body's sum is valid (checkBodyMasses).
+      if (!Inertia::isValidInertiaMatrix(SymMat33().setFromLower(Ic_I)) &&
+          body.invalid_part.empty()) {
         std::ostringstream s;
         s << "link '" << link.name << "' has an invalid inertia (ixx " << in.ixx
           << " iyy " << in.iyy << " izz " << in.izz << " ixy " << in.ixy
-          << " ixz " << in.ixz << " iyz " << in.iyz
-          << "): moments must be non-negative and obey the triangle inequality";
-        failUrdf(source, s.str());
+          << " ixz " << in.ixz << " iyz " << in.iyz << ")";
+        body.invalid_part = s.str();
       }
       const Transform X_BI = X_BL * toTransform(in.origin);
       const Mat33 R = X_BI.R().asMat33();
@@ -593,6 +594,7 @@ ArticulationModel buildArticulationModel(const std::string& urdf_xml,
   builder.model.bodies[0].link = 0;
   builder.addLink(*root, 0, Transform());
   builder.resolveMimics();
+  checkBodyMasses(builder.model, [&source](const std::string& what) { failUrdf(source, what); });
   return std::move(builder.model);
 }
 

@@ -52,7 +52,14 @@ struct BodyModel {
   // means "no inertial and no geometry to derive one from".
   double mass = 0;
   SimTK::Vec3 first_moment{0};  // mass * center of mass
-  SimTK::Inertia inertia{0};
+  SimTK::Inertia inertia{0};    // set from inertia_sum by checkBodyMasses
+  // The parts' inertias summed about the body origin, unchecked: a link
+  // welded on over a fixed joint may have moments that are invalid alone
+  // (a camera's 8.7e-6 + 6.7e-4 < 1.4e-3) and fine merged; only the
+  // body's sum must be a valid inertia. `invalid_part` describes the first
+  // part that was invalid alone ("" if none), for the error.
+  SimTK::SymMat33 inertia_sum{0};
+  std::string invalid_part;
   std::vector<CollisionShape> shapes;
 };
 

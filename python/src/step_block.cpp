@@ -1,9 +1,9 @@
 #include "step_block.hpp"
 
 #include <manibench/error.hpp>
+#include <manibench/futex.hpp>
 
 #include <fcntl.h>
-#include <linux/futex.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <sys/syscall.h>
@@ -23,28 +23,6 @@ namespace {
 constexpr std::size_t kAlign = 64;
 
 std::size_t roundUp(std::size_t n) { return (n + kAlign - 1) / kAlign * kAlign; }
-
-// Both processes map the same object: the futex is keyed by the page, so
-// no FUTEX_PRIVATE_FLAG.
-void futexWait(std::atomic<uint32_t>& word, uint32_t expected, double timeout_s) {
-  static_assert(sizeof(std::atomic<uint32_t>) == sizeof(uint32_t));
-  timespec timeout{};
-  timeout.tv_sec = time_t(timeout_s);
-  timeout.tv_nsec = long((timeout_s - double(timeout.tv_sec)) * 1e9);
-  syscall(SYS_futex, reinterpret_cast<uint32_t*>(&word), FUTEX_WAIT, expected,
-          timeout_s > 0 ? &timeout : nullptr, nullptr, 0);
-}
-
-void futexWakeAll(std::atomic<uint32_t>& word) {
-  syscall(SYS_futex, reinterpret_cast<uint32_t*>(&word), FUTEX_WAKE, INT32_MAX, nullptr, nullptr,
-          0);
-}
-
-inline void cpuRelax() {
-#if defined(__x86_64__) || defined(__i386__)
-  __builtin_ia32_pause();
-#endif
-}
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -195,6 +195,39 @@ TEST(UrdfRobustness, ThePluginsViewGivesTheRootLinkAndSetsTheRootTwist) {
 
 // A free body with no collision shape falls through the ground: the scene
 // says so, naming the link, instead of letting it fall for ever.
+// A camera as a widely used quadruped's URDF writes it: principal moments
+// that violate the triangle inequality (8.7e-6 + 6.7e-4 < 1.4e-3), welded
+// to its parent by a fixed joint. Only the merged body's inertia means
+// anything, and it is valid: the file loads. The same camera on a joint of
+// its own is a body with that inertia: refused, naming the link.
+TEST(UrdfRobustness, AWeldedLinkCountsOnlyMergedIntoItsBody) {
+  const std::string camera =
+      link("camera", "<inertial><mass value=\"0.05\"/><inertia ixx=\"8.7e-6\" ixy=\"0\" ixz=\"0\" "
+                     "iyy=\"6.7e-4\" iyz=\"0\" izz=\"1.4e-3\"/></inertial>");
+  const std::string welded = "  <joint name=\"mount\" type=\"fixed\"><parent link=\"base\"/><child link=\"camera\"/>"
+                             "<origin xyz=\"0.1 0 0\"/></joint>\n";
+  Scene scene;
+  const int r = scene.addUrdfString(robot(link("base", inertial()) + camera + welded), "", "robot", Pose(), false);
+  scene.finalize();
+  EXPECT_EQ(scene.getJoints(r).size(), 0u);
+  expectMentions(loadError(robot(link("base", inertial()) + camera + joint("mount", "base", "camera"))),
+                 {"link 'camera' has an invalid inertia (ixx 8.7e-06", "triangle inequality"});
+}
+
+// A link that moves but has no mass (no <inertial>, no collision geometry,
+// nothing welded to it) loaded and fell through the ground at t = 1.46 s;
+// it is refused at load, naming the link and its joint.
+TEST(UrdfRobustness, AMovingLinkWithoutMassIsRefusedNamingIt) {
+  expectMentions(loadError(robot(link("a", inertial()) + link("b") + joint("ab", "a", "b"))),
+                 {"link 'b' moves (joint 'ab') but has no mass"});
+  // Massless but welded to a link with mass: fine.
+  Scene scene;
+  const std::string weld = "  <joint name=\"w\" type=\"fixed\"><parent link=\"b\"/><child link=\"c\"/></joint>\n";
+  scene.addUrdfString(robot(link("a", inertial()) + link("b") + link("c", inertial()) + joint("ab", "a", "b") + weld),
+                      "", "robot", Pose(), true);
+  scene.finalize();
+}
+
 TEST(UrdfRobustness, ABodyFallingThroughTheGroundIsADivergenceNamingIt) {
   Scene scene;
   scene.addGround(0);

@@ -33,6 +33,11 @@ class EvaluationError : public Error {
 // This build's version, as written into result files.
 const char* getManibenchVersion();
 
+// What the policy's sandbox is made of on this machine: "seccomp, Landlock
+// ABI 7, rlimits", or without Landlock "seccomp, rlimits; no file rules
+// (this kernel has no Landlock)" (docs/evaluation.md, "Sandbox").
+std::string describeSandbox();
+
 // One episode to run: episode `level` of `object_id`.
 struct EpisodeSpec {
   std::size_t index = 0;  // position in the episode list
@@ -61,6 +66,10 @@ inline constexpr const char* kPolicyError = "policy_error";      // the policy r
 inline constexpr const char* kInvalidAction = "invalid_action";  // NaN, infinity, wrong size
 inline constexpr const char* kEnvironmentError = "environment_error";  // task/physics failed
 inline constexpr const char* kEnvironmentTimeout = "environment_timeout";
+// The policy's sandbox refused a call (network, processes, signals out,
+// other processes' memory), or the policy went past a limit (memory, CPU
+// time, output).
+inline constexpr const char* kSandbox = "sandbox";
 }  // namespace failure
 
 struct EpisodeRecord {
@@ -114,6 +123,17 @@ struct EvaluationOptions {
   // seed; recorded trajectories keep the policy's own actions beside the
   // executed ones (demos generate --action-noise).
   double action_noise = 0;
+  // The policy runs in a sandboxed process of its own (policy_process.hpp,
+  // docs/evaluation.md "Sandbox"); false: in the worker's process, beside
+  // the environment (--trusted-policy), as fast as it gets but with the
+  // worker's power over the results.
+  bool sandbox_policy = true;
+  // Files and folders the sandboxed policy may read (its library or
+  // script folder, its configuration folder, --policy-read).
+  std::vector<std::string> policy_read_paths;
+  double policy_cpu_limit = 60;                       // s of CPU time per episode
+  uint64_t policy_memory_limit = uint64_t(4) << 30;   // bytes of address space it may add
+  uint64_t policy_output_limit = uint64_t(16) << 20;  // bytes: its log, each temporary file
 };
 
 // What a worker reports after setting up: the task as configured.

@@ -59,7 +59,7 @@ struct EpisodeHooks {
 // until done (or until on_step says stop). Errors propagate as thrown (the
 // environment's name the episode; the policy's are PluginCallErrors): a
 // caller that needs to know where one happened watches on_phase.
-EpisodeResult runEpisode(Environment& env, PolicyInstance& policy, const std::string& object_id,
+EpisodeResult runEpisode(Environment& env, ActingPolicy& policy, const std::string& object_id,
                          uint64_t seed, const EpisodeHooks& hooks = {});
 
 }  // namespace manibench

@@ -127,22 +127,37 @@ struct PolicyLayout {
   std::vector<sdk::Segment> action_segments;
 };
 
-class PolicyInstance {
+// What runEpisode asks of a policy: a plugin's policy in this process
+// (PolicyInstance), or one run in a sandboxed process of its own (the
+// evaluation kit's, evaluation/policy_process.hpp).
+class ActingPolicy {
+ public:
+  virtual ~ActingPolicy() = default;
+  virtual void reset(uint64_t seed) = 0;
+  // Writes the raw action; validation is the environment's job.
+  virtual void act(const Eigen::VectorXd& observation, uint32_t step, Eigen::VectorXd& action,
+                   const VisualObservation& visual) = 0;
+};
+
+class PolicyInstance : public ActingPolicy {
  public:
   PolicyInstance(const PluginRegistry& registry, const std::string& name,
                  const std::string& config_yaml, const PolicyLayout& layout);
-  ~PolicyInstance();
+  ~PolicyInstance() override;
   PolicyInstance(const PolicyInstance&) = delete;
   PolicyInstance& operator=(const PolicyInstance&) = delete;
 
   const std::string& getName() const { return name_; }
   const std::string& getLibraryPath() const { return library_path_; }
-  void reset(uint64_t seed);
+  void reset(uint64_t seed) override;
   // Writes the raw action; validation is the environment's job. `visual`
   // fills the ABI 1.1 fields of its mode (none in State); rgb as bytes
   // reaches the policy as the float32 layout's floats (makeObservationView).
   void act(const Eigen::VectorXd& observation, uint32_t step, Eigen::VectorXd& action,
-           const VisualObservation& visual = VisualObservation());
+           const VisualObservation& visual) override;
+  void act(const Eigen::VectorXd& observation, uint32_t step, Eigen::VectorXd& action) {
+    act(observation, step, action, VisualObservation());
+  }
 
  private:
   const mb_policy_descriptor* descriptor_;
