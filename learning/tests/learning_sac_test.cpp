@@ -11,6 +11,7 @@
 #include "learning_test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
 
 #include <signal.h>
 
@@ -142,6 +143,42 @@ TEST_F(Sac, TheTorchPolicyPluginRunsTheAgent) {
   ASSERT_EQ(eval.exit_code, 0) << eval.err;
   EXPECT_TRUE(fs::exists(path("plugin/eval/summary.json")));
   EXPECT_TRUE(contains(r.checkpoint, "iter_0000200.pt"));
+}
+
+// Two Reach objects at a budget no agent succeeds in: each is retrained
+// once with its next seed, both end below the threshold with their own
+// directories and policy configurations; the same command again finds
+// them done.
+TEST_F(Sac, APopulationTrainsOneAgentPerObjectAndRetrainsThoseBelowTheThreshold) {
+  const std::vector<std::string> command = {
+      "train", "sac-population", "Reach-v0", "--objects", "0,1", "--out", path("population"), "--steps", "200",
+      "--workers", "1", "--batch-size", "32", "--hidden", "16", "--random-steps", "100", "--learning-starts", "64",
+      "--max-attempts", "2", "--eval-episodes", "1", "--demos", "1"};
+  const manibench::testing::CommandResult first = runCli(command);
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  for (const std::string object : {"0", "1"}) {
+    const fs::path dir = path("population/objects/" + object);
+    EXPECT_TRUE(fs::exists(dir / "attempt_0/checkpoints/iter_0000200.pt")) << object;
+    EXPECT_TRUE(fs::exists(dir / "attempt_1/checkpoints/iter_0000200.pt")) << object;
+    EXPECT_TRUE(fs::exists(dir / "policy.yaml")) << object;
+    EXPECT_TRUE(contains(first.err, "object " + object + ": no demonstrations (its agent is below the threshold)"));
+    // Its own seed per attempt, from the base seed and the object id.
+    const YAML::Node a = YAML::LoadFile((dir / "attempt_0/train.yaml").string());
+    const YAML::Node b = YAML::LoadFile((dir / "attempt_1/train.yaml").string());
+    EXPECT_NE(a["seed"].as<uint64_t>(), b["seed"].as<uint64_t>());
+    EXPECT_EQ(a["environment"].as<std::string>(), "Reach_" + object + "-v0");
+    EXPECT_EQ(a["workers"].as<unsigned>(), 1u);
+  }
+  const YAML::Node summary = YAML::LoadFile(path("population/population.yaml"));
+  EXPECT_EQ(summary["objects"]["0"]["state"].as<std::string>(), "below_threshold");
+  EXPECT_EQ(summary["objects"]["1"]["attempts"].as<unsigned>(), 2u);
+  EXPECT_NE(YAML::LoadFile((fs::path(path("population/objects/0")) / "attempt_0/train.yaml").string())["seed"].as<uint64_t>(),
+            YAML::LoadFile((fs::path(path("population/objects/1")) / "attempt_0/train.yaml").string())["seed"].as<uint64_t>());
+
+  const manibench::testing::CommandResult again = runCli(command);
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_TRUE(contains(again.err, "object 0: done before")) << again.err;
+  EXPECT_FALSE(contains(again.err, "training (seed")) << again.err;
 }
 
 TEST_F(Sac, BadOptionsAreErrorsThatNameThem) {

@@ -8,6 +8,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <iomanip>
@@ -16,6 +17,7 @@
 
 #include "cli.hpp"
 #include "programs.hpp"
+#include "sac_population.hpp"
 
 namespace manibench::learning::programs {
 
@@ -65,6 +67,26 @@ Output:
   --log-every N           env steps per log.csv row (default 2000)
   --no-progress           no progress line (shown only on a terminal)
   --resume DIR            continue the training in DIR from its newest checkpoint
+)";
+
+const char* kPopulationUsage = R"(usage: manibench train sac-population TASK --out DIR [options]
+
+Supplement C.2's demonstration agents: one SAC agent per object of the
+split, each trained from scratch on its fixed-object id by its own
+`manibench train sac` (own directory, own seed from --seed and the object
+id), evaluated, and retrained with the next seed while below --threshold.
+Run the same command again to continue a stopped population.
+  --split S               train (default) or test
+  --objects ID,...        only these objects
+  --seed S                base seed (default 0)
+  --threshold X           success rate an agent needs (default 0.3, C.2)
+  --max-attempts N        trainings per object at most (default 3)
+  --eval-episodes N       evaluation episodes per agent (default 20)
+  --eval-seed S           the evaluation's base seed (default 1000)
+  --demos N               then N successful episodes per accepted object,
+                          each from its own agent: DIR/demos/ID.h5
+Every `manibench train sac` option but --out, --objects, --split, --seed
+and --resume goes to each object's training (--steps, --workers, ...).
 )";
 
 const std::vector<std::string> kValued = {
@@ -161,6 +183,46 @@ SacHooks makeHooks(bool progress) {
   return hooks;
 }
 
+int runSacPopulation(int argc, char** argv) {
+  std::vector<std::string> valued = kValued;
+  valued.insert(valued.end(), {"threshold", "max-attempts", "eval-episodes", "eval-seed", "demos"});
+  const mb::cli::Arguments args = mb::cli::parseArguments(argc, argv, 3, valued, kFlags, kPopulationUsage);
+  if (args.help) {
+    std::cout << kPopulationUsage;
+    return 0;
+  }
+  auto has = [&](const std::string& key) { return args.options.count(key) > 0; };
+  auto integer = [&](const std::string& key, int64_t minimum) {
+    return parseInteger(args.options.at(key), "--" + key, minimum, kPopulationUsage);
+  };
+  if (args.positional.size() != 1) throw UsageError("name one task", kPopulationUsage);
+  if (!has("out")) throw UsageError("no --out DIR", kPopulationUsage);
+  if (has("resume")) throw UsageError("run the same command again to continue a population", kPopulationUsage);
+  parseSacOptions(args, kPopulationUsage);  // the training's options, checked once here
+  PopulationOptions o;
+  o.task = args.positional.front();
+  o.out_dir = args.options.at("out");
+  o.split = mb::cli::parseSplit(args, "train", kPopulationUsage);
+  if (has("objects")) o.objects = splitList(args.options.at("objects"));
+  if (has("seed")) o.seed = uint64_t(integer("seed", 0));
+  if (has("threshold")) o.threshold = parseNumber(args.options.at("threshold"), "--threshold", kPopulationUsage);
+  if (has("max-attempts")) o.max_attempts = unsigned(integer("max-attempts", 1));
+  if (has("eval-episodes")) o.eval_episodes = unsigned(integer("eval-episodes", 1));
+  if (has("eval-seed")) o.eval_seed = uint64_t(integer("eval-seed", 0));
+  if (has("demos")) o.demos_per_object = unsigned(integer("demos", 1));
+  const std::vector<std::string> own = {"out", "objects", "split", "seed", "resume", "no-progress"};
+  for (const auto& [key, value] : args.options)
+    if (std::find(kValued.begin(), kValued.end(), key) != kValued.end() &&
+        std::find(own.begin(), own.end(), key) == own.end())
+      o.sac_args.insert(o.sac_args.end(), {"--" + key, value});
+  for (const auto& [key, values] : args.repeated)
+    for (const std::string& value : values) o.sac_args.insert(o.sac_args.end(), {"--" + key, value});
+  for (const std::string& flag : kFlags)
+    if (has(flag) && flag != "no-progress") o.sac_args.push_back("--" + flag);
+  mb::cli::StopSignals stop;
+  return runPopulation(o);
+}
+
 bool holdsSacTraining(const std::string& dir) {
   try {
     const YAML::Node node = YAML::LoadFile((fs::path(dir) / "train.yaml").string());
@@ -216,6 +278,9 @@ bool isSacCommand(int argc, char** argv) {
   return false;
 }
 
-int runSacCommand(int argc, char** argv) { return runSac(argc, argv); }
+int runSacCommand(int argc, char** argv) {
+  if (argc > 2 && std::string(argv[2]) == "sac-population") return runSacPopulation(argc, argv);
+  return runSac(argc, argv);
+}
 
 }  // namespace manibench::learning::programs
