@@ -4,9 +4,9 @@
 //   MANIBENCH_LONG_TESTS=1 ctest -R SacLong --output-on-failure
 //
 // Budget (docs/learning.md): on Reach arm 0 a 2 x 64 SAC with batch 256
-// and one worker measured 0.70 / 0.65 / 0.80 / 0.85 success (deterministic
-// actor, 20 episodes) at 15k / 20k / 25k / 30k env steps, and the numbers
-// in docs/learning.md at 35k / 40k; the test asks >= 0.9 at 40k.
+// and one worker measured 0.70 / 0.65 / 0.80 / 0.85 / 0.95 / 0.90 success
+// (deterministic actor, 20 episodes) at 15k / 20k / 25k / 30k / 35k / 40k
+// env steps; the test asks >= 0.9 at 35k (3-4 minutes on the loaded VM).
 #include <test_support.hpp>
 
 #include <gtest/gtest.h>
@@ -46,10 +46,10 @@ double readSuccessRate(const std::string& summary) {
   return nlohmann::json::parse(in)["overall"]["success_rate"].get<double>();
 }
 
-const std::vector<std::string> kReachAgent = {"--steps", "40000", "--workers", "1", "--batch-size", "256",
+const std::vector<std::string> kReachAgent = {"--steps", "35000", "--workers", "1", "--batch-size", "256",
                                               "--hidden", "64,64", "--random-steps", "1000", "--no-progress"};
 
-TEST_F(SacLong, SacLearnsReachWithinFortyThousandSteps) {
+TEST_F(SacLong, SacLearnsReachWithinThirtyFiveThousandSteps) {
   std::vector<std::string> train = {"train", "sac", "Reach_0-v0", "--out", path("reach")};
   train.insert(train.end(), kReachAgent.begin(), kReachAgent.end());
   const manibench::testing::CommandResult r = runCli(train);
