@@ -75,7 +75,7 @@ TEST_F(SacLong, APopulationOfTwoReachObjectsMakesDemonstrationsThatReplayBitForB
     const manibench::testing::CommandResult replay = runCli({"demos", "replay", demos, "--check"});
     EXPECT_EQ(replay.exit_code, 0) << replay.out << replay.err;
     const manibench::testing::CommandResult info = runCli({"demos", "info", demos});
-    EXPECT_TRUE(contains(info.out, "3 trajector")) << info.out;
+    EXPECT_TRUE(contains(info.out, "trajectories   3 of 1 object")) << info.out;
   }
 }
 
