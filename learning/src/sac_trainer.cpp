@@ -442,15 +442,12 @@ class SacTrainer {
       try {
         r = workers_->receive(w);
       } catch (const WorkerDied& e) {
-        say(std::string(e.what()) + "; its episode (object " + s.object + ", seed " + std::to_string(s.seed) +
-            ") is dropped");
-        startEpisode(w);
+        dropEpisode(w, e.what());
         continue;
       }
       times_.physics += r.physics_seconds;
       if (!r.ok) {
-        say("worker " + std::to_string(w) + ": " + r.error + "; the episode is dropped");
-        startEpisode(w);
+        dropEpisode(w, "worker " + std::to_string(w) + ": " + r.error);
         continue;
       }
       replay_->add(s.obs, clipped.data() + w * a_dim, r.reward, r.observation, r.terminated);
@@ -495,12 +492,32 @@ class SacTrainer {
     row_updates_ = updates_;
   }
 
+  // The answer to sendSaveState; a worker that died meanwhile is replaced,
+  // its episode dropped, and the replacement's new episode saved instead.
+  WorkerReply receiveState(unsigned w) {
+    for (;;) {
+      try {
+        return workers_->receive(w);
+      } catch (const WorkerDied& e) {
+        dropEpisode(w, e.what());
+        collectResets();
+        workers_->sendSaveState(w);
+      }
+    }
+  }
+
+  void dropEpisode(unsigned w, const std::string& why) {
+    const Slot& s = slots_[w];
+    say(why + "; its episode (object " + s.object + ", seed " + std::to_string(s.seed) + ") is dropped");
+    startEpisode(w);
+  }
+
   void saveAll() {
     // Each worker's environment as it stands (restoreState continues it bit for bit).
     std::map<std::string, torch::Tensor> extras;
     for (unsigned w = 0; w < workers_->size(); ++w) workers_->sendSaveState(w);
     for (unsigned w = 0; w < workers_->size(); ++w) {
-      const WorkerReply r = workers_->receive(w);
+      const WorkerReply r = receiveState(w);
       if (!r.ok) throw LearningError("worker " + std::to_string(w) + " cannot save its state: " + r.error);
       extras["worker_state_" + std::to_string(w)] =
           torch::from_blob(const_cast<uint8_t*>(r.state.data()), {int64_t(r.state.size())}, torch::kUInt8).clone();

@@ -109,7 +109,7 @@ TEST_F(Sac, ADyingWorkerIsReportedAndReplaced) {
   SacOptions o = makeOptions("dying", 400);
   o.workers = 2;
   std::vector<std::string> messages;
-  pid_t killed = 0;
+  pid_t killed = 0, killed_at_checkpoint = 0;
   std::vector<pid_t> last_pids;
   bool replacement_alive = false;
   SacHooks hooks;
@@ -120,6 +120,11 @@ TEST_F(Sac, ADyingWorkerIsReportedAndReplaced) {
     if (killed == 0 && p.env_steps >= 120) {
       killed = p.worker_pids.at(1);
       ::kill(killed, SIGKILL);
+    }
+    // Just before the checkpoint at 250 env steps asks the workers for their states.
+    if (killed_at_checkpoint == 0 && p.env_steps >= 250) {
+      killed_at_checkpoint = p.worker_pids.at(0);
+      ::kill(killed_at_checkpoint, SIGKILL);
     }
   };
   const SacResult r = trainSac(getBuildTreeRegistry(), o, hooks);
@@ -133,6 +138,14 @@ TEST_F(Sac, ADyingWorkerIsReportedAndReplaced) {
   ASSERT_EQ(last_pids.size(), 2u);
   EXPECT_NE(last_pids[1], killed);
   EXPECT_TRUE(replacement_alive);
+  ASSERT_NE(killed_at_checkpoint, 0);
+  EXPECT_TRUE(std::any_of(messages.begin(), messages.end(), [&](const std::string& m) {
+    return contains(m, "environment worker 0 (pid " + std::to_string(killed_at_checkpoint) + ") died");
+  }));
+  int checkpoints = 0;
+  for (const auto& entry : fs::directory_iterator(path("dying/checkpoints")))
+    checkpoints += entry.path().filename().string().rfind("iter_", 0) == 0 ? 1 : 0;
+  EXPECT_EQ(checkpoints, 2);  // at 250 (or 251: a dropped step shifts the count) and at the end
 }
 
 TEST_F(Sac, TheTorchPolicyPluginRunsTheAgent) {
