@@ -2,6 +2,9 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
+#include <tuple>
+
 namespace manibench::learning {
 
 // --- options ------------------------------------------------------------------------------
@@ -24,8 +27,15 @@ AlgorithmOptions AlgorithmOptions::makeDefaults(const std::string& name) {
     o.batch_size = 64;
     o.lr = 5e-4;
     o.weight_decay = 0;
+  } else if (name == "sac") {
+    // Table 6: Adam 3e-4, discount 0.95, minibatch 1024, tau 0.005.
+    o.batch_size = 1024;
+    o.lr = 3e-4;
+    o.weight_decay = 0;
+    o.gamma = 0.95;
+    o.tau = 0.005;
   } else {
-    throw LearningError("unknown algorithm '" + name + "' (bc, bcq or td3bc)");
+    throw LearningError("unknown algorithm '" + name + "' (bc, bcq, td3bc or sac)");
   }
   return o;
 }
@@ -46,6 +56,12 @@ void AlgorithmOptions::writeYaml(YAML::Node& node) const {
   node["action_noise"] = action_noise;
   node["noise_clip"] = noise_clip;
   node["policy_delay"] = policy_delay;
+  node["init_temperature"] = init_temperature;
+  node["tune_temperature"] = tune_temperature;
+  node["target_entropy_per_dim"] = target_entropy_per_dim;
+  node["log_std_min"] = log_std_min;
+  node["log_std_max"] = log_std_max;
+  node["target_update_every"] = target_update_every;
 }
 
 AlgorithmOptions AlgorithmOptions::readYaml(const YAML::Node& node) {
@@ -64,6 +80,13 @@ AlgorithmOptions AlgorithmOptions::readYaml(const YAML::Node& node) {
   o.action_noise = node["action_noise"].as<double>();
   o.noise_clip = node["noise_clip"].as<double>();
   o.policy_delay = node["policy_delay"].as<int64_t>();
+  // Absent from the checkpoints written before SAC: the defaults.
+  o.init_temperature = node["init_temperature"].as<double>(o.init_temperature);
+  o.tune_temperature = node["tune_temperature"].as<bool>(o.tune_temperature);
+  o.target_entropy_per_dim = node["target_entropy_per_dim"].as<double>(o.target_entropy_per_dim);
+  o.log_std_min = node["log_std_min"].as<double>(o.log_std_min);
+  o.log_std_max = node["log_std_max"].as<double>(o.log_std_max);
+  o.target_update_every = node["target_update_every"].as<int64_t>(o.target_update_every);
   return o;
 }
 
@@ -102,10 +125,24 @@ torch::optim::Adam& Algorithm::addOptimizer(const std::string& name, const std::
   std::vector<torch::Tensor> parameters;
   for (const std::string& n : networks)
     for (const torch::Tensor& p : getNetwork(n)->parameters()) parameters.push_back(p);
+  return addTensorOptimizer(name, std::move(parameters));
+}
+
+torch::optim::Adam& Algorithm::addTensorOptimizer(const std::string& name, std::vector<torch::Tensor> parameters) {
   auto adam = std::make_unique<torch::optim::Adam>(
       parameters, torch::optim::AdamOptions(options_.lr).weight_decay(options_.weight_decay));
   optimizers_.emplace_back(name, std::move(adam));
   return *optimizers_.back().second;
+}
+
+torch::Tensor Algorithm::addParameter(const std::string& name, torch::Tensor value) {
+  value.set_requires_grad(true);
+  parameters_.emplace_back(name, value);
+  return value;
+}
+
+torch::Tensor Algorithm::explore(const ObservationBatch&) {
+  throw LearningError(options_.name + " is an offline algorithm: it does not explore");
 }
 
 std::shared_ptr<Network> Algorithm::getNetwork(const std::string& name) const {
@@ -124,6 +161,7 @@ void Algorithm::save(torch::serialize::OutputArchive& archive, bool with_optimiz
     network->save(sub);
     archive.write("net." + name, sub);
   }
+  for (const auto& [name, parameter] : parameters_) archive.write("param." + name, parameter);
   if (!with_optimizers) return;
   for (const auto& [name, optimizer] : optimizers_) {
     torch::serialize::OutputArchive sub;
@@ -138,12 +176,36 @@ void Algorithm::load(torch::serialize::InputArchive& archive, bool with_optimize
     archive.read("net." + name, sub);
     network->load(sub);
   }
+  for (auto& [name, parameter] : parameters_) {
+    torch::Tensor saved;
+    archive.read("param." + name, saved);
+    torch::NoGradGuard no_grad;
+    parameter.copy_(saved);
+  }
   if (!with_optimizers) return;
   for (const auto& [name, optimizer] : optimizers_) {
     torch::serialize::InputArchive sub;
     archive.read("optim." + name, sub);
     optimizer->load(sub);
   }
+}
+
+namespace {
+
+}  // namespace
+
+// Q-networks (obs, a) -> 1: critic1, critic2 and their targets, made in
+// that order (the order draws their initial weights), the targets copies.
+std::tuple<std::shared_ptr<Network>, std::shared_ptr<Network>, std::shared_ptr<Network>, std::shared_ptr<Network>>
+Algorithm::addTwinCritics(const NetOptions& net, const ObservationSpec& spec, const torch::Device& device) {
+  const int64_t a = spec.action_dim;
+  auto critic1 = addNetwork("critic1", makeNetwork(net, spec, a, 1), device);
+  auto critic2 = addNetwork("critic2", makeNetwork(net, spec, a, 1), device);
+  auto critic1_target = addNetwork("critic1_target", makeNetwork(net, spec, a, 1), device);
+  auto critic2_target = addNetwork("critic2_target", makeNetwork(net, spec, a, 1), device);
+  copyParameters(*critic1_target, *critic1);
+  copyParameters(*critic2_target, *critic2);
+  return {critic1, critic2, critic1_target, critic2_target};
 }
 
 namespace {
@@ -265,12 +327,7 @@ class Bcq : public Algorithm {
     // The VAE: encoder (obs, a) -> mean and log std of z; decoder (obs, z) -> a.
     encoder_ = addNetwork("vae_encoder", makeNetwork(net, spec, a, 2 * z), device);
     decoder_ = addNetwork("vae_decoder", makeNetwork(net, spec, z, a), device);
-    critic1_ = addNetwork("critic1", makeNetwork(net, spec, a, 1), device);
-    critic2_ = addNetwork("critic2", makeNetwork(net, spec, a, 1), device);
-    critic1_target_ = addNetwork("critic1_target", makeNetwork(net, spec, a, 1), device);
-    critic2_target_ = addNetwork("critic2_target", makeNetwork(net, spec, a, 1), device);
-    copyParameters(*critic1_target_, *critic1_);
-    copyParameters(*critic2_target_, *critic2_);
+    std::tie(critic1_, critic2_, critic1_target_, critic2_target_) = addTwinCritics(net, spec, device);
     vae_optimizer_ = &addOptimizer("vae", {"vae_encoder", "vae_decoder"});
     critic_optimizer_ = &addOptimizer("critic", {"critic1", "critic2"});
     if (o.phi > 0) {
@@ -366,6 +423,94 @@ class Bcq : public Algorithm {
   torch::optim::Adam *vae_optimizer_, *critic_optimizer_, *actor_optimizer_ = nullptr;
 };
 
+// --- SAC ----------------------------------------------------------------------------------
+
+// The actor outputs the mean and log std of a Gaussian over the
+// pre-squashing action u; the action is tanh(u) (Haarnoja et al. 2018,
+// appendix C), its log-likelihood corrected by log(1 - tanh(u)^2),
+// written as 2 (log 2 - u - softplus(-2u)) for stability.
+class Sac : public Algorithm {
+ public:
+  Sac(const AlgorithmOptions& o, const NetOptions& net, const ObservationSpec& spec, const torch::Device& device)
+      : Algorithm(o), action_dim_(spec.action_dim) {
+    const int64_t a = action_dim_;
+    actor_ = addNetwork("actor", makeNetwork(net, spec, 0, 2 * a), device);
+    std::tie(critic1_, critic2_, critic1_target_, critic2_target_) = addTwinCritics(net, spec, device);
+    actor_optimizer_ = &addOptimizer("actor", {"actor"});
+    critic_optimizer_ = &addOptimizer("critic", {"critic1", "critic2"});
+    log_temperature_ = addParameter(
+        "log_temperature", torch::full({1}, std::log(o.init_temperature), torch::TensorOptions(device)));
+    temperature_optimizer_ = &addTensorOptimizer("temperature", {log_temperature_});
+    target_entropy_ = o.target_entropy_per_dim * double(a);
+  }
+  bool needsNextObservations() const override { return true; }
+  std::vector<std::string> getLossNames() const override {
+    return {"critic_loss", "actor_loss", "temperature", "entropy", "q"};
+  }
+
+  // A reparametrized sample and its log-likelihood [B].
+  std::pair<torch::Tensor, torch::Tensor> sample(const ObservationBatch& obs) {
+    const torch::Tensor out = actor_->forward(obs, {});
+    const torch::Tensor mean = out.slice(1, 0, action_dim_);
+    const torch::Tensor log_std = out.slice(1, action_dim_).clamp(options_.log_std_min, options_.log_std_max);
+    const torch::Tensor noise = torch::randn_like(mean);
+    const torch::Tensor u = mean + log_std.exp() * noise;
+    const torch::Tensor log_prob = (-0.5 * noise.pow(2) - log_std - 0.5 * std::log(2 * M_PI)).sum(1) -
+                                   (2 * (std::log(2.0) - u - torch::softplus(-2 * u))).sum(1);
+    return {torch::tanh(u), log_prob};
+  }
+
+  std::vector<double> update(const TransitionBatch& b, int64_t iteration) override {
+    for (auto& [name, network] : networks_) network->train();
+    const torch::Tensor temperature = log_temperature_.exp().detach();
+    torch::Tensor target;
+    {
+      torch::NoGradGuard no_grad;
+      const auto [next_action, next_log_prob] = sample(b.next_obs);
+      const torch::Tensor q_next = torch::min(critic1_target_->forward(b.next_obs, next_action),
+                                              critic2_target_->forward(b.next_obs, next_action)).squeeze(1);
+      target = b.rewards + options_.gamma * (1 - b.dones) * (q_next - temperature * next_log_prob);
+    }
+    const torch::Tensor critic_loss =
+        torch::mse_loss(critic1_->forward(b.obs, b.actions).squeeze(1), target) +
+        torch::mse_loss(critic2_->forward(b.obs, b.actions).squeeze(1), target);
+    step(*critic_optimizer_, critic_loss);
+
+    const auto [action, log_prob] = sample(b.obs);
+    const torch::Tensor q = torch::min(critic1_->forward(b.obs, action), critic2_->forward(b.obs, action)).squeeze(1);
+    const torch::Tensor actor_loss = (temperature * log_prob - q).mean();
+    step(*actor_optimizer_, actor_loss);
+    if (options_.tune_temperature) {
+      const torch::Tensor temperature_loss = -(log_temperature_ * (log_prob.detach() + target_entropy_)).mean();
+      step(*temperature_optimizer_, temperature_loss);
+    }
+    if ((iteration + 1) % options_.target_update_every == 0) {
+      softUpdate(*critic1_target_, *critic1_, options_.tau);
+      softUpdate(*critic2_target_, *critic2_, options_.tau);
+    }
+    return {critic_loss.item<double>(), actor_loss.item<double>(), temperature.item<double>(),
+            -log_prob.mean().item<double>(), q.mean().item<double>()};
+  }
+
+  torch::Tensor act(const ObservationBatch& obs, at::Generator&) override {
+    torch::NoGradGuard no_grad;
+    actor_->eval();
+    return torch::tanh(actor_->forward(obs, {}).slice(1, 0, action_dim_));
+  }
+  torch::Tensor explore(const ObservationBatch& obs) override {
+    torch::NoGradGuard no_grad;
+    actor_->eval();
+    return sample(obs).first;
+  }
+
+ private:
+  int64_t action_dim_;
+  double target_entropy_;
+  std::shared_ptr<Network> actor_, critic1_, critic2_, critic1_target_, critic2_target_;
+  torch::Tensor log_temperature_;
+  torch::optim::Adam *actor_optimizer_, *critic_optimizer_, *temperature_optimizer_;
+};
+
 }  // namespace
 
 std::unique_ptr<Algorithm> makeAlgorithm(const AlgorithmOptions& options, const NetOptions& net,
@@ -374,7 +519,12 @@ std::unique_ptr<Algorithm> makeAlgorithm(const AlgorithmOptions& options, const 
   if (options.name == "bc") return std::make_unique<BehaviorCloning>(options, net, spec, device);
   if (options.name == "td3bc") return std::make_unique<Td3Bc>(options, net, spec, device);
   if (options.name == "bcq") return std::make_unique<Bcq>(options, net, spec, device);
-  throw LearningError("unknown algorithm '" + options.name + "' (bc, bcq or td3bc)");
+  if (options.name == "sac") {
+    if (options.target_update_every <= 0) throw LearningError("the target update interval must be positive");
+    if (options.init_temperature <= 0) throw LearningError("SAC's initial temperature must be positive");
+    return std::make_unique<Sac>(options, net, spec, device);
+  }
+  throw LearningError("unknown algorithm '" + options.name + "' (bc, bcq, td3bc or sac)");
 }
 
 }  // namespace manibench::learning

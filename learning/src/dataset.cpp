@@ -288,6 +288,18 @@ std::pair<torch::Tensor, torch::Tensor> DemoDataset::calcStateStatistics() const
   return {mean, std};
 }
 
+void setSpecLayout(const Environment& env, ObservationSpec& spec) {
+  const PolicyLayout layout = env.calcPolicyLayout();
+  spec.state_dim = layout.observation_dim;
+  spec.state_segments.clear();
+  for (const sdk::Segment& s : layout.observation_segments)
+    spec.state_segments.push_back({s.name, s.offset, s.size});
+  spec.action_dim = layout.action_dim;
+  spec.action_segments.clear();
+  for (const sdk::Segment& s : layout.action_segments)
+    spec.action_segments.push_back({s.name, s.offset, s.size});
+}
+
 ObservationSpec calcDemoSpec(const PluginRegistry& registry, const DemoDataset& dataset) {
   const DemoFileInfo& info = dataset.getInfo();
   ObservationSpec spec;
@@ -301,13 +313,7 @@ ObservationSpec calcDemoSpec(const PluginRegistry& registry, const DemoDataset& 
     throw LearningError("cannot make the environment of " + quoted(dataset.getOptions().paths.front()) +
                         " (" + info.task + "): " + e.what());
   }
-  const PolicyLayout layout = env->calcPolicyLayout();
-  spec.state_dim = layout.observation_dim;
-  for (const sdk::Segment& s : layout.observation_segments)
-    spec.state_segments.push_back({s.name, s.offset, s.size});
-  spec.action_dim = layout.action_dim;
-  for (const sdk::Segment& s : layout.action_segments)
-    spec.action_segments.push_back({s.name, s.offset, s.size});
+  setSpecLayout(*env, spec);
   spec.point_count = dataset.getPointCount();
   spec.mask_count = dataset.getMaskCount();
   if (spec.isPointCloud()) spec.mask_names = env->getTaskDescription().masks;

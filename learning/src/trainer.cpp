@@ -2,6 +2,8 @@
 #include <manibench/learning/compute.hpp>
 #include <manibench/learning/trainer.hpp>
 
+#include "training_files.hpp"
+
 #include <manibench/evaluation.hpp>
 
 #include <yaml-cpp/yaml.h>
@@ -84,49 +86,6 @@ TrainOptions TrainOptions::readYaml(const YAML::Node& node) {
 // --- the loop -----------------------------------------------------------------------------
 
 namespace {
-
-std::string yamlText(const YAML::Node& node) {
-  YAML::Emitter out;
-  out << node;
-  return std::string(out.c_str()) + "\n";
-}
-
-void writeText(const fs::path& path, const std::string& text) {
-  const fs::path temporary = path.string() + ".tmp";
-  {
-    std::ofstream out(temporary);
-    out << text;
-    if (!out) throw LearningError("cannot write '" + path.string() + "'");
-  }
-  fs::rename(temporary, path);
-}
-
-std::string checkpointName(int64_t iteration) {
-  std::ostringstream name;
-  name << "iter_" << std::setw(7) << std::setfill('0') << iteration << ".pt";
-  return name.str();
-}
-
-std::string formatNumber(double value) {
-  std::ostringstream out;
-  out << std::setprecision(9) << value;
-  return out.str();
-}
-
-// Keeps the CSV's header and the rows of iterations up to `iteration`
-// (a resumed run rewrites what came after its checkpoint).
-void truncateCsv(const fs::path& path, int64_t iteration) {
-  std::ifstream in(path);
-  if (!in) return;
-  std::string line, kept;
-  bool header = true;
-  while (std::getline(in, line)) {
-    if (header || std::stoll(line.substr(0, line.find(','))) <= iteration) kept += line + "\n";
-    header = false;
-  }
-  in.close();
-  writeText(path, kept);
-}
 
 class Trainer {
  public:
@@ -348,13 +307,12 @@ TrainResult train(const PluginRegistry& registry, const TrainOptions& options, c
 
 TrainResult resumeTraining(const PluginRegistry& registry, const std::string& dir, int64_t iterations,
                            const TrainHooks& hooks) {
-  const fs::path file = fs::path(dir) / "train.yaml";
-  if (!fs::exists(file)) throw LearningError("'" + dir + "' holds no training (no train.yaml)");
   TrainOptions options;
+  const YAML::Node node = readTrainingYaml(dir);
   try {
-    options = TrainOptions::readYaml(YAML::LoadFile(file.string()));
+    options = TrainOptions::readYaml(node);
   } catch (const YAML::Exception& e) {
-    throw LearningError("'" + file.string() + "': " + e.what());
+    throw LearningError("'" + (fs::path(dir) / "train.yaml").string() + "': " + e.what());
   }
   options.out_dir = dir;
   Trainer trainer(registry, options, hooks);

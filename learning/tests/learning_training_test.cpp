@@ -12,6 +12,7 @@
 #include <manibench/plugin_instances.hpp>
 
 #include <test_registry.hpp>
+#include "learning_test_support.hpp"
 #include <test_support.hpp>
 
 #include <gtest/gtest.h>
@@ -65,23 +66,6 @@ class LearningTraining : public ::testing::Test {
     return o;
   }
 };
-
-// Every parameter and buffer of every network of two checkpoints, bit for bit.
-bool sameWeights(const std::string& a, const std::string& b) {
-  const LoadedCheckpoint x = loadCheckpoint(a, torch::kCPU, false), y = loadCheckpoint(b, torch::kCPU, false);
-  const auto& nx = x.algorithm->getNetworks();
-  const auto& ny = y.algorithm->getNetworks();
-  if (nx.size() != ny.size()) return false;
-  for (std::size_t i = 0; i < nx.size(); ++i) {
-    const auto px = nx[i].second->named_parameters(), py = ny[i].second->named_parameters();
-    for (const auto& p : px)
-      if (!torch::equal(p.value(), py[p.key()])) return false;
-    const auto bx = nx[i].second->named_buffers(), by = ny[i].second->named_buffers();
-    for (const auto& p : bx)
-      if (!torch::equal(p.value(), by[p.key()])) return false;
-  }
-  return true;
-}
 
 std::string readFile(const std::string& path) {
   std::ifstream in(path);

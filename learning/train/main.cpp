@@ -6,25 +6,17 @@
 
 #include <manibench/plugin_registry.hpp>
 
-#include <nlohmann/json.hpp>
-
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <climits>
-#include <cstring>
-#include <fcntl.h>
-#include <cmath>
+#include <chrono>
 #include <filesystem>
-#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
 
 #include "cli.hpp"
-
-extern char** environ;
+#include "programs.hpp"
+#include "sac_command.hpp"
 
 namespace mb = manibench;
 namespace ml = manibench::learning;
@@ -35,6 +27,7 @@ namespace {
 
 const char* kUsage = R"(usage: manibench train bc|bcq|td3bc --demos FILE.h5 [--demos FILE.h5 ...] --out DIR [options]
        manibench train --resume DIR [--iterations N]
+       manibench train sac ... (manibench train sac --help)
 
 Learns a policy from demonstrations (supplement D.2-D.3, docs/learning.md):
 Behavior Cloning, BCQ or TD3+BC, with an MLP on state demonstrations or
@@ -99,94 +92,37 @@ Output and evaluation:
   --resume DIR            continue the training in DIR from its newest checkpoint
 )";
 
-std::vector<std::string> splitList(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream in(text);
-  for (std::string item; std::getline(in, item, ',');)
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
+using ml::programs::splitList;
 
 int64_t parseInteger(const std::string& text, const std::string& option, int64_t minimum) {
-  try {
-    std::size_t used = 0;
-    const long long value = std::stoll(text, &used);
-    if (used == text.size() && value >= minimum) return value;
-  } catch (const std::exception&) {
-  }
-  throw UsageError(option + " needs an integer of at least " + std::to_string(minimum) + ", got '" + text + "'",
-                   kUsage);
+  return ml::programs::parseInteger(text, option, minimum, kUsage);
 }
-
 double parseNumber(const std::string& text, const std::string& option) {
-  try {
-    std::size_t used = 0;
-    const double value = std::stod(text, &used);
-    if (used == text.size() && std::isfinite(value) && value >= 0) return value;
-  } catch (const std::exception&) {
-  }
-  throw UsageError(option + " needs a non-negative number, got '" + text + "'", kUsage);
+  return ml::programs::parseNumber(text, option, kUsage);
 }
-
 std::vector<int64_t> parseLayers(const std::string& text, const std::string& option) {
-  std::vector<int64_t> out;
-  for (const std::string& item : splitList(text)) out.push_back(parseInteger(item, option, 1));
-  if (out.empty()) throw UsageError(option + " needs at least one layer size", kUsage);
-  return out;
+  return ml::programs::parseLayers(text, option, kUsage);
 }
 
-std::string getProgramDir() {
-  char path[PATH_MAX];
-  const ssize_t n = readlink("/proc/self/exe", path, sizeof(path) - 1);
-  if (n <= 0) return ".";
-  path[n] = 0;
-  return fs::path(path).parent_path().string();
-}
-
-// `manibench eval` of the newest checkpoint, in a child process (posix_spawn:
-// nothing of this process's libtorch crosses into the evaluation's workers).
+// `manibench eval` of the newest checkpoint.
 ml::EvaluationOutcome runEvaluation(const ml::EvaluationRequest& r) {
   const ml::TrainOptions& o = *r.options;
-  const std::string program = getProgramDir() + "/manibench";
-  std::vector<std::string> args = {program, "eval", o.eval_task.empty() ? r.environment_id : o.eval_task,
-                                   "--policy", "torch_policy", "--policy-config", r.policy_config,
-                                   "--config", r.environment_config, "--split", o.eval_split,
+  std::vector<std::string> args = {"--config", r.environment_config, "--split", o.eval_split,
                                    "--episodes-per-object", std::to_string(o.eval_episodes),
                                    "--workers", std::to_string(o.eval_workers), "--seed",
-                                   std::to_string(o.eval_seed), "--no-progress",
-                                   "--out", r.out_dir};
+                                   std::to_string(o.eval_seed)};
   if (!o.eval_objects.empty()) {
     std::string ids;
     for (const std::string& id : o.eval_objects) ids += (ids.empty() ? "" : ",") + id;
     args.push_back("--objects");
     args.push_back(ids);
   }
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  fs::create_directories(r.out_dir);
-  const std::string log_path = r.out_dir + "/eval.log";
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-  pid_t pid = 0;
-  const int error = posix_spawn(&pid, program.c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (error != 0) throw ml::LearningError("cannot start " + program + ": " + std::strerror(error));
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  try {
+    return ml::programs::runPolicyEvaluation(o.eval_task.empty() ? r.environment_id : o.eval_task,
+                                             r.policy_config, args, r.out_dir);
+  } catch (const ml::LearningError& e) {
+    throw ml::LearningError("the evaluation at iteration " + std::to_string(r.iteration) + ": " + e.what());
   }
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    throw ml::LearningError("the evaluation at iteration " + std::to_string(r.iteration) + " failed (" +
-                            log_path + " says why)");
-  std::ifstream in(r.out_dir + "/summary.json");
-  const nlohmann::json summary = nlohmann::json::parse(in);
-  ml::EvaluationOutcome outcome;
-  outcome.episodes = summary["overall"]["episodes"].get<uint32_t>();
-  outcome.successes = summary["overall"]["successes"].get<uint32_t>();
-  outcome.success_rate = summary["overall"]["success_rate"].get<double>();
-  return outcome;
 }
 
 void drawProgress(const ml::TrainProgress& p) {
@@ -270,6 +206,7 @@ ml::TrainOptions parseTrainOptions(const mb::cli::Arguments& args, int argc, cha
 }
 
 int run(int argc, char** argv) {
+  if (ml::programs::isSacCommand(argc, argv)) return ml::programs::runSacCommand(argc, argv);
   const std::vector<std::string> valued = {
       "demos", "objects", "per-object", "cache-gb", "net", "history", "action-history", "hidden", "point-layers", "width", "layers", "heads",
       "dropout", "iterations", "batch-size", "lr", "weight-decay", "seed", "threads", "device", "gamma", "tau",

@@ -2,9 +2,11 @@
 // Cloning (MSE on the demonstrated actions), BCQ (Fujimoto et al. 2019:
 // a VAE of the demonstrated actions, twin Q-networks, the best of n
 // sampled actions; Table 7) and TD3+BC (Fujimoto & Gu 2021: TD3 with a
-// BC term, lambda = alpha / mean |Q|; Table 8). Each owns its networks
-// and optimizers, takes one gradient step per update() and acts on a batch
-// of observations.
+// BC term, lambda = alpha / mean |Q|; Table 8); and SAC (Haarnoja et al.
+// 2018, with automatic entropy tuning; Table 6), the online agent of
+// supplement C.2 that sac_trainer.hpp feeds from environment workers. Each
+// owns its networks and optimizers, takes one gradient step per update()
+// and acts on a batch of observations.
 #pragma once
 
 #include <manibench/learning/networks.hpp>
@@ -13,13 +15,14 @@
 
 #include <memory>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
 namespace manibench::learning {
 
 struct AlgorithmOptions {
-  std::string name = "bc";  // bc | bcq | td3bc
+  std::string name = "bc";  // bc | bcq | td3bc | sac
   int64_t batch_size = 128;
   double lr = 3e-4;
   double weight_decay = 0;
@@ -40,6 +43,16 @@ struct AlgorithmOptions {
   double action_noise = 0.2;
   double noise_clip = 0.5;
   int64_t policy_delay = 2;
+  // SAC (Table 6; the table is silent on the entropy terms, these are
+  // ManiSkill-Learn's): the initial temperature, whether it is tuned
+  // towards the target entropy (per action dimension: -1 gives the usual
+  // -|A|), the log std's clamp, and the target networks' update interval
+  // in gradient steps (Table 6: every step).
+  double init_temperature = 0.2;
+  bool tune_temperature = true;
+  double target_entropy_per_dim = -1.0;
+  double log_std_min = -20, log_std_max = 2;
+  int64_t target_update_every = 1;
 
   // The tables' values (and ManiSkill-Learn's where the tables are
   // silent) for `name`; throws LearningError for an unknown name.
@@ -71,8 +84,13 @@ class Algorithm {
   // updates count them), in training mode; the losses in getLossNames()'s order.
   virtual std::vector<double> update(const TransitionBatch& batch, int64_t iteration) = 0;
   // Actions [B, A] in evaluation mode, without gradients; `generator`
-  // draws BCQ's samples (the others are deterministic).
+  // draws BCQ's samples (the others are deterministic; SAC's is the tanh
+  // of its Gaussian's mean).
   virtual torch::Tensor act(const ObservationBatch& obs, at::Generator& generator) = 0;
+  // Exploration actions [B, A] in [-1, 1], without gradients, drawn from
+  // libtorch's default generator: the online algorithms' (SAC's squashed
+  // Gaussian); the offline ones throw.
+  virtual torch::Tensor explore(const ObservationBatch& obs);
 
   // The networks and optimizers by name ("actor", "critic1", ...).
   const std::vector<std::pair<std::string, std::shared_ptr<Network>>>& getNetworks() const {
@@ -80,7 +98,8 @@ class Algorithm {
   }
   // Sets the state normalization of every network.
   void setStateNormalization(const torch::Tensor& mean, const torch::Tensor& scale);
-  // Writes / reads the networks (and optimizers) under "net.NAME" ("optim.NAME").
+  // Writes / reads the networks (and optimizers, and the lone parameters
+  // such as SAC's temperature) under "net.NAME" ("optim.NAME", "param.NAME").
   void save(torch::serialize::OutputArchive& archive, bool with_optimizers) const;
   void load(torch::serialize::InputArchive& archive, bool with_optimizers);
 
@@ -90,11 +109,19 @@ class Algorithm {
                                       const torch::Device& device);
   // An Adam optimizer over `names`' parameters.
   torch::optim::Adam& addOptimizer(const std::string& name, const std::vector<std::string>& networks);
+  // An Adam optimizer over tensors that belong to no network.
+  torch::optim::Adam& addTensorOptimizer(const std::string& name, std::vector<torch::Tensor> parameters);
+  // critic1, critic2 (obs, a) -> Q and their targets (copies), in that order.
+  std::tuple<std::shared_ptr<Network>, std::shared_ptr<Network>, std::shared_ptr<Network>, std::shared_ptr<Network>>
+  addTwinCritics(const NetOptions& net, const ObservationSpec& spec, const torch::Device& device);
+  // A trainable tensor outside the networks, saved with them.
+  torch::Tensor addParameter(const std::string& name, torch::Tensor value);
   std::shared_ptr<Network> getNetwork(const std::string& name) const;
 
   AlgorithmOptions options_;
   std::vector<std::pair<std::string, std::shared_ptr<Network>>> networks_;
   std::vector<std::pair<std::string, std::unique_ptr<torch::optim::Adam>>> optimizers_;
+  std::vector<std::pair<std::string, torch::Tensor>> parameters_;
 };
 
 std::unique_ptr<Algorithm> makeAlgorithm(const AlgorithmOptions& options, const NetOptions& net,

@@ -108,6 +108,8 @@ class DemoDataset {
 // the layouts of the environment its configuration makes (which needs the
 // task's plugin).
 ObservationSpec calcDemoSpec(const PluginRegistry& registry, const DemoDataset& dataset);
+// The state and action layouts of `env` (its own observation mode) into `spec`.
+void setSpecLayout(const Environment& env, ObservationSpec& spec);
 
 // Minibatches without replacement within an epoch (the last partial batch
 // of each window is dropped), from a fully specified generator: the same

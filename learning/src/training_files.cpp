@@ -1,0 +1,66 @@
+#include "training_files.hpp"
+
+#include <manibench/learning/spec.hpp>
+
+#include <yaml-cpp/yaml.h>
+
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+namespace manibench::learning {
+
+namespace fs = std::filesystem;
+
+std::string yamlText(const YAML::Node& node) {
+  YAML::Emitter out;
+  out << node;
+  return std::string(out.c_str()) + "\n";
+}
+
+void writeText(const fs::path& path, const std::string& text) {
+  const fs::path temporary = path.string() + ".tmp";
+  {
+    std::ofstream out(temporary);
+    out << text;
+    if (!out) throw LearningError("cannot write '" + path.string() + "'");
+  }
+  fs::rename(temporary, path);
+}
+
+std::string checkpointName(int64_t iteration) {
+  std::ostringstream name;
+  name << "iter_" << std::setw(7) << std::setfill('0') << iteration << ".pt";
+  return name.str();
+}
+
+std::string formatNumber(double value) {
+  std::ostringstream out;
+  out << std::setprecision(9) << value;
+  return out.str();
+}
+
+void truncateCsv(const fs::path& path, int64_t iteration) {
+  std::ifstream in(path);
+  if (!in) return;
+  std::string line, kept;
+  bool header = true;
+  while (std::getline(in, line)) {
+    if (header || std::stoll(line.substr(0, line.find(','))) <= iteration) kept += line + "\n";
+    header = false;
+  }
+  in.close();
+  writeText(path, kept);
+}
+
+YAML::Node readTrainingYaml(const std::string& dir) {
+  const fs::path file = fs::path(dir) / "train.yaml";
+  if (!fs::exists(file)) throw LearningError("'" + dir + "' holds no training (no train.yaml)");
+  try {
+    return YAML::LoadFile(file.string());
+  } catch (const YAML::Exception& e) {
+    throw LearningError("'" + file.string() + "': " + e.what());
+  }
+}
+
+}  // namespace manibench::learning

@@ -1,0 +1,30 @@
+// The files of a training's directory, shared by the demonstration trainer
+// (trainer.cpp) and SAC's (sac_trainer.cpp): whole-file writes that a kill
+// cannot leave half-written, checkpoint names that sort by number, and the
+// CSV logs a resumed run cuts back to its checkpoint.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+namespace YAML {
+class Node;
+}
+
+namespace manibench::learning {
+
+std::string yamlText(const YAML::Node& node);
+// Writes `text` to a temporary file renamed into place.
+void writeText(const std::filesystem::path& path, const std::string& text);
+// "iter_0001000.pt": names that sort as their numbers (findNewestCheckpoint).
+std::string checkpointName(int64_t iteration);
+// Nine significant digits.
+std::string formatNumber(double value);
+// Keeps the CSV's header and the rows whose first column is at most
+// `iteration` (a resumed run rewrites what came after its checkpoint).
+void truncateCsv(const std::filesystem::path& path, int64_t iteration);
+// DIR/train.yaml; a LearningError naming the file when it is missing or damaged.
+YAML::Node readTrainingYaml(const std::string& dir);
+
+}  // namespace manibench::learning
