@@ -264,14 +264,17 @@ std::string formatDuration(double seconds) {
   return buffer;
 }
 
+std::string formatProgressBar(std::size_t done, std::size_t total, int width) {
+  const int filled = total ? int(std::size_t(width) * std::min(done, total) / total) : 0;
+  std::string bar(std::size_t(filled), '#');
+  bar.resize(std::size_t(width), '.');
+  return "[" + bar + "] " + std::to_string(done) + "/" + std::to_string(total);
+}
+
 void drawProgressBar(std::size_t done, std::size_t total, const std::string& unit,
                      const std::string& details, double elapsed) {
-  const int width = 30;
-  const int filled = total ? int(width * std::min(done, total) / total) : 0;
-  std::string bar(std::size_t(filled), '#');
-  bar.resize(width, '.');
   std::ostringstream line;
-  line << "\r[" << bar << "] " << done << "/" << total << " " << unit << details;
+  line << "\r" << formatProgressBar(done, total) << " " << unit << details;
   if (done > 0 && total > done)
     line << ", ~" << formatDuration(elapsed / double(done) * double(total - done)) << " left";
   else

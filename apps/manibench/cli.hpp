@@ -135,6 +135,8 @@ void printEpisode(const mb::EpisodeResult& r);
 
 // "mm:ss" or "h:mm:ss".
 std::string formatDuration(double seconds);
+// "[#####.....] done/total", a bar of `width` characters.
+std::string formatProgressBar(std::size_t done, std::size_t total, int width = 30);
 // One progress line on stderr, redrawn in place: a bar of done/total, the
 // unit, `details` (", 3 successful"), and the time left (or elapsed).
 void drawProgressBar(std::size_t done, std::size_t total, const std::string& unit,

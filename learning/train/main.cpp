@@ -127,11 +127,8 @@ ml::EvaluationOutcome runEvaluation(const ml::EvaluationRequest& r) {
 
 void drawProgress(const ml::TrainProgress& p) {
   std::ostringstream line;
-  const int width = 30;
-  const int filled = int(width * p.iteration / std::max<int64_t>(p.total, 1));
-  std::string bar(std::size_t(filled), '#');
-  bar.resize(width, '.');
-  line << "\r[" << bar << "] " << p.iteration << "/" << p.total << " it, " << std::fixed << std::setprecision(1)
+  line << "\r" << mb::cli::formatProgressBar(std::size_t(p.iteration), std::size_t(p.total)) << " it, "
+       << std::fixed << std::setprecision(1)
        << p.iterations_per_second << " it/s";
   line << std::defaultfloat << std::setprecision(4);
   for (std::size_t i = 0; i < p.losses.size() && i < 2; ++i) line << ", " << p.loss_names[i] << " " << p.losses[i];

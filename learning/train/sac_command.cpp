@@ -149,11 +149,8 @@ std::string joinCommand(int argc, char** argv) {
 
 void drawSacProgress(const SacProgress& p) {
   std::ostringstream line;
-  const int width = 24;
-  const int filled = int(width * p.env_steps / std::max<int64_t>(p.total, 1));
-  std::string bar(std::size_t(filled), '#');
-  bar.resize(width, '.');
-  line << "\r[" << bar << "] " << p.env_steps << "/" << p.total << " steps, " << std::fixed << std::setprecision(1)
+  line << "\r" << mb::cli::formatProgressBar(std::size_t(p.env_steps), std::size_t(p.total), 24) << " steps, "
+       << std::fixed << std::setprecision(1)
        << p.env_steps_per_second << " steps/s, " << p.updates_per_second << " updates/s, return "
        << std::setprecision(2) << p.mean_return << ", success " << std::setprecision(0) << 100 * p.success_rate
        << "% (" << p.episodes << " episodes)";
