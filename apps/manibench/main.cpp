@@ -42,6 +42,8 @@ Commands:
                             on the OpenCabinetDrawer-v0 test split
   train bc|bcq|td3bc        learn a policy from demonstrations (docs/learning.md;
                             built where libtorch is installed)
+  train sac|sac-population  SAC agents on the dense reward, one per object for
+                            demonstrations (supplement C.2; docs/learning.md)
   view TASK                 a window on a task: free and task cameras, masks,
                             point cloud, overlay; drive the robot by keyboard
                             (--record FILE.h5), watch --policy NAME or
