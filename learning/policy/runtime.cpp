@@ -15,7 +15,7 @@ namespace sdk = manibench::sdk;
 
 std::vector<SpecSegment> toSegments(const sdk::Layout& layout) {
   std::vector<SpecSegment> out;
-  for (const sdk::Segment& s : layout.segments) out.push_back({s.name, s.offset, s.size});
+  for (const sdk::Segment& s : layout.segments) out.push_back({s.name, s.offset, s.size, s.description});
   return out;
 }
 

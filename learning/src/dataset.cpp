@@ -59,7 +59,7 @@ void checkShape(const Shape& expected, const Shape& got, const std::string& wher
 ObservationBatch DataChunk::gatherObservations(const torch::Tensor& rows, const NetOptions& inputs) const {
   ObservationBatch b;
   b.state = state.index_select(0, rows);
-  if (inputs.history > 1 || inputs.action_history > 0 || inputs.step_input) {
+  if (inputs.hasExtraStateInputs()) {
     // As InputHistory builds them while acting.
     const torch::Tensor first = obs_first.index_select(0, rows);
     std::vector<torch::Tensor> parts{b.state};
@@ -71,6 +71,7 @@ ObservationBatch DataChunk::gatherObservations(const torch::Tensor& rows, const 
       parts.push_back(actions.index_select(0, transition.clamp_min(0)) * exists.unsqueeze(1).to(torch::kFloat32));
     }
     if (inputs.step_input) parts.push_back(calcStepFeature((rows - first).to(torch::kFloat32)).unsqueeze(1));
+    if (inputs.robot_frame.isEnabled()) parts.push_back(calcRobotFrameFeatures(inputs.robot_frame, b.state));
     b.state = torch::cat(parts, 1);
   }
   if (xyz.defined()) {
@@ -254,20 +255,17 @@ DataChunk DemoDataset::load(const std::vector<std::size_t>& indices) const {
   return c;
 }
 
-std::pair<torch::Tensor, torch::Tensor> DemoDataset::calcStateStatistics() const {
-  std::vector<double> sum(state_dim_, 0.0), squares(state_dim_, 0.0);
+std::pair<torch::Tensor, torch::Tensor> DemoDataset::calcStateStatistics(const StateFeatures& features) const {
+  torch::Tensor sum, squares;  // float64, over every observation
   uint64_t count = 0;
   std::vector<std::size_t> window;
   uint64_t bytes = 0;
   auto flush = [&] {
     if (window.empty()) return;
     const DataChunk c = load(window);
-    const torch::Tensor s = c.state.to(torch::kFloat64);
-    const torch::Tensor total = s.sum(0), total_squares = (s * s).sum(0);
-    for (uint32_t d = 0; d < state_dim_; ++d) {
-      sum[d] += total[d].item<double>();
-      squares[d] += total_squares[d].item<double>();
-    }
+    const torch::Tensor s = (features ? features(c.state) : c.state).to(torch::kFloat64);
+    sum = sum.defined() ? sum + s.sum(0) : s.sum(0);
+    squares = squares.defined() ? squares + (s * s).sum(0) : (s * s).sum(0);
     count += uint64_t(s.size(0));
     window.clear();
     bytes = 0;
@@ -278,14 +276,9 @@ std::pair<torch::Tensor, torch::Tensor> DemoDataset::calcStateStatistics() const
     bytes += calcBytes(i);
   }
   flush();
-  torch::Tensor mean = torch::empty({int64_t(state_dim_)}, torch::kFloat32);
-  torch::Tensor std = torch::empty({int64_t(state_dim_)}, torch::kFloat32);
-  for (uint32_t d = 0; d < state_dim_; ++d) {
-    const double mu = sum[d] / double(count);
-    mean[d] = mu;
-    std[d] = std::sqrt(std::max(0.0, squares[d] / double(count) - mu * mu));
-  }
-  return {mean, std};
+  const torch::Tensor mean = sum / double(count);
+  const torch::Tensor std = (squares / double(count) - mean * mean).clamp_min(0.0).sqrt();
+  return {mean.to(torch::kFloat32), std.to(torch::kFloat32)};
 }
 
 void setSpecLayout(const Environment& env, ObservationSpec& spec) {
@@ -293,7 +286,7 @@ void setSpecLayout(const Environment& env, ObservationSpec& spec) {
   spec.state_dim = layout.observation_dim;
   spec.state_segments.clear();
   for (const sdk::Segment& s : layout.observation_segments)
-    spec.state_segments.push_back({s.name, s.offset, s.size});
+    spec.state_segments.push_back({s.name, s.offset, s.size, s.description});
   spec.action_dim = layout.action_dim;
   spec.action_segments.clear();
   for (const sdk::Segment& s : layout.action_segments)

@@ -76,6 +76,7 @@ void NetOptions::writeYaml(YAML::Node& node) const {
   node["history"] = history;
   node["action_history"] = action_history;
   node["step_input"] = step_input;
+  if (robot_frame.isEnabled()) robot_frame.writeYaml(node["robot_frame"]);
   node["mlp_hidden"] = mlp_hidden;
   node["point_layers"] = point_layers;
   node["pointnet_head"] = pointnet_head;
@@ -94,6 +95,7 @@ NetOptions NetOptions::readYaml(const YAML::Node& node) {
   o.history = node["history"].as<int64_t>(1);
   o.action_history = node["action_history"].as<int64_t>(0);
   o.step_input = node["step_input"].as<bool>(false);
+  o.robot_frame = RobotFrameInputs::readYaml(node["robot_frame"]);
   o.mlp_hidden = node["mlp_hidden"].as<std::vector<int64_t>>();
   o.point_layers = node["point_layers"].as<std::vector<int64_t>>();
   o.pointnet_head = node["pointnet_head"].as<std::vector<int64_t>>();
@@ -456,7 +458,7 @@ class PnTransformerNetwork : public Network {
 
 int64_t calcInputStateDim(const NetOptions& options, const ObservationSpec& spec) {
   return options.history * int64_t(spec.state_dim) + options.action_history * int64_t(spec.action_dim) +
-         (options.step_input ? 1 : 0);
+         (options.step_input ? 1 : 0) + options.robot_frame.calcDim();
 }
 
 InputHistory::InputHistory(const NetOptions& options, const ObservationSpec& spec) : options_(options) {
@@ -469,7 +471,7 @@ void InputHistory::reset() {
 }
 
 torch::Tensor InputHistory::makeInput(const torch::Tensor& state, int64_t step) {
-  if (options_.history == 1 && options_.action_history == 0 && !options_.step_input) return state;
+  if (!options_.hasExtraStateInputs()) return state;
   if (states_.empty()) {
     states_.assign(std::size_t(options_.history), state);
   } else {
@@ -479,6 +481,7 @@ torch::Tensor InputHistory::makeInput(const torch::Tensor& state, int64_t step) 
   std::vector<torch::Tensor> parts = states_;
   parts.insert(parts.end(), actions_.begin(), actions_.end());
   if (options_.step_input) parts.push_back(calcStepFeature(torch::full({1, 1}, float(step))));
+  if (options_.robot_frame.isEnabled()) parts.push_back(calcRobotFrameFeatures(options_.robot_frame, state));
   return torch::cat(parts, 1);
 }
 

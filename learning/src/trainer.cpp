@@ -100,6 +100,12 @@ class Trainer {
       options_.network.kind = spec_.isPointCloud() ? NetKind::PnTransformer : NetKind::Mlp;
       options_.pick_network = false;
     }
+    if (options_.robot_frame) {
+      options_.network.robot_frame = planRobotFrameInputs(spec_);
+      options_.robot_frame = false;  // from now on the network's options carry it
+    }
+    if (options_.network.robot_frame.isEnabled())
+      say("robot-frame inputs: " + options_.network.robot_frame.describe());
     say("demonstrations: " + std::to_string(dataset_->getTrajectories().size()) + " trajectories, " +
         std::to_string(dataset_->getTransitionCount()) + " transitions, " +
         std::to_string(dataset_->calcTotalBytes() >> 20) + " MiB as tensors (" +
@@ -118,15 +124,7 @@ class Trainer {
     writeText(dir_ / "environment.yaml", dataset_->getInfo().config);
     torch::manual_seed(options_.seed);
     algorithm_ = makeAlgorithm(options_.algorithm, options_.network, spec_, device_);
-    if (options_.normalize_state) {
-      auto [mean, std] = dataset_->calcStateStatistics();
-      torch::Tensor scale = torch::where(std > 1e-6, 1.0 / std, torch::ones_like(std));
-      // Every stacked observation alike; actions and the step as they are.
-      const int64_t rest = calcInputStateDim(options_.network, spec_) - options_.network.history * spec_.state_dim;
-      mean = torch::cat({mean.repeat({options_.network.history}), torch::zeros({rest})});
-      scale = torch::cat({scale.repeat({options_.network.history}), torch::ones({rest})});
-      algorithm_->setStateNormalization(mean.to(device_), scale.to(device_));
-    }
+    if (options_.normalize_state) setStateNormalization();
     sampler_ = std::make_unique<BatchSampler>(*dataset_, options_.algorithm.batch_size, options_.seed,
                                               algorithm_->needsNextObservations(), options_.network);
     for (const auto& [name, network] : algorithm_->getNetworks())
@@ -134,6 +132,24 @@ class Trainer {
           std::to_string(countParameters(*network)) + " parameters");
     writeCsvHeaders();
     return run(0);
+  }
+
+  // (s - mean) / std per feature of the state and of its robot-frame
+  // features, every stacked observation alike; actions and the step as they are.
+  void setStateNormalization() {
+    const RobotFrameInputs& frame = options_.network.robot_frame;
+    auto [mean, std] = dataset_->calcStateStatistics([&](const torch::Tensor& states) {
+      return frame.isEnabled() ? torch::cat({states, calcRobotFrameFeatures(frame, states)}, 1) : states;
+    });
+    const int64_t state_dim = spec_.state_dim, frame_dim = frame.calcDim();
+    torch::Tensor scale = torch::where(std > 1e-6, 1.0 / std, torch::ones_like(std));
+    const int64_t history = options_.network.history;
+    const int64_t rest = calcInputStateDim(options_.network, spec_) - history * state_dim - frame_dim;
+    auto arrange = [&](const torch::Tensor& v, double other) {
+      return torch::cat({v.slice(0, 0, state_dim).repeat({history}), torch::full({rest}, other),
+                         v.slice(0, state_dim)});
+    };
+    algorithm_->setStateNormalization(arrange(mean, 0.0).to(device_), arrange(scale, 1.0).to(device_));
   }
 
   TrainResult resume(int64_t iterations) {

@@ -5,9 +5,12 @@
 #include <manibench/learning/algorithms.hpp>
 #include <manibench/learning/checkpoint.hpp>
 #include <manibench/learning/networks.hpp>
+#include <manibench/learning/robot_frame.hpp>
 
 #include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -289,6 +292,106 @@ TEST(LearningSpec, DifferentLayoutsAreErrorsNamingBoth) {
   b.task = "Other-v0";
   EXPECT_THROW(a.checkSame(b, "x", "y"), LearningError);
   EXPECT_NO_THROW(a.checkSame(makeStateSpec(), "x", "y"));
+}
+
+// A mobile-robot layout as the tasks word it (MoveBucket-v0's kinds).
+ObservationSpec makeMobileSpec() {
+  ObservationSpec s;
+  s.task = "Mobile-v0";
+  s.mode = "state";
+  s.state_segments = {{"fingertip_positions", 0, 6, "finger pad centres, world (m)"},
+                      {"base_position", 6, 2, "x, y of base_link, world (m)"},
+                      {"base_yaw", 8, 1, "heading (rad)"},
+                      {"base_velocity", 9, 2, "world x, y (m/s)"},
+                      {"joint_positions", 11, 3, "robot q, actuated joint order"},
+                      {"bucket_pose", 14, 7, "bucket frame: position, quaternion wxyz"},
+                      {"bucket_ang_velocity", 21, 3, "world (rad/s)"},
+                      {"joint_axis", 24, 3, "world; q grows turning about it"},
+                      {"rim", 27, 3, "half widths (m)"}};
+  s.state_dim = 30;
+  s.action_dim = 2;
+  s.action_segments = {{"base", 0, 2}};
+  return s;
+}
+
+TEST(LearningRobotFrame, ThePlanFollowsTheSegmentsNamesAndDescriptions) {
+  const RobotFrameInputs plan = planRobotFrameInputs(makeMobileSpec());
+  EXPECT_EQ(plan.base_position, 6u);
+  EXPECT_EQ(plan.base_yaw, 8u);
+  using K = RobotFrameInputs::Kind;
+  const std::vector<RobotFrameInputs::Entry> expected{{"fingertip_positions", K::Points, 0, 6},
+                                                      {"base_velocity", K::PlanarVector, 9, 2},
+                                                      {"bucket_pose", K::Pose, 14, 7},
+                                                      {"bucket_ang_velocity", K::Vectors, 21, 3},
+                                                      {"joint_axis", K::Vectors, 24, 3}};
+  EXPECT_EQ(plan.entries, expected) << plan.describe();
+  EXPECT_EQ(plan.calcDim(), 21);
+  NetOptions options;  // the plan travels with the network's options (train.yaml, checkpoints)
+  options.robot_frame = plan;
+  YAML::Node node;
+  options.writeYaml(node);
+  EXPECT_EQ(NetOptions::readYaml(YAML::Load(YAML::Dump(node))).robot_frame, plan) << YAML::Dump(node);
+  EXPECT_TRUE(NetOptions::readYaml(YAML::Load(YAML::Dump(node))).hasExtraStateInputs());
+
+  ObservationSpec fixed = makeMobileSpec();
+  fixed.state_segments.erase(fixed.state_segments.begin() + 2);  // no base_yaw
+  try {
+    planRobotFrameInputs(fixed);
+    FAIL();
+  } catch (const LearningError& e) {
+    EXPECT_NE(std::string(e.what()).find("base_yaw"), std::string::npos) << e.what();
+  }
+}
+
+TEST(LearningRobotFrame, FeaturesAreTheWorldSeenFromTheBase) {
+  const RobotFrameInputs plan = planRobotFrameInputs(makeMobileSpec());
+  // The base at (1, 2) facing +y; a finger pad at (1, 3, 0.5) is 1 m ahead.
+  torch::Tensor s = torch::zeros({1, 30});
+  s[0][0] = 1; s[0][1] = 3; s[0][2] = 0.5;
+  s[0][6] = 1; s[0][7] = 2; s[0][8] = float(M_PI / 2);
+  s[0][9] = 0.0; s[0][10] = 0.3;  // moving along world +y: forward
+  s[0][17] = 1.0;                  // the bucket's identity orientation (w = 1)
+  const torch::Tensor f = calcRobotFrameFeatures(plan, s);
+  ASSERT_EQ(f.size(1), plan.calcDim());
+  EXPECT_NEAR(f[0][0].item<float>(), 1.0, 1e-6);
+  EXPECT_NEAR(f[0][1].item<float>(), 0.0, 1e-6);
+  EXPECT_NEAR(f[0][2].item<float>(), 0.5, 1e-6);
+  EXPECT_NEAR(f[0][6].item<float>(), 0.3, 1e-6);  // base_velocity: forward
+  EXPECT_NEAR(f[0][7].item<float>(), 0.0, 1e-6);
+  // The world-aligned bucket is turned by -90 degrees about z, w kept >= 0.
+  EXPECT_NEAR(f[0][11].item<float>(), std::sqrt(0.5), 1e-6);
+  EXPECT_NEAR(f[0][14].item<float>(), -std::sqrt(0.5), 1e-6);
+}
+
+TEST(LearningRobotFrame, FeaturesDoNotChangeWhenTheWholeSceneMovesAndTurns) {
+  const RobotFrameInputs plan = planRobotFrameInputs(makeMobileSpec());
+  torch::manual_seed(3);
+  torch::Tensor s = torch::randn({16, 30}, torch::kFloat64);
+  for (int64_t q : {17}) {  // a unit quaternion
+    const torch::Tensor quat = s.slice(1, q, q + 4);
+    s.slice(1, q, q + 4).copy_(quat / quat.norm(2, 1, true));
+  }
+  // Turn everything by 0.7 rad about z and shift it by (3, -2).
+  const double a = 0.7, c = std::cos(a), n = std::sin(a);
+  torch::Tensor moved = s.clone();
+  auto turnColumns = [&](int64_t x, bool shift) {
+    const torch::Tensor px = s.select(1, x), py = s.select(1, x + 1);
+    moved.select(1, x).copy_(c * px - n * py + (shift ? 3.0 : 0.0));
+    moved.select(1, x + 1).copy_(n * px + c * py + (shift ? -2.0 : 0.0));
+  };
+  for (int64_t x : {0, 3, 6, 14}) turnColumns(x, true);  // points, the base, the pose's position
+  for (int64_t x : {9, 21, 24}) turnColumns(x, false);    // vectors
+  moved.select(1, 8) += a;                                // the base's heading
+  const torch::Tensor qw = s.select(1, 17), qz = s.select(1, 20), qx = s.select(1, 18), qy = s.select(1, 19);
+  const double hw = std::cos(a / 2), hz = std::sin(a / 2);  // (hw, 0, 0, hz) * q
+  moved.select(1, 17).copy_(hw * qw - hz * qz);
+  moved.select(1, 18).copy_(hw * qx - hz * qy);
+  moved.select(1, 19).copy_(hw * qy + hz * qx);
+  moved.select(1, 20).copy_(hw * qz + hz * qw);
+  const torch::Tensor before = calcRobotFrameFeatures(plan, s), after = calcRobotFrameFeatures(plan, moved);
+  EXPECT_TRUE(torch::allclose(before, after, 1e-5, 1e-5)) << (before - after).abs().max();
+  // The world-frame state itself did change.
+  EXPECT_FALSE(torch::allclose(s, moved, 1e-3, 1e-3));
 }
 
 }  // namespace

@@ -232,7 +232,12 @@ TEST_F(LearningTraining, InputsWithHistoryAreBuiltAlikeWhileActingAndTraining) {
   inputs.history = 3;
   inputs.action_history = 2;
   inputs.step_input = true;
-  EXPECT_EQ(calcInputStateDim(inputs, spec), 3 * 15 + 2 * 2 + 1);
+  // Reach has no mobile base: a frame made up of its first values.
+  inputs.robot_frame.base_position = 0;
+  inputs.robot_frame.base_yaw = 2;
+  inputs.robot_frame.entries = {{"points", RobotFrameInputs::Kind::Points, 3, 6},
+                                {"pose", RobotFrameInputs::Kind::Pose, 8, 7}};
+  EXPECT_EQ(calcInputStateDim(inputs, spec), 3 * 15 + 2 * 2 + 1 + 13);
   InputHistory history(inputs, spec);
   const int64_t first = dataset.getTrajectories()[1].steps + 1;  // trajectory 0's first row
   for (int episode = 0; episode < 2; ++episode) {  // reset() starts over

@@ -55,6 +55,8 @@ Network:
                           (or agent) vectors (default 1: the current one)
   --action-history N      the state input includes the last N actions (default 0)
   --step-input            the state input includes the episode's step (t / 100)
+  --robot-frame           the state input also holds its world-frame positions,
+                          poses and velocities in the robot base's frame
   --hidden N,N,...        mlp hidden layers (default 256,256,256)
   --point-layers N,N      pointnet per-point layers (default 256,512)
   --width N               pn_transformer width (default 256)
@@ -162,6 +164,7 @@ ml::TrainOptions parseTrainOptions(const mb::cli::Arguments& args, int argc, cha
   if (has("history")) o.network.history = parseInteger(value("history"), "--history", 1);
   if (has("action-history")) o.network.action_history = parseInteger(value("action-history"), "--action-history", 0);
   o.network.step_input = has("step-input");
+  o.robot_frame = has("robot-frame");
   if (has("hidden")) o.network.mlp_hidden = parseLayers(value("hidden"), "--hidden");
   if (has("point-layers")) o.network.point_layers = parseLayers(value("point-layers"), "--point-layers");
   if (has("width")) o.network.width = parseInteger(value("width"), "--width", 1);
@@ -211,7 +214,7 @@ int run(int argc, char** argv) {
       "out", "checkpoint-every", "log-every", "eval-every", "eval-task", "eval-split", "eval-objects",
       "eval-episodes", "eval-workers", "eval-seed", "resume"};
   const mb::cli::Arguments args =
-      mb::cli::parseArguments(argc, argv, 2, valued, {"normalize-state", "step-input", "executed-actions", "no-progress"}, kUsage, {"demos"});
+      mb::cli::parseArguments(argc, argv, 2, valued, {"normalize-state", "step-input", "robot-frame", "executed-actions", "no-progress"}, kUsage, {"demos"});
   if (args.help) {
     std::cout << kUsage;
     return 0;

@@ -20,6 +20,7 @@
 #include <torch/torch.h>
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -93,8 +94,10 @@ class DemoDataset {
   // The trajectories `indices` (into getTrajectories()), in that order.
   DataChunk load(const std::vector<std::size_t>& indices) const;
   // Mean and standard deviation of each state feature over every
-  // observation (reads the whole set once when it streams).
-  std::pair<torch::Tensor, torch::Tensor> calcStateStatistics() const;
+  // observation (reads the whole set once when it streams); of
+  // `features(states)` ([O, S] -> [O, F]) when given.
+  using StateFeatures = std::function<torch::Tensor(const torch::Tensor&)>;
+  std::pair<torch::Tensor, torch::Tensor> calcStateStatistics(const StateFeatures& features = {}) const;
 
  private:
   DatasetOptions options_;

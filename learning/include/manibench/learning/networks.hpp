@@ -7,6 +7,7 @@
 // to an output vector; D.3 feeds the extra vector in beside the robot state.
 #pragma once
 
+#include <manibench/learning/robot_frame.hpp>
 #include <manibench/learning/spec.hpp>
 
 #include <torch/torch.h>
@@ -59,6 +60,9 @@ struct NetOptions {
   int64_t history = 1;
   int64_t action_history = 0;
   bool step_input = false;
+  // The current state's world-frame segments in the robot base's frame,
+  // appended last (robot_frame.hpp; off when empty).
+  RobotFrameInputs robot_frame;
   // mlp: hidden layers (Table 6's 3 x 256).
   std::vector<int64_t> mlp_hidden{256, 256, 256};
   // pointnet: per-point layers [256, 512], head [512, 256, out] (D.2).
@@ -75,6 +79,10 @@ struct NetOptions {
   double dropout = 0.1;
   std::vector<int64_t> transformer_head{128};
 
+  // Whether the state input is more than the current state vector.
+  bool hasExtraStateInputs() const {
+    return history > 1 || action_history > 0 || step_input || robot_frame.isEnabled();
+  }
   void writeYaml(YAML::Node& node) const;
   static NetOptions readYaml(const YAML::Node& node);
 };
@@ -99,12 +107,13 @@ class Network : public torch::nn::Module {
 };
 
 // The width of the state input: history x the spec's state (or agent)
-// vector, action_history x the action, and 1 for the step.
+// vector, action_history x the action, 1 for the step, and the robot-frame
+// features.
 int64_t calcInputStateDim(const NetOptions& options, const ObservationSpec& spec);
 
 // The state input of one step at a time (what a policy acting in an
 // episode feeds its network): [s_t, s_t-1, ..., s_t-history+1, a_t-1, ...,
-// a_t-action_history, t / 100]. The training batches are built the same
+// a_t-action_history, t / 100, robot_frame(s_t)]. The training batches are built the same
 // way (DataChunk, tested equal).
 class InputHistory {
  public:

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace YAML {
@@ -26,9 +27,15 @@ class LearningError : public std::runtime_error {
 };
 
 struct SpecSegment {
+  SpecSegment() = default;
+  SpecSegment(std::string name_, uint32_t offset_, uint32_t size_, std::string description_ = {})
+      : name(std::move(name_)), offset(offset_), size(size_), description(std::move(description_)) {}
   std::string name;
   uint32_t offset = 0;
   uint32_t size = 0;
+  // The task's words for it, where the layout came from a live environment
+  // (not written to checkpoints; planRobotFrameInputs reads it).
+  std::string description;
   bool operator==(const SpecSegment& o) const {
     return name == o.name && offset == o.offset && size == o.size;
   }

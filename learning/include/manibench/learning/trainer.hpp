@@ -41,6 +41,9 @@ struct TrainOptions {
   int64_t checkpoint_every = 1000;
   int64_t log_every = 100;
   bool normalize_state = false;  // (s - mean) / std per feature, from the demonstrations
+  // Append the state's world-frame segments in the robot base's frame
+  // (robot_frame.hpp); resolved into network.robot_frame when training starts.
+  bool robot_frame = false;
   // Success of the current policy every eval_every iterations (0: never),
   // through TrainHooks::evaluate.
   int64_t eval_every = 0;
