@@ -101,19 +101,8 @@ std::string onePositional(const Arguments& args, const std::string& what) {
   return args.positional[0];
 }
 
-int generate(int argc, char** argv) {
-  const Arguments args = parseArguments(
-      argc, argv, 3,
-      {"policy", "policy-config", "out", "split", "objects", "per-object", "max-attempts", "workers",
-       "seed", "obs", "controller", "config", "set", "step-timeout", "env-timeout", "action-noise",
-       "policy-cpu-limit", "policy-memory-limit", "policy-output-limit", "policy-read", "shard"},
-      {"no-progress", "resume", kTrustedPolicyFlag}, kDemosUsage, {"config", "set", "policy-read"});
-  if (args.positional.size() != 1) throw UsageError("demos generate takes one TASK", kDemosUsage);
-  if (!args.options.count("policy")) throw UsageError("demos generate needs --policy", kDemosUsage);
-  if (!args.options.count("out")) throw UsageError("demos generate needs --out FILE.h5", kDemosUsage);
-  const std::string task = args.positional[0];
-  const std::string out = args.options.at("out");
-
+// generate's options but the policy, the sandbox and the configuration.
+GenerationOptions parseGenerationOptions(const Arguments& args, const std::string& task) {
   GenerationOptions options;
   EvaluationOptions& evaluation = options.evaluation;
   evaluation.task = task;
@@ -150,6 +139,80 @@ int generate(int argc, char** argv) {
     evaluation.policy_config = text.str();
   }
 
+  if (args.options.count("shard")) {
+    try {
+      parseShard(args.options.at("shard"), options.shard, options.shards);
+    } catch (const InvalidArgument& e) {
+      throw UsageError(e.what(), kDemosUsage);
+    }
+  }
+  return options;
+}
+
+// The file so far and the rest (resumed), or the ranks' trajectories as
+// they came (MPI), into `out` in the order the run writes them; the parts
+// are removed. The number of trajectories.
+std::size_t mergeParts(const std::string& out, const std::string& part, bool resume, const DemoFileInfo& info,
+                       const GenerationOptions& options) {
+  std::vector<std::string> parts = {part};
+  if (resume) {
+    parts.insert(parts.begin(), out + ".before.h5");
+    std::filesystem::rename(out, parts.front());
+  }
+  const DemoMergeResult merged = mergeDemonstrations(parts, out, info, options.shard, options.shards);
+  for (const std::string& file : parts) {
+    std::filesystem::remove(file);
+    std::filesystem::remove(getDemoJsonPath(file));
+  }
+  if (resume) std::cout << "resumed " << out << ": " << merged.trajectories << " trajectories\n";
+  return merged.trajectories;
+}
+
+// What a generation did, on the terminal; the exit status.
+int reportGeneration(const GenerationResult& result, const GenerationOptions& options, const std::string& out) {
+  std::size_t short_objects = 0;
+  for (const GenerationObjectResult& o : result.objects) {
+    if (o.kept >= options.per_object) continue;
+    ++short_objects;
+    std::cout << "  object " << o.object_id << ": " << o.kept << " of " << options.per_object
+              << " after " << o.attempts << " episode(s)"
+              << (o.failures ? " (" + std::to_string(o.failures) + " failed)" : "") << "\n";
+  }
+  std::cout << "wrote " << result.trajectories << " trajectories of " << result.objects.size()
+            << " object(s) from " << result.episodes << " episodes in " << std::fixed
+            << std::setprecision(2) << result.seconds << " s (" << std::setprecision(1)
+            << (result.seconds > 0 ? double(result.episodes) / result.seconds : 0.0)
+            << " episodes/s) to " << out << " and " << getDemoJsonPath(out) << "\n";
+  std::cout.unsetf(std::ios::fixed);
+  if (result.interrupted) {
+    std::cerr << "manibench: generation stopped (" << result.stop_reason << "); " << out
+              << " holds the " << result.trajectories << " trajectories finished\n";
+    return 130;
+  }
+  if (short_objects) {
+    std::cerr << "manibench: " << short_objects << " object(s) got fewer than " << options.per_object
+              << " successful episodes within " << options.max_attempts << " attempts\n";
+    return 1;
+  }
+  return 0;
+}
+
+int generate(int argc, char** argv) {
+  const Arguments args = parseArguments(
+      argc, argv, 3,
+      {"policy", "policy-config", "out", "split", "objects", "per-object", "max-attempts", "workers",
+       "seed", "obs", "controller", "config", "set", "step-timeout", "env-timeout", "action-noise",
+       "policy-cpu-limit", "policy-memory-limit", "policy-output-limit", "policy-read", "shard"},
+      {"no-progress", "resume", kTrustedPolicyFlag}, kDemosUsage, {"config", "set", "policy-read"});
+  if (args.positional.size() != 1) throw UsageError("demos generate takes one TASK", kDemosUsage);
+  if (!args.options.count("policy")) throw UsageError("demos generate needs --policy", kDemosUsage);
+  if (!args.options.count("out")) throw UsageError("demos generate needs --out FILE.h5", kDemosUsage);
+  const std::string task = args.positional[0];
+  const std::string out = args.options.at("out");
+
+  GenerationOptions options = parseGenerationOptions(args, task);
+  EvaluationOptions& evaluation = options.evaluation;
+
   PluginRegistry registry;
   loadPlugins(registry);
   evaluation.policy = resolvePolicy(registry, args.options.at("policy"));
@@ -170,13 +233,6 @@ int generate(int argc, char** argv) {
   if (MpiRanks::isStartedByMpi()) mpi = std::make_unique<MpiRanks>();
   const bool writer = !mpi || mpi->getRank() == 0;
   const bool resume = writer && args.options.count("resume") && std::filesystem::exists(out);
-  if (args.options.count("shard")) {
-    try {
-      parseShard(args.options.at("shard"), options.shard, options.shards);
-    } catch (const InvalidArgument& e) {
-      throw UsageError(e.what(), kDemosUsage);
-    }
-  }
   if ((options.shards > 1 || resume || mpi) && evaluation.objects.empty()) {
     // A share of the objects, or those left, is taken from the whole list,
     // which the file records: the split's, as the workers will see it.
@@ -211,6 +267,14 @@ int generate(int argc, char** argv) {
   info.created = formatUtcNow();
   info.command = joinCommand(argc, argv);
 
+  if (resume) {
+    // Another run's file is an error before anything runs.
+    DemoFileInfo expected = info;
+    expected.generation = formatGeneration(options, evaluation.objects, options.max_attempts);
+    const std::string difference = findGenerationDifference(out, expected);
+    if (!difference.empty())
+      throw std::runtime_error("--resume: " + out + " is of another generation (" + difference + " here)");
+  }
   const EnvironmentFactory factory = [&registry, task, sources] {
     return makeEnvironment(registry, task, sources, true);
   };
@@ -221,6 +285,13 @@ int generate(int argc, char** argv) {
       std::string details = ", " + std::to_string(p.episodes) + " episodes";
       if (p.failures) details += ", " + std::to_string(p.failures) + " failed";
       drawProgressBar(p.kept, p.wanted, "trajectories", details, p.elapsed);
+    };
+  if (mpi && writer && !progress && !args.options.count("no-progress"))
+    hooks.on_progress = [last = -1.0](const GenerationProgress& p) mutable {
+      if (p.elapsed - last < 10 && p.kept < p.wanted) return;
+      last = p.elapsed;
+      std::cerr << "progress: " << p.kept << " of " << p.wanted << " trajectories (every rank), " << p.episodes
+                << " episodes here, " << formatDuration(p.elapsed) << " elapsed\n";
     };
   hooks.should_stop = [] { return StopSignals::isRequested(); };
   std::optional<StopSignals> stop_signals(std::in_place);
@@ -251,7 +322,7 @@ int generate(int argc, char** argv) {
   std::size_t own = 0;
   for (std::size_t i = 0; i < evaluation.objects.size(); ++i)
     own += i % options.shards == options.shard && !options.done_objects.count(evaluation.objects[i]);
-  if (resume && own == 0 && !mpi) {
+  if (resume && own == 0) {
     std::cout << out << " has every object of its run: nothing to resume\n";
     return 0;
   }
@@ -260,47 +331,8 @@ int generate(int argc, char** argv) {
   if (progress) std::cerr << "\n";
   if (ranked)
     for (const std::string& error : ranked->getErrors()) std::cerr << "manibench: " << error << "\n";
-  if (path != out) {
-    // The file so far and the rest (or the ranks' trajectories as they
-    // came), in the order the run writes them.
-    std::vector<std::string> parts = {path};
-    if (resume) {
-      parts.insert(parts.begin(), out + ".before.h5");
-      std::filesystem::rename(out, parts.front());
-    }
-    const DemoMergeResult merged = mergeDemonstrations(parts, out, info, options.shard, options.shards);
-    for (const std::string& file : parts) {
-      std::filesystem::remove(file);
-      std::filesystem::remove(getDemoJsonPath(file));
-    }
-    if (resume) std::cout << "resumed " << out << ": " << merged.trajectories << " trajectories\n";
-    result.trajectories = merged.trajectories;
-  }
-  std::size_t short_objects = 0;
-  for (const GenerationObjectResult& o : result.objects) {
-    if (o.kept >= options.per_object) continue;
-    ++short_objects;
-    std::cout << "  object " << o.object_id << ": " << o.kept << " of " << options.per_object
-              << " after " << o.attempts << " episode(s)"
-              << (o.failures ? " (" + std::to_string(o.failures) + " failed)" : "") << "\n";
-  }
-  std::cout << "wrote " << result.trajectories << " trajectories of " << result.objects.size()
-            << " object(s) from " << result.episodes << " episodes in " << std::fixed
-            << std::setprecision(2) << result.seconds << " s (" << std::setprecision(1)
-            << (result.seconds > 0 ? double(result.episodes) / result.seconds : 0.0)
-            << " episodes/s) to " << out << " and " << getDemoJsonPath(out) << "\n";
-  std::cout.unsetf(std::ios::fixed);
-  if (result.interrupted) {
-    std::cerr << "manibench: generation stopped (" << result.stop_reason << "); " << out
-              << " holds the " << result.trajectories << " trajectories finished\n";
-    return 130;
-  }
-  if (short_objects) {
-    std::cerr << "manibench: " << short_objects << " object(s) got fewer than " << options.per_object
-              << " successful episodes within " << options.max_attempts << " attempts\n";
-    return 1;
-  }
-  return 0;
+  if (path != out) result.trajectories = mergeParts(out, path, resume, info, options);
+  return reportGeneration(result, options, out);
 }
 
 // demos merge FILE.h5... --out FILE.h5

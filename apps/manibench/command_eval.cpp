@@ -117,6 +117,63 @@ bool sameResults(const EvaluationResult& a, const EvaluationResult& b) {
 
 }  // namespace
 
+// The options that need no plugin: the episode list, workers, timeouts,
+// the shard.
+EvaluationOptions parseEvaluationOptions(const Arguments& args, const std::string& task) {
+  EvaluationOptions options;
+  options.task = task;
+  options.split = parseSplit(args, "test", kEvalUsage);
+  options.seed = parseSeed(valueOr(args, "seed", "0"), kEvalUsage);
+  const uint64_t workers = parseSeed(valueOr(args, "workers", "1"), kEvalUsage, "--workers");
+  if (workers < 1 || workers > 256) throw UsageError("--workers must be 1 to 256", kEvalUsage);
+  options.workers = unsigned(workers);
+  options.step_timeout = parsePositive(valueOr(args, "step-timeout", "10"), "--step-timeout");
+  options.environment_timeout = parsePositive(valueOr(args, "env-timeout", "300"), "--env-timeout");
+  try {
+    if (args.options.count("levels")) {
+      if (args.options.count("episodes-per-object"))
+        throw UsageError("give --levels or --episodes-per-object, not both", kEvalUsage);
+      options.levels = parseLevels(args.options.at("levels"));
+    } else {
+      const uint64_t n =
+          parseSeed(valueOr(args, "episodes-per-object", "5"), kEvalUsage, "--episodes-per-object");
+      if (n == 0 || n > 1000000)
+        throw UsageError("--episodes-per-object must be 1 to 1000000", kEvalUsage);
+      for (uint64_t level = 0; level < n; ++level) options.levels.push_back(level);
+    }
+    if (args.options.count("objects")) options.objects = parseIdList(args.options.at("objects"));
+    if (args.options.count("shard")) parseShard(args.options.at("shard"), options.shard, options.shards);
+  } catch (const InvalidArgument& e) {
+    throw UsageError(e.what(), kEvalUsage);
+  }
+  return options;
+}
+
+// Under mpirun stderr is a pipe, not the terminal: a line now and then
+// (Slurm's log keeps them too).
+void printProgressLine(const EvaluationProgress& p) {
+  static double last = -1;
+  if (p.elapsed - last < 10 && p.done < p.total) return;
+  last = p.elapsed;
+  std::cerr << "progress: " << p.done << " of " << p.total << " episodes (every rank), " << p.successes
+            << " successful, " << formatDuration(p.elapsed) << " elapsed\n";
+}
+
+// A rank but 0: runs its part, sends each record to rank 0, prints nothing
+// but errors. Its exit status is 0 (an error is rank 0's to report: a
+// non-zero status would make mpirun end the job before rank 0 writes).
+int runOtherRank(const PluginRegistry& registry, const EvaluationOptions& options, const EnvironmentFactory& factory,
+                 const EvaluationHooks& hooks, RankedEvaluation& ranked, int rank) {
+  try {
+    const EvaluationResult part = evaluatePolicy(registry, options, factory, hooks);
+    ranked.finish(part.interrupted ? part.stop_reason : "");
+  } catch (const std::exception& e) {
+    std::cerr << "manibench: rank " << rank << ": " << e.what() << "\n";
+    ranked.fail(e.what());
+  }
+  return 0;
+}
+
 // eval merge DIR... [--out DIR]
 int mergeEvaluations(int argc, char** argv) {
   const Arguments args = parseArguments(argc, argv, 3, {"out"}, {}, kEvalUsage, {});
@@ -167,32 +224,7 @@ int commandEval(int argc, char** argv) {
   if (!args.options.count("policy"))
     throw UsageError("eval needs --policy NAME|PATH.so", kEvalUsage);
 
-  EvaluationOptions options;
-  options.task = task;
-  options.split = parseSplit(args, "test", kEvalUsage);
-  options.seed = parseSeed(valueOr(args, "seed", "0"), kEvalUsage);
-  const uint64_t workers = parseSeed(valueOr(args, "workers", "1"), kEvalUsage, "--workers");
-  if (workers < 1 || workers > 256) throw UsageError("--workers must be 1 to 256", kEvalUsage);
-  options.workers = unsigned(workers);
-  options.step_timeout = parsePositive(valueOr(args, "step-timeout", "10"), "--step-timeout");
-  options.environment_timeout = parsePositive(valueOr(args, "env-timeout", "300"), "--env-timeout");
-  try {
-    if (args.options.count("levels")) {
-      if (args.options.count("episodes-per-object"))
-        throw UsageError("give --levels or --episodes-per-object, not both", kEvalUsage);
-      options.levels = parseLevels(args.options.at("levels"));
-    } else {
-      const uint64_t n =
-          parseSeed(valueOr(args, "episodes-per-object", "5"), kEvalUsage, "--episodes-per-object");
-      if (n == 0 || n > 1000000)
-        throw UsageError("--episodes-per-object must be 1 to 1000000", kEvalUsage);
-      for (uint64_t level = 0; level < n; ++level) options.levels.push_back(level);
-    }
-    if (args.options.count("objects")) options.objects = parseIdList(args.options.at("objects"));
-    if (args.options.count("shard")) parseShard(args.options.at("shard"), options.shard, options.shards);
-  } catch (const InvalidArgument& e) {
-    throw UsageError(e.what(), kEvalUsage);
-  }
+  EvaluationOptions options = parseEvaluationOptions(args, task);
 
   const ConfigSources sources = getConfigSources(args, parseObservationMode(args, kEvalUsage));
   for (const std::string& file : sources.files) options.config_notes.push_back("--config " + file);
@@ -262,6 +294,7 @@ int commandEval(int argc, char** argv) {
   const bool progress = writer && !args.options.count("no-progress") && isatty(STDERR_FILENO);
   EvaluationHooks hooks;
   if (progress) hooks.on_progress = drawProgress;
+  if (mpi && writer && !progress && !args.options.count("no-progress")) hooks.on_progress = printProgressLine;
   hooks.should_stop = [] { return StopSignals::isRequested(); };
   std::optional<StopSignals> stop_signals(std::in_place);
   std::optional<RankedEvaluation> ranked;
@@ -269,18 +302,7 @@ int commandEval(int argc, char** argv) {
     ranked.emplace(*mpi);
     ranked->prepare(options, hooks, hooks.should_stop);
   }
-  if (!writer) {
-    // Another rank: runs its part, sends each record to rank 0, prints
-    // nothing but errors.
-    try {
-      const EvaluationResult part = evaluatePolicy(registry, options, factory, hooks);
-      ranked->finish(part.interrupted ? part.stop_reason : "");
-    } catch (const std::exception& e) {
-      std::cerr << "manibench: rank " << mpi->getRank() << ": " << e.what() << "\n";
-      ranked->fail(e.what());
-    }
-    return 0;
-  }
+  if (!writer) return runOtherRank(registry, options, factory, hooks, *ranked, mpi->getRank());
 
   std::cout << "evaluating policy " << options.policy << " on " << task << " ("
             << (task_id.isFixed() ? "its fixed objects" : options.split + " split") << "), " << options.levels.size() << " level(s) per object, seed " << options.seed

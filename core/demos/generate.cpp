@@ -117,14 +117,17 @@ GenerationResult generateDemonstrations(const PluginRegistry& registry,
   if (options.shards > 1 && options.evaluation.objects.empty())
     throw EvaluationError("a shard needs the run's whole object list");
   // This run's objects: its shard of the list, without those done before.
+  // (MPI) the ranks share the objects left, so that a resumed run
+  // spreads the rest.
   std::vector<std::string> own;
-  std::size_t position = 0;  // in the shard
+  std::size_t position = 0;  // among the shard's objects left
   for (std::size_t i = 0; i < options.evaluation.objects.size(); ++i) {
-    if (i % options.shards != options.shard) continue;
-    if (position++ % options.ranks == options.rank && !options.done_objects.count(options.evaluation.objects[i]))
-      own.push_back(options.evaluation.objects[i]);
+    if (i % options.shards != options.shard || options.done_objects.count(options.evaluation.objects[i]))
+      continue;
+    if (position++ % options.ranks == options.rank) own.push_back(options.evaluation.objects[i]);
   }
   const bool own_list = options.shards > 1 || options.ranks > 1 || !options.done_objects.empty();
+  if (own_list && own.empty() && options.ranks > 1 && options.rank > 0) return {};  // more ranks than objects
   if (own_list && own.empty()) throw EvaluationError("no objects left to run");
 
   GenerationResult result;

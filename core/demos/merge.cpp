@@ -30,10 +30,10 @@ std::string shorten(const std::string& text) {
   return text.size() > 80 ? text.substr(0, 77) + "..." : text;
 }
 
-// "" when the two files come from the same generation (shards apart).
-std::string findDifference(const Input& a, const Input& b) {
-  const DemoFileInfo& x = a.reader->getInfo();
-  const DemoFileInfo& y = b.reader->getInfo();
+// "" when the two describe the same generation (shards apart); the
+// controller, observation mode and plugins only when `all`.
+std::string findDifference(const DemoFileInfo& x, const Json& x_generation, const DemoFileInfo& y,
+                           const Json& y_generation, bool all) {
   const std::vector<std::pair<const char*, std::pair<std::string, std::string>>> fields = {
       {"task", {x.environment_id, y.environment_id}},
       {"manibench_version", {x.manibench_version, y.manibench_version}},
@@ -43,13 +43,14 @@ std::string findDifference(const Input& a, const Input& b) {
       {"config", {x.config, y.config}},
       {"plugins", {x.plugins, y.plugins}}};
   for (const auto& [name, values] : fields)
-    if (values.first != values.second)
+    if (values.first != values.second && (all || std::string(name) == "task" || std::string(name) == "policy" ||
+                                          std::string(name) == "config"))
       return std::string(name) + ": '" + shorten(values.first) + "' vs '" + shorten(values.second) + "'";
-  for (const auto& [key, value] : a.generation.items()) {
-    if (key == "shard" || key == "shards") continue;
-    if (!b.generation.contains(key) || b.generation.at(key) != value)
+  for (const auto& [key, value] : x_generation.items()) {
+    if (all && (key == "shard" || key == "shards")) continue;
+    if (!y_generation.contains(key) || y_generation.at(key) != value)
       return key + ": " + shorten(value.dump()) + " vs " +
-             shorten(b.generation.contains(key) ? b.generation.at(key).dump() : "nothing");
+             shorten(y_generation.contains(key) ? y_generation.at(key).dump() : "nothing");
   }
   return "";
 }
@@ -87,7 +88,8 @@ DemoMergeResult mergeDemonstrations(const std::vector<std::string>& inputs, cons
   std::vector<Input> files;
   for (const std::string& path : inputs) files.push_back(openInput(path));
   for (std::size_t f = 1; f < files.size(); ++f) {
-    const std::string difference = findDifference(files[0], files[f]);
+    const std::string difference = findDifference(files[0].reader->getInfo(), files[0].generation,
+                                                  files[f].reader->getInfo(), files[f].generation, true);
     if (!difference.empty())
       throw DemoError("'" + inputs[f] + "' is of another generation than '" + inputs[0] + "': " + difference);
   }
@@ -197,6 +199,14 @@ std::vector<std::string> findDoneObjects(const std::string& path) {
   for (const std::string& object : in.generation.at("objects").get<std::vector<std::string>>())
     if (isDone(in, object, per_object)) done.push_back(object);
   return done;
+}
+
+std::string findGenerationDifference(const std::string& path, const DemoFileInfo& info) {
+  const DemoReader reader(path);
+  if (reader.getInfo().generation.empty())
+    throw DemoError("'" + path + "' was not made by `demos generate` (no generation attribute)");
+  return findDifference(reader.getInfo(), Json::parse(reader.getInfo().generation), info,
+                        Json::parse(info.generation), false);
 }
 
 }  // namespace manibench

@@ -185,5 +185,38 @@ TEST(Mpi, KilledRankLosesOnlyItsUnfinishedEpisodesAndResumeCompletes) {
   EXPECT_EQ(countEpisodes(out / "journal.jsonl"), 60u);  // nothing twice
 }
 
+// What Slurm sends at a time limit: mpirun forwards it, rank 0 writes the
+// episodes it has as partial results, as a single run does.
+TEST(Mpi, SigtermOnMpirunLeavesReadablePartialResults) {
+  TempDir dir;
+  const fs::path out = dir / "ranks";
+  const pid_t mpirun = fork();
+  ASSERT_GE(mpirun, 0);
+  if (mpirun == 0) {
+    std::vector<std::string> words = underMpirun(3, evalArguments(out, "0-199", "150"));
+    words.insert(words.begin(), MANIBENCH_TEST_MPIRUN);
+    std::vector<char*> argv;
+    for (std::string& w : words) argv.push_back(w.data());
+    argv.push_back(nullptr);
+    const int null = open("/dev/null", O_WRONLY);
+    dup2(null, 1);
+    dup2(null, 2);
+    execvp(argv[0], argv.data());
+    _exit(127);
+  }
+  for (int i = 0; i < 6000 && countEpisodes(out / "journal.jsonl") < 4; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  kill(mpirun, SIGTERM);
+  int status = 0;
+  waitpid(mpirun, &status, 0);
+  const std::string json = readFile(out / "summary.json");
+  EXPECT_TRUE(contains(json, "\"complete\": false")) << json;
+  EXPECT_TRUE(contains(json, "\"episodes_planned\": 400")) << json;
+  const auto episodes = readCsv(out / "episodes.csv");
+  EXPECT_GE(episodes.size(), 4u);
+  EXPECT_LT(episodes.size(), 400u);
+  EXPECT_EQ(episodes.size(), countEpisodes(out / "journal.jsonl"));
+}
+
 }  // namespace
 }  // namespace manibench

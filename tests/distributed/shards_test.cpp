@@ -263,6 +263,11 @@ TEST(DemoShards, ResumeCompletesAStoppedFileAsTheSingleRunWritesIt) {
     for (std::size_t i = 0; i < 4; ++i) writer.append(reader.read(reader.getTrajectoryNames()[i]));
     writer.close();
   }
+  // Another run's options: an error before anything runs, the file kept.
+  const auto other = runCli(demoArguments(cut, {"--resume", "--seed", "4"}));
+  EXPECT_EQ(other.exit_code, 1);
+  testing::expectMentions(other.err, {"another generation", "seed: 3 vs 4"});
+  EXPECT_EQ(DemoReader(cut).getTrajectoryNames().size(), 4u);
   const auto resumed = runCli(demoArguments(cut, {"--resume"}));
   testing::expectMentions(resumed.out, {"resumed " + cut + ": 9 trajectories"});
   EXPECT_TRUE(readTrajectories(cut) == readTrajectories(whole));

@@ -256,5 +256,9 @@ DemoMergeResult mergeDemonstrations(const std::vector<std::string>& inputs, cons
 // Reads what a file says of its objects (mergeDemonstrations on it alone,
 // without writing): the objects done.
 std::vector<std::string> findDoneObjects(const std::string& path);
+// "" when the file at `path` comes from the generation `info` describes
+// (task, policy, configuration, its generation attribute: split, seed,
+// objects, counts, noise, shard), else the first difference.
+std::string findGenerationDifference(const std::string& path, const DemoFileInfo& info);
 
 }  // namespace manibench
