@@ -94,28 +94,72 @@ bool MpiRanks::receive(int& source, int& tag, std::string& bytes) {
   return true;
 }
 
+std::string RankedRun::exchangeStart(const std::string& start, const std::function<bool()>& stop) {
+  if (isRankZero()) {
+    for (int r = 1; r < ranks_.getSize(); ++r) ranks_.send(r, kMpiStart, start);
+    return start;
+  }
+  int source = 0, tag = 0;
+  std::string bytes;
+  while (!ranks_.receive(source, tag, bytes) || tag != kMpiStart) {
+    if (stop && stop()) throw std::runtime_error("stopped before rank 0 started the run");
+    usleep(10000);
+  }
+  return bytes;
+}
+
+void RankedRun::receive(const std::function<void(const std::string&)>& on_record,
+                        const std::function<void(const std::string&)>& on_done) {
+  int source = 0, tag = 0;
+  std::string bytes;
+  while (ranks_.receive(source, tag, bytes)) {
+    if (tag == kMpiRecord) on_record(bytes);
+    if (tag == kMpiError) errors_.push_back("rank " + std::to_string(source) + ": " + bytes);
+    if (tag == kMpiDone) {
+      ++done_;
+      on_done(bytes);
+    }
+  }
+}
+
+void RankedRun::finish(const std::string& payload) {
+  if (!isRankZero()) ranks_.send(0, kMpiDone, payload);
+}
+
+void RankedRun::fail(const std::string& message) {
+  if (isRankZero()) return;
+  ranks_.send(0, kMpiError, message);
+  ranks_.send(0, kMpiDone, "");
+}
+
 void RankedEvaluation::prepare(EvaluationOptions& options, EvaluationHooks& hooks,
                                const std::function<bool()>& stop) {
   options.rank = uint32_t(ranks_.getRank());
   options.ranks = uint32_t(ranks_.getSize());
-  if (ranks_.getRank() == 0) {
-    std::string done;
-    for (const EpisodeRecord& r : options.resumed) {
-      const uint64_t index = r.spec.index;
-      done.append(reinterpret_cast<const char*>(&index), sizeof(index));
-    }
-    for (int r = 1; r < ranks_.getSize(); ++r) ranks_.send(r, kMpiStart, done);
-    hooks.take_remote = [this] { return takeRecords(); };
-    hooks.remote_done = [this] { return done_ == ranks_.getSize() - 1; };
+  // The indices of the episodes rank 0's journal has (only they matter to
+  // the others: which episodes not to run).
+  std::string done;
+  for (const EpisodeRecord& r : options.resumed) {
+    const uint64_t index = r.spec.index;
+    done.append(reinterpret_cast<const char*>(&index), sizeof(index));
+  }
+  done = exchangeStart(done, stop);
+  if (isRankZero()) {
+    hooks.take_remote = [this] {
+      std::vector<EpisodeRecord> records;
+      receive([&](const std::string& bytes) { records.push_back(unpackEpisodeRecord(bytes)); },
+              [this](const std::string& why) {
+                if (!why.empty() && why != "complete") errors_.push_back("a rank stopped: " + why);
+              });
+      return records;
+    };
+    hooks.remote_done = [this] { return areOthersDone(); };
     return;
   }
-  // The others: which episodes rank 0's journal has (only their indices
-  // matter here), then each finished record goes to rank 0.
-  const std::string bytes = waitForStart(ranks_, stop);
   options.resumed.clear();
-  for (std::size_t at = 0; at + 8 <= bytes.size(); at += 8) {
+  for (std::size_t at = 0; at + 8 <= done.size(); at += 8) {
     EpisodeRecord r;
-    std::memcpy(&r.spec.index, bytes.data() + at, 8);
+    std::memcpy(&r.spec.index, done.data() + at, 8);
     options.resumed.push_back(r);
   }
   auto previous = hooks.on_episode;
@@ -125,93 +169,41 @@ void RankedEvaluation::prepare(EvaluationOptions& options, EvaluationHooks& hook
   };
 }
 
-std::vector<EpisodeRecord> RankedEvaluation::takeRecords() {
-  std::vector<EpisodeRecord> records;
-  int source = 0, tag = 0;
-  std::string bytes;
-  while (ranks_.receive(source, tag, bytes)) {
-    if (tag == kMpiRecord) records.push_back(unpackEpisodeRecord(bytes));
-    if (tag == kMpiError) errors_.push_back("rank " + std::to_string(source) + ": " + bytes);
-    if (tag == kMpiDone) {
-      ++done_;
-      if (!bytes.empty() && bytes != "complete") errors_.push_back("rank " + std::to_string(source) + ": " + bytes);
-    }
-  }
-  return records;
-}
-
-void RankedEvaluation::finish(const std::string& why) {
-  if (ranks_.getRank() != 0) ranks_.send(0, kMpiDone, why.empty() ? "complete" : why);
-}
-
-void RankedEvaluation::fail(const std::string& message) {
-  if (ranks_.getRank() == 0) return;
-  ranks_.send(0, kMpiError, message);
-  ranks_.send(0, kMpiDone, "");
-}
-
-std::string waitForStart(MpiRanks& ranks, const std::function<bool()>& stop) {
-  int source = 0, tag = 0;
-  std::string bytes;
-  while (!ranks.receive(source, tag, bytes) || tag != kMpiStart) {
-    if (stop && stop()) throw std::runtime_error("stopped before rank 0 started the run");
-    usleep(10000);
-  }
-  return bytes;
-}
-
 void RankedGeneration::prepare(GenerationOptions& options, GenerationHooks& hooks,
                                const std::function<bool()>& stop) {
   options.rank = uint32_t(ranks_.getRank());
   options.ranks = uint32_t(ranks_.getSize());
-  if (ranks_.getRank() == 0) {
-    std::string done;
-    for (const std::string& object : options.done_objects) done += object + "\n";
-    for (int r = 1; r < ranks_.getSize(); ++r) ranks_.send(r, kMpiStart, done);
-    hooks.take_remote = [this] { return takeTrajectories(); };
-    hooks.remote_done = [this] { return done_ == ranks_.getSize() - 1; };
+  std::string done;
+  for (const std::string& object : options.done_objects) done += object + "\n";
+  done = exchangeStart(done, stop);
+  if (isRankZero()) {
+    hooks.take_remote = [this] {
+      std::vector<Trajectory> trajectories;
+      receive(
+          [&](const std::string& bytes) {
+            EpisodeRecord r = unpackEpisodeRecord(bytes);
+            if (r.trajectory) trajectories.push_back(*r.trajectory);
+          },
+          [this](const std::string& results) {
+            if (results.empty()) return;
+            const auto json = nlohmann::json::parse(results);
+            for (const auto& [object, o] : json.at("objects").items())
+              results_.push_back({object, o.at("kept"), o.at("attempts"), o.at("failures")});
+          });
+      return trajectories;
+    };
+    hooks.remote_done = [this] { return areOthersDone(); };
     hooks.take_remote_results = [this] { return std::move(results_); };
     return;
   }
-  std::istringstream done(waitForStart(ranks_, stop));
+  std::istringstream objects(done);
   options.done_objects.clear();
-  for (std::string object; std::getline(done, object);) options.done_objects.insert(object);
+  for (std::string object; std::getline(objects, object);) options.done_objects.insert(object);
   hooks.on_kept = [this](const Trajectory& t) {
     EpisodeRecord r;
     r.trajectory = std::make_shared<Trajectory>(t);
     ranks_.send(0, kMpiRecord, packEpisodeRecord(r));
   };
-}
-
-std::vector<Trajectory> RankedGeneration::takeTrajectories() {
-  std::vector<Trajectory> trajectories;
-  int source = 0, tag = 0;
-  std::string bytes;
-  while (ranks_.receive(source, tag, bytes)) {
-    if (tag == kMpiRecord) {
-      EpisodeRecord r = unpackEpisodeRecord(bytes);
-      if (r.trajectory) trajectories.push_back(*r.trajectory);
-    }
-    if (tag == kMpiError) errors_.push_back("rank " + std::to_string(source) + ": " + bytes);
-    if (tag == kMpiDone) {
-      ++done_;
-      if (bytes.empty()) continue;
-      const auto json = nlohmann::json::parse(bytes);
-      for (const auto& [object, o] : json.at("objects").items())
-        results_.push_back({object, o.at("kept"), o.at("attempts"), o.at("failures")});
-    }
-  }
-  return trajectories;
-}
-
-void RankedGeneration::finish(const std::string& result_json) {
-  if (ranks_.getRank() != 0) ranks_.send(0, kMpiDone, result_json);
-}
-
-void RankedGeneration::fail(const std::string& message) {
-  if (ranks_.getRank() == 0) return;
-  ranks_.send(0, kMpiError, message);
-  ranks_.send(0, kMpiDone, "");
 }
 
 }  // namespace manibench::cli

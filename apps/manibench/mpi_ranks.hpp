@@ -45,53 +45,61 @@ enum MpiTag : int {
   kMpiError = 4,   // r -> 0: it could not run (the message), then kMpiDone
 };
 
-// Ties an evaluation to the ranks: rank 0 receives the others' records
-// (options.ranks/rank and the hooks set here), the others send theirs.
-// Every rank calls prepare() before evaluatePolicy and finish() after.
-class RankedEvaluation {
+// What an evaluation and a generation share over the ranks: rank 0 sends
+// the others a start message (what a resumed run has done) and receives
+// their records, errors and ends; the others wait for the start, then send.
+class RankedRun {
  public:
-  explicit RankedEvaluation(MpiRanks& ranks) : ranks_(ranks) {}
-  // Sets options.rank/ranks; rank 0 tells the others which episodes
-  // `options.resumed` holds, the others wait for that; hooks get the
-  // record exchange. `stop` ends a wait early.
-  void prepare(EvaluationOptions& options, EvaluationHooks& hooks, const std::function<bool()>& stop);
-  // Not rank 0: tells rank 0 this rank is done (`why` empty: complete).
-  void finish(const std::string& why);
+  explicit RankedRun(MpiRanks& ranks) : ranks_(ranks) {}
+  // Not rank 0: tells rank 0 this rank is done (`payload`: why not
+  // complete, or the generation's results).
+  void finish(const std::string& payload);
   // Not rank 0: rank 0 learns that this rank could not run.
   void fail(const std::string& message);
   // Rank 0: what ranks reported as errors.
   const std::vector<std::string>& getErrors() const { return errors_; }
 
- private:
-  std::vector<EpisodeRecord> takeRecords();
+ protected:
+  // Rank 0 sends `start` to every other rank and returns it; the others
+  // wait for it (`stop` ends the wait) and return what came.
+  std::string exchangeStart(const std::string& start, const std::function<bool()>& stop);
+  // Rank 0: the waiting messages; records to `on_record`, each end's
+  // payload to `on_done`.
+  void receive(const std::function<void(const std::string&)>& on_record,
+               const std::function<void(const std::string&)>& on_done);
+  bool areOthersDone() const { return done_ == ranks_.getSize() - 1; }
+  bool isRankZero() const { return ranks_.getRank() == 0; }
+
   MpiRanks& ranks_;
   int done_ = 0;
   std::vector<std::string> errors_;
+};
+
+// Ties an evaluation to the ranks: rank 0 receives the others' records
+// (options.ranks/rank and the hooks set here), the others send theirs.
+// Every rank calls prepare() before evaluatePolicy and, but rank 0,
+// finish() or fail() after.
+class RankedEvaluation : public RankedRun {
+ public:
+  using RankedRun::RankedRun;
+  // Sets options.rank/ranks; rank 0 tells the others which episodes
+  // `options.resumed` holds, the others wait for that; hooks get the
+  // record exchange. `stop` ends a wait early.
+  void prepare(EvaluationOptions& options, EvaluationHooks& hooks, const std::function<bool()>& stop);
 };
 
 // The same for `demos generate`: the ranks share the objects, the others
-// send each trajectory they keep and, at the end, their objects' results.
-class RankedGeneration {
+// send each trajectory they keep and, at the end (finish), their objects'
+// results (formatGenerationResult).
+class RankedGeneration : public RankedRun {
  public:
-  explicit RankedGeneration(MpiRanks& ranks) : ranks_(ranks) {}
+  using RankedRun::RankedRun;
   // Sets options.rank/ranks; rank 0 sends options.done_objects (--resume),
   // the others wait for them; hooks get the exchange.
   void prepare(GenerationOptions& options, GenerationHooks& hooks, const std::function<bool()>& stop);
-  // Not rank 0: its objects' results (formatGenerationResult), or that it
-  // failed.
-  void finish(const std::string& result_json);
-  void fail(const std::string& message);
-  const std::vector<std::string>& getErrors() const { return errors_; }
 
  private:
-  std::vector<Trajectory> takeTrajectories();
-  MpiRanks& ranks_;
-  int done_ = 0;
   std::vector<GenerationObjectResult> results_;
-  std::vector<std::string> errors_;
 };
-
-// Not rank 0: waits for rank 0's kMpiStart; its payload.
-std::string waitForStart(MpiRanks& ranks, const std::function<bool()>& stop);
 
 }  // namespace manibench::cli

@@ -18,33 +18,20 @@
 #include <sstream>
 #include <thread>
 
-#include "eval_test_support.hpp"
-#include "test_support.hpp"
+#include "distributed_support.hpp"
 
 namespace manibench {
 namespace {
 
 using testing::contains;
 using testing::readFile;
+using testing::countEpisodes;
+using testing::expectSameFiles;
+using testing::readTrajectories;
 using testing::runCli;
 
 const std::vector<std::string> kMpirun = {"--allow-run-as-root", "--oversubscribe", "--mca", "btl", "self,vader",
                                           "-x", "MANIBENCH_PLUGIN_PATH"};
-
-std::string withoutTiming(const std::string& json) {
-  std::istringstream in(json);
-  std::string line, out;
-  while (std::getline(in, line))
-    if (!contains(line, "\"timing\"")) out += line + "\n";
-  return out;
-}
-
-void expectSameFiles(const fs::path& a, const fs::path& b) {
-  EXPECT_EQ(readFile(a / "episodes.csv"), readFile(b / "episodes.csv")) << a << " vs " << b;
-  EXPECT_EQ(readFile(a / "summary.csv"), readFile(b / "summary.csv")) << a << " vs " << b;
-  EXPECT_EQ(withoutTiming(readFile(a / "summary.json")), withoutTiming(readFile(b / "summary.json")))
-      << a << " vs " << b;
-}
 
 std::vector<std::string> evalArguments(const fs::path& out, const std::string& levels,
                                        const std::string& steps = "25") {
@@ -71,18 +58,6 @@ TEST(Mpi, ThreeRanksWriteWhatOneProcessWrites) {
   const auto single = testing::runProgram(MANIBENCH_TEST_MPIRUN, underMpirun(1, evalArguments(dir / "mpi1", "0-4")));
   ASSERT_EQ(single.exit_code, 0) << single.out << single.err;
   expectSameFiles(dir / "one", dir / "mpi1");
-}
-
-// Every field of every trajectory, as bytes, in file order.
-std::vector<std::string> readTrajectories(const std::string& path) {
-  const DemoReader reader(path);
-  std::vector<std::string> all;
-  for (const std::string& name : reader.getTrajectoryNames()) {
-    EpisodeRecord r;
-    r.trajectory = std::make_shared<Trajectory>(reader.read(name));
-    all.push_back(packEpisodeRecord(r));
-  }
-  return all;
 }
 
 // Noise makes objects need different numbers of rounds (docs/distributed.md):
@@ -134,31 +109,14 @@ std::vector<pid_t> listChildren(pid_t parent) {
   return children;
 }
 
-std::size_t countEpisodes(const fs::path& journal) {
-  const std::string text = readFile(journal);
-  std::size_t n = 0;
-  for (std::size_t at = 0; (at = text.find("\"episode\":", at)) != std::string::npos; ++at) ++n;
-  return n;
-}
-
 TEST(Mpi, KilledRankLosesOnlyItsUnfinishedEpisodesAndResumeCompletes) {
   TempDir dir;
   const fs::path out = dir / "ranks";
   ASSERT_EQ(runCli(evalArguments(dir / "one", "0-29", "150")).exit_code, 0);
-  const pid_t mpirun = fork();
-  ASSERT_GE(mpirun, 0);
-  if (mpirun == 0) {
-    std::vector<std::string> words = underMpirun(3, evalArguments(out, "0-29", "150"));
-    words.insert(words.begin(), MANIBENCH_TEST_MPIRUN);
-    std::vector<char*> argv;
-    for (std::string& w : words) argv.push_back(w.data());
-    argv.push_back(nullptr);
-    const int null = open("/dev/null", O_WRONLY);
-    dup2(null, 1);
-    dup2(null, 2);
-    execvp(argv[0], argv.data());
-    _exit(127);
-  }
+  std::vector<std::string> words = underMpirun(3, evalArguments(out, "0-29", "150"));
+  words.insert(words.begin(), MANIBENCH_TEST_MPIRUN);
+  const pid_t mpirun = testing::startInBackground(words);
+  ASSERT_GT(mpirun, 0);
   // Rank 2 is killed once rank 0's journal has a few episodes.
   for (int i = 0; i < 6000 && countEpisodes(out / "journal.jsonl") < 4; ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
@@ -190,20 +148,10 @@ TEST(Mpi, KilledRankLosesOnlyItsUnfinishedEpisodesAndResumeCompletes) {
 TEST(Mpi, SigtermOnMpirunLeavesReadablePartialResults) {
   TempDir dir;
   const fs::path out = dir / "ranks";
-  const pid_t mpirun = fork();
-  ASSERT_GE(mpirun, 0);
-  if (mpirun == 0) {
-    std::vector<std::string> words = underMpirun(3, evalArguments(out, "0-199", "150"));
-    words.insert(words.begin(), MANIBENCH_TEST_MPIRUN);
-    std::vector<char*> argv;
-    for (std::string& w : words) argv.push_back(w.data());
-    argv.push_back(nullptr);
-    const int null = open("/dev/null", O_WRONLY);
-    dup2(null, 1);
-    dup2(null, 2);
-    execvp(argv[0], argv.data());
-    _exit(127);
-  }
+  std::vector<std::string> words = underMpirun(3, evalArguments(out, "0-199", "150"));
+  words.insert(words.begin(), MANIBENCH_TEST_MPIRUN);
+  const pid_t mpirun = testing::startInBackground(words);
+  ASSERT_GT(mpirun, 0);
   for (int i = 0; i < 6000 && countEpisodes(out / "journal.jsonl") < 4; ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   kill(mpirun, SIGTERM);

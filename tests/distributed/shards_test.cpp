@@ -17,31 +17,17 @@
 #include <sstream>
 #include <thread>
 
-#include "eval_test_support.hpp"
-#include "test_support.hpp"
+#include "distributed_support.hpp"
 
 namespace manibench {
 namespace {
 
 using testing::contains;
 using testing::readFile;
+using testing::countEpisodes;
+using testing::expectSameFiles;
+using testing::readTrajectories;
 using testing::runCli;
-
-// The JSON without its one timing line (wall times differ between runs).
-std::string withoutTiming(const std::string& json) {
-  std::istringstream in(json);
-  std::string line, out;
-  while (std::getline(in, line))
-    if (!contains(line, "\"timing\"")) out += line + "\n";
-  return out;
-}
-
-void expectSameFiles(const fs::path& a, const fs::path& b) {
-  EXPECT_EQ(readFile(a / "episodes.csv"), readFile(b / "episodes.csv")) << a << " vs " << b;
-  EXPECT_EQ(readFile(a / "summary.csv"), readFile(b / "summary.csv")) << a << " vs " << b;
-  EXPECT_EQ(withoutTiming(readFile(a / "summary.json")), withoutTiming(readFile(b / "summary.json")))
-      << a << " vs " << b;
-}
 
 // Short episodes of a random policy: 2 objects x 3 levels.
 std::vector<std::string> evalArguments(const fs::path& out, std::vector<std::string> extra = {}) {
@@ -144,33 +130,16 @@ TEST(EvalShards, KilledShardKeepsItsEpisodesAndResumeCompletesIt) {
   ASSERT_EQ(runCli(clean(dir / "s1", {"--shard", "1/2"})).exit_code, 0);
 
   const fs::path s2 = dir / "s2";
-  const pid_t pid = fork();
-  ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    setpgid(0, 0);
-    std::vector<std::string> words = clean(s2, {"--shard", "2/2"});
-    words.insert(words.begin(), MANIBENCH_TEST_CLI);
-    std::vector<char*> argv;
-    for (std::string& w : words) argv.push_back(w.data());
-    argv.push_back(nullptr);
-    const int null = open("/dev/null", O_WRONLY);
-    dup2(null, 1);
-    dup2(null, 2);
-    execv(argv[0], argv.data());
-    _exit(127);
-  }
+  std::vector<std::string> words = clean(s2, {"--shard", "2/2"});
+  words.insert(words.begin(), MANIBENCH_TEST_CLI);
+  const pid_t pid = testing::startInBackground(words);
+  ASSERT_GT(pid, 0);
   // Killed once its journal has three episodes.
-  auto countEpisodes = [&] {
-    const std::string journal = readFile(s2 / "journal.jsonl");
-    std::size_t n = 0;
-    for (std::size_t at = 0; (at = journal.find("\"episode\":", at)) != std::string::npos; ++at) ++n;
-    return n;
-  };
-  for (int i = 0; i < 6000 && countEpisodes() < 3; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  for (int i = 0; i < 6000 && countEpisodes(s2 / "journal.jsonl") < 3; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
   kill(-pid, SIGKILL);
   int status = 0;
   waitpid(pid, &status, 0);
-  const std::size_t kept = countEpisodes();
+  const std::size_t kept = countEpisodes(s2 / "journal.jsonl");
   ASSERT_GE(kept, 3u);
   ASSERT_LT(kept, 40u) << "the shard finished before it was killed";
   EXPECT_FALSE(fs::exists(s2 / "summary.json"));
@@ -188,18 +157,6 @@ TEST(EvalShards, KilledShardKeepsItsEpisodesAndResumeCompletesIt) {
 }
 
 // --- demonstrations ---------------------------------------------------------------
-
-// Every field of every trajectory, as bytes, in file order.
-std::vector<std::string> readTrajectories(const std::string& path) {
-  const DemoReader reader(path);
-  std::vector<std::string> all;
-  for (const std::string& name : reader.getTrajectoryNames()) {
-    EpisodeRecord r;
-    r.trajectory = std::make_shared<Trajectory>(reader.read(name));
-    all.push_back(packEpisodeRecord(r));
-  }
-  return all;
-}
 
 // Noisy actions make some episodes fail, so that objects need different
 // numbers of rounds (one gives up after 6 attempts with 1 of 2): the order
