@@ -21,6 +21,7 @@
 #include <sstream>
 
 #include "cli.hpp"
+#include "mpi_ranks.hpp"
 #include "video.hpp"
 
 namespace manibench::cli {
@@ -54,6 +55,16 @@ const char* kDemosUsage = R"(usage: manibench demos generate|replay|convert|info
         --policy-output-limit MIB, --policy-read PATH   as for eval: the
                                policy runs sandboxed unless --trusted-policy
         --no-progress          no progress bar
+        --shard I/N            only share I of N of the objects (every N-th),
+                               for job arrays; `demos merge` combines the
+                               shards' files (docs/distributed.md)
+        --resume               FILE.h5 exists (a run cut short): run only
+                               the objects it lacks and complete it
+  merge FILE.h5... --out FILE.h5
+      Combines the files of `generate --shard` runs into the file the whole
+      run writes (same trajectories, same order). Objects not finished in
+      any of them are named; a file of another run is an error naming the
+      difference.
   replay FILE.h5 [--trajectories traj_0,traj_3] [--check] [--video DIR]
       Re-simulates each trajectory from its first state with its actions;
       --check compares every step's state, observation, reward and flags
@@ -90,19 +101,8 @@ std::string onePositional(const Arguments& args, const std::string& what) {
   return args.positional[0];
 }
 
-int generate(int argc, char** argv) {
-  const Arguments args = parseArguments(
-      argc, argv, 3,
-      {"policy", "policy-config", "out", "split", "objects", "per-object", "max-attempts", "workers",
-       "seed", "obs", "controller", "config", "set", "step-timeout", "env-timeout", "action-noise",
-       "policy-cpu-limit", "policy-memory-limit", "policy-output-limit", "policy-read"},
-      {"no-progress", kTrustedPolicyFlag}, kDemosUsage, {"config", "set", "policy-read"});
-  if (args.positional.size() != 1) throw UsageError("demos generate takes one TASK", kDemosUsage);
-  if (!args.options.count("policy")) throw UsageError("demos generate needs --policy", kDemosUsage);
-  if (!args.options.count("out")) throw UsageError("demos generate needs --out FILE.h5", kDemosUsage);
-  const std::string task = args.positional[0];
-  const std::string out = args.options.at("out");
-
+// generate's options but the policy, the sandbox and the configuration.
+GenerationOptions parseGenerationOptions(const Arguments& args, const std::string& task) {
   GenerationOptions options;
   EvaluationOptions& evaluation = options.evaluation;
   evaluation.task = task;
@@ -139,55 +139,37 @@ int generate(int argc, char** argv) {
     evaluation.policy_config = text.str();
   }
 
-  PluginRegistry registry;
-  loadPlugins(registry);
-  evaluation.policy = resolvePolicy(registry, args.options.at("policy"));
-  const PluginEntry& policy = registry.getEntry(PluginKind::Policy, evaluation.policy);
-  {
-    std::vector<std::string> policy_files = {registry.getLibraries()[policy.library].path};
-    if (args.options.count("policy-config")) policy_files.push_back(args.options.at("policy-config"));
-    applySandboxOptions(args, evaluation, policy_files, kDemosUsage);
+  if (args.options.count("shard")) {
+    try {
+      parseShard(args.options.at("shard"), options.shard, options.shards);
+    } catch (const InvalidArgument& e) {
+      throw UsageError(e.what(), kDemosUsage);
+    }
   }
-  const TaskId task_id = resolveTaskId(registry, task);
-  const ConfigSources sources = getConfigSources(args, parseObservationMode(args, kDemosUsage));
-  for (const std::string& file : sources.files) evaluation.config_notes.push_back("--config " + file);
-  for (const std::string& set : sources.overrides) evaluation.config_notes.push_back("--set " + set);
-  const ConfigNode config = loadTaskConfig(registry, task, sources);
-  calcEnvironmentOptions(config);  // bad values fail here, before any worker
+  return options;
+}
 
-  DemoFileInfo info;
-  info.manibench_version = getManibenchVersion();
-  info.task = task_id.task;
-  info.environment_id = task;
-  info.config = formatConfig(config);
-  info.plugins = describePlugins(registry);
-  const LoadedLibrary& policy_library = registry.getLibraries()[policy.library];
-  info.policy = evaluation.policy + " (" + policy_library.path + ", version " + policy_library.version + ")";
-  info.created = formatUtcNow();
-  info.command = joinCommand(argc, argv);
-
-  const EnvironmentFactory factory = [&registry, task, sources] {
-    return makeEnvironment(registry, task, sources, true);
-  };
-  const bool progress = !args.options.count("no-progress") && isatty(STDERR_FILENO);
-  GenerationHooks hooks;
-  if (progress)
-    hooks.on_progress = [](const GenerationProgress& p) {
-      std::string details = ", " + std::to_string(p.episodes) + " episodes";
-      if (p.failures) details += ", " + std::to_string(p.failures) + " failed";
-      drawProgressBar(p.kept, p.wanted, "trajectories", details, p.elapsed);
-    };
-  hooks.should_stop = [] { return StopSignals::isRequested(); };
-  std::cout << "generating " << options.per_object << " trajectory(ies) per object of " << task << " ("
-            << evaluation.split << " split) with policy " << evaluation.policy << ", "
-            << evaluation.workers << " worker(s), into " << out << "\n"
-            << std::flush;
-  GenerationResult result;
-  {
-    StopSignals stop_signals;
-    result = generateDemonstrations(registry, options, factory, out, info, hooks);
+// The file so far and the rest (resumed), or the ranks' trajectories as
+// they came (MPI), into `out` in the order the run writes them; the parts
+// are removed. The number of trajectories.
+std::size_t mergeParts(const std::string& out, const std::string& part, bool resume, const DemoFileInfo& info,
+                       const GenerationOptions& options) {
+  std::vector<std::string> parts = {part};
+  if (resume) {
+    parts.insert(parts.begin(), out + ".before.h5");
+    std::filesystem::rename(out, parts.front());
   }
-  if (progress) std::cerr << "\n";
+  const DemoMergeResult merged = mergeDemonstrations(parts, out, info, options.shard, options.shards);
+  for (const std::string& file : parts) {
+    std::filesystem::remove(file);
+    std::filesystem::remove(getDemoJsonPath(file));
+  }
+  if (resume) std::cout << "resumed " << out << ": " << merged.trajectories << " trajectories\n";
+  return merged.trajectories;
+}
+
+// What a generation did, on the terminal; the exit status.
+int reportGeneration(const GenerationResult& result, const GenerationOptions& options, const std::string& out) {
   std::size_t short_objects = 0;
   for (const GenerationObjectResult& o : result.objects) {
     if (o.kept >= options.per_object) continue;
@@ -213,6 +195,167 @@ int generate(int argc, char** argv) {
     return 1;
   }
   return 0;
+}
+
+int generate(int argc, char** argv) {
+  const Arguments args = parseArguments(
+      argc, argv, 3,
+      {"policy", "policy-config", "out", "split", "objects", "per-object", "max-attempts", "workers",
+       "seed", "obs", "controller", "config", "set", "step-timeout", "env-timeout", "action-noise",
+       "policy-cpu-limit", "policy-memory-limit", "policy-output-limit", "policy-read", "shard"},
+      {"no-progress", "resume", kTrustedPolicyFlag}, kDemosUsage, {"config", "set", "policy-read"});
+  if (args.positional.size() != 1) throw UsageError("demos generate takes one TASK", kDemosUsage);
+  if (!args.options.count("policy")) throw UsageError("demos generate needs --policy", kDemosUsage);
+  if (!args.options.count("out")) throw UsageError("demos generate needs --out FILE.h5", kDemosUsage);
+  const std::string task = args.positional[0];
+  const std::string out = args.options.at("out");
+
+  GenerationOptions options = parseGenerationOptions(args, task);
+  EvaluationOptions& evaluation = options.evaluation;
+
+  PluginRegistry registry;
+  loadPlugins(registry);
+  evaluation.policy = resolvePolicy(registry, args.options.at("policy"));
+  const PluginEntry& policy = registry.getEntry(PluginKind::Policy, evaluation.policy);
+  {
+    std::vector<std::string> policy_files = {registry.getLibraries()[policy.library].path};
+    if (args.options.count("policy-config")) policy_files.push_back(args.options.at("policy-config"));
+    applySandboxOptions(args, evaluation, policy_files, kDemosUsage);
+  }
+  const TaskId task_id = resolveTaskId(registry, task);
+  const ConfigSources sources = getConfigSources(args, parseObservationMode(args, kDemosUsage));
+  for (const std::string& file : sources.files) evaluation.config_notes.push_back("--config " + file);
+  for (const std::string& set : sources.overrides) evaluation.config_notes.push_back("--set " + set);
+  const ConfigNode config = loadTaskConfig(registry, task, sources);
+  const EnvironmentOptions environment = calcEnvironmentOptions(config);  // bad values fail here
+  // Under mpirun the ranks share the objects; rank 0 alone writes the file.
+  std::unique_ptr<MpiRanks> mpi;
+  if (MpiRanks::isStartedByMpi()) mpi = std::make_unique<MpiRanks>();
+  const bool writer = !mpi || mpi->getRank() == 0;
+  const bool resume = writer && args.options.count("resume") && std::filesystem::exists(out);
+  if ((options.shards > 1 || resume || mpi) && evaluation.objects.empty()) {
+    // A share of the objects, or those left, is taken from the whole list,
+    // which the file records: the split's, as the workers will see it.
+    const TaskInstance probe(registry, task_id.task, environment.task_config);
+    evaluation.objects = task_id.isFixed()
+                             ? selectFixedObjects(task_id, probe.listObjects("train"), probe.listObjects("test"))
+                             : probe.listObjects(evaluation.split);
+  }
+  // Where this process writes: the file, or (resumed, or trajectories
+  // arriving from ranks in any order) a part that is merged into it in the
+  // run's order; another rank writes a scratch file of its own.
+  std::string path = out;
+  if (resume) {
+    for (const std::string& object : findDoneObjects(out)) options.done_objects.insert(object);
+    path = out + ".rest.h5";
+  } else if (mpi && writer) {
+    path = out + ".unordered.h5";
+  } else if (!writer) {
+    const char* tmp = std::getenv("TMPDIR");
+    path = std::string(tmp && *tmp ? tmp : "/tmp") + "/manibench-demos-rank" + std::to_string(mpi->getRank()) +
+           "-" + std::to_string(getpid()) + ".h5";
+  }
+
+  DemoFileInfo info;
+  info.manibench_version = getManibenchVersion();
+  info.task = task_id.task;
+  info.environment_id = task;
+  info.config = formatConfig(config);
+  info.plugins = describePlugins(registry);
+  const LoadedLibrary& policy_library = registry.getLibraries()[policy.library];
+  info.policy = evaluation.policy + " (" + policy_library.path + ", version " + policy_library.version + ")";
+  info.created = formatUtcNow();
+  info.command = joinCommand(argc, argv);
+
+  if (resume) {
+    // Another run's file is an error before anything runs.
+    DemoFileInfo expected = info;
+    expected.generation = formatGeneration(options, evaluation.objects, options.max_attempts);
+    const std::string difference = findGenerationDifference(out, expected);
+    if (!difference.empty())
+      throw std::runtime_error("--resume: " + out + " is of another generation (" + difference + " here)");
+  }
+  const EnvironmentFactory factory = [&registry, task, sources] {
+    return makeEnvironment(registry, task, sources, true);
+  };
+  const bool progress = writer && !args.options.count("no-progress") && isatty(STDERR_FILENO);
+  GenerationHooks hooks;
+  if (progress)
+    hooks.on_progress = [](const GenerationProgress& p) {
+      std::string details = ", " + std::to_string(p.episodes) + " episodes";
+      if (p.failures) details += ", " + std::to_string(p.failures) + " failed";
+      drawProgressBar(p.kept, p.wanted, "trajectories", details, p.elapsed);
+    };
+  if (mpi && writer && !progress && !args.options.count("no-progress"))
+    hooks.on_progress = [last = -1.0](const GenerationProgress& p) mutable {
+      if (p.elapsed - last < 10 && p.kept < p.wanted) return;
+      last = p.elapsed;
+      std::cerr << "progress: " << p.kept << " of " << p.wanted << " trajectories (every rank), " << p.episodes
+                << " episodes here, " << formatDuration(p.elapsed) << " elapsed\n";
+    };
+  hooks.should_stop = [] { return StopSignals::isRequested(); };
+  std::optional<StopSignals> stop_signals(std::in_place);
+  std::optional<RankedGeneration> ranked;
+  if (mpi) {
+    ranked.emplace(*mpi);
+    ranked->prepare(options, hooks, hooks.should_stop);
+  }
+  if (!writer) {
+    try {
+      const GenerationResult part = generateDemonstrations(registry, options, factory, path, info, hooks);
+      ranked->finish(formatGenerationResult(part, options.per_object,
+                                            options.max_attempts));
+    } catch (const std::exception& e) {
+      std::cerr << "manibench: rank " << mpi->getRank() << ": " << e.what() << "\n";
+      ranked->fail(e.what());
+    }
+    for (const std::string& file : {path, getDemoJsonPath(path)}) std::filesystem::remove(file);
+    return 0;
+  }
+  std::cout << "generating " << options.per_object << " trajectory(ies) per object of " << task << " ("
+            << evaluation.split << " split) with policy " << evaluation.policy << ", "
+            << evaluation.workers << " worker(s)"
+            << (mpi ? ", " + std::to_string(mpi->getSize()) + " MPI rank(s)" : std::string()) << ", into " << out
+            << "\n"
+            << std::flush;
+  GenerationResult result;
+  std::size_t own = 0;
+  for (std::size_t i = 0; i < evaluation.objects.size(); ++i)
+    own += i % options.shards == options.shard && !options.done_objects.count(evaluation.objects[i]);
+  if (resume && own == 0) {
+    std::cout << out << " has every object of its run: nothing to resume\n";
+    return 0;
+  }
+  result = generateDemonstrations(registry, options, factory, path, info, hooks);
+  stop_signals.reset();
+  if (progress) std::cerr << "\n";
+  if (ranked)
+    for (const std::string& error : ranked->getErrors()) std::cerr << "manibench: " << error << "\n";
+  if (path != out) result.trajectories = mergeParts(out, path, resume, info, options);
+  return reportGeneration(result, options, out);
+}
+
+// demos merge FILE.h5... --out FILE.h5
+int merge(int argc, char** argv) {
+  const Arguments args = parseArguments(argc, argv, 3, {"out"}, {}, kDemosUsage, {});
+  if (args.positional.empty()) throw UsageError("demos merge needs files", kDemosUsage);
+  if (!args.options.count("out")) throw UsageError("demos merge needs --out FILE.h5", kDemosUsage);
+  const std::string out = args.options.at("out");
+  for (const std::string& input : args.positional)
+    if (std::filesystem::exists(out) && std::filesystem::equivalent(input, out))
+      throw UsageError("--out must be another file than the inputs", kDemosUsage);
+  DemoFileInfo info;
+  info.created = formatUtcNow();
+  info.command = joinCommand(argc, argv);
+  const DemoMergeResult merged = mergeDemonstrations(args.positional, out, info);
+  std::cout << "wrote " << merged.trajectories << " trajectories of " << merged.done_objects.size()
+            << " object(s) to " << out << "\n";
+  if (merged.missing.empty()) return 0;
+  for (const std::string& m : merged.missing) std::cerr << "manibench: missing: " << m << "\n";
+  std::cerr << "manibench: " << merged.missing.size()
+            << " object(s) unfinished; `demos generate ... --shard I/N --out SHARD.h5 --resume` on "
+               "their shard completes it, then merge again\n";
+  return 1;
 }
 
 int replay(int argc, char** argv) {
@@ -406,6 +549,7 @@ int commandDemos(int argc, char** argv) {
     }
   if (sub == "generate") return generate(argc, argv);
   if (sub == "replay") return replay(argc, argv);
+  if (sub == "merge") return merge(argc, argv);
   if (sub == "convert") return convert(argc, argv);
   if (sub == "info") return info(argc, argv);
   throw UsageError("unknown demos command '" + sub + "'", kDemosUsage);

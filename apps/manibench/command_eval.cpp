@@ -17,12 +17,14 @@
 #include <sstream>
 
 #include "cli.hpp"
+#include "mpi_ranks.hpp"
 
 namespace manibench::cli {
 
 namespace {
 
 const std::string kEvalUsageText = R"(usage: manibench eval [TASK] --policy NAME|PATH.so|PATH.py [options]
+       manibench eval merge DIR... [--out DIR]
 
 Evaluates a policy on a task's objects (ManiSkill's evaluation kit): every
 selected object times every level is one episode, with a seed derived from
@@ -58,11 +60,26 @@ Options:
   --benchmark             run the evaluation with 1 worker, then with
                           --workers, check that both give the same results
                           and print the speedup
+  --shard I/N             run only share I of N of the episode list (every
+                          N-th episode; seeds as in the whole run): for job
+                          arrays, combined by `eval merge` (docs/distributed.md)
+  --resume                run only the episodes the journal in --out lacks
+                          (a run that was killed or stopped); the files then
+                          hold every episode
   --controller NAME       override the task's default controller
   --config FILE           a YAML configuration layer; repeatable, later wins
   --set KEY=VALUE         one key; repeatable
 )" + std::string(kSandboxUsage) + R"(Exit status: 0 when every episode ran (failed episodes included), 1 on an
 error, 130 when interrupted (partial results written).
+Under mpirun (mpirun -np R manibench eval ...) the ranks share the episodes
+and rank 0 writes the files a single run writes (docs/distributed.md).
+
+eval merge DIR... combines the results of shards (or of runs cut short) from
+their journals into --out (default results): the files the whole run writes,
+byte for byte. Episodes no DIR has are named (object, seed); the merged
+files are then partial and `eval ... --out DIR --resume` runs what is
+missing. Results of different evaluations are an error naming the
+difference.
 )";
 const char* const kEvalUsage = kEvalUsageText.c_str();
 
@@ -100,27 +117,9 @@ bool sameResults(const EvaluationResult& a, const EvaluationResult& b) {
 
 }  // namespace
 
-int commandEval(int argc, char** argv) {
-  const Arguments args =
-      parseArguments(argc, argv, 2,
-                     {"task", "policy", "policy-config", "obs", "split", "objects",
-                      "episodes-per-object", "levels", "seed", "workers", "step-timeout",
-                      "env-timeout", "out", "controller", "config", "set", "policy-cpu-limit",
-                      "policy-memory-limit", "policy-output-limit", "policy-read"},
-                     {"no-progress", "benchmark", kTrustedPolicyFlag}, kEvalUsage,
-                     {"config", "set", "policy-read"});
-  if (args.help) {
-    std::cout << kEvalUsage;
-    return 0;
-  }
-  std::string task = valueOr(args, "task", "");
-  if (args.positional.size() > 1 || (args.positional.size() == 1 && !task.empty()))
-    throw UsageError("eval takes one TASK (as a word or --task)", kEvalUsage);
-  if (!args.positional.empty()) task = args.positional[0];
-  if (task.empty()) throw UsageError("eval needs a TASK", kEvalUsage);
-  if (!args.options.count("policy"))
-    throw UsageError("eval needs --policy NAME|PATH.so", kEvalUsage);
-
+// The options that need no plugin: the episode list, workers, timeouts,
+// the shard.
+EvaluationOptions parseEvaluationOptions(const Arguments& args, const std::string& task) {
   EvaluationOptions options;
   options.task = task;
   options.split = parseSplit(args, "test", kEvalUsage);
@@ -143,9 +142,89 @@ int commandEval(int argc, char** argv) {
       for (uint64_t level = 0; level < n; ++level) options.levels.push_back(level);
     }
     if (args.options.count("objects")) options.objects = parseIdList(args.options.at("objects"));
+    if (args.options.count("shard")) parseShard(args.options.at("shard"), options.shard, options.shards);
   } catch (const InvalidArgument& e) {
     throw UsageError(e.what(), kEvalUsage);
   }
+  return options;
+}
+
+// Under mpirun stderr is a pipe, not the terminal: a line now and then
+// (Slurm's log keeps them too).
+void printProgressLine(const EvaluationProgress& p) {
+  static double last = -1;
+  if (p.elapsed - last < 10 && p.done < p.total) return;
+  last = p.elapsed;
+  std::cerr << "progress: " << p.done << " of " << p.total << " episodes (every rank), " << p.successes
+            << " successful, " << formatDuration(p.elapsed) << " elapsed\n";
+}
+
+// A rank but 0: runs its part, sends each record to rank 0, prints nothing
+// but errors. Its exit status is 0 (an error is rank 0's to report: a
+// non-zero status would make mpirun end the job before rank 0 writes).
+int runOtherRank(const PluginRegistry& registry, const EvaluationOptions& options, const EnvironmentFactory& factory,
+                 const EvaluationHooks& hooks, RankedEvaluation& ranked, int rank) {
+  try {
+    const EvaluationResult part = evaluatePolicy(registry, options, factory, hooks);
+    ranked.finish(part.interrupted ? part.stop_reason : "");
+  } catch (const std::exception& e) {
+    std::cerr << "manibench: rank " << rank << ": " << e.what() << "\n";
+    ranked.fail(e.what());
+  }
+  return 0;
+}
+
+// eval merge DIR... [--out DIR]
+int mergeEvaluations(int argc, char** argv) {
+  const Arguments args = parseArguments(argc, argv, 3, {"out"}, {}, kEvalUsage, {});
+  if (args.help) {
+    std::cout << kEvalUsage;
+    return 0;
+  }
+  if (args.positional.empty()) throw UsageError("eval merge needs result folders", kEvalUsage);
+  std::vector<EvaluationJournal> journals;
+  for (const std::string& dir : args.positional)
+    journals.push_back(readJournal((std::filesystem::path(dir) / kJournalFileName).string()));
+  std::vector<EpisodeSpec> missing;
+  const EvaluationResult merged = mergeJournals(journals, missing);
+  const std::string out = valueOr(args, "out", "results");
+  std::filesystem::create_directories(out);
+  writeJournal((std::filesystem::path(out) / kJournalFileName).string(), merged);
+  printEvaluationTable(std::cout, merged);
+  for (const std::string& path : writeEvaluationFiles(out, merged)) std::cout << "wrote " << path << "\n";
+  if (!missing.empty()) {
+    std::cerr << "manibench: " << missing.size() << " of " << merged.planned.size()
+              << " episodes are in none of the folders: " << describeEpisodes(missing, 20)
+              << "; the files are partial: `manibench eval ... --out " << out
+              << " --resume` runs them\n";
+    return 1;
+  }
+  return 0;
+}
+
+int commandEval(int argc, char** argv) {
+  if (argc > 2 && std::string(argv[2]) == "merge") return mergeEvaluations(argc, argv);
+  const Arguments args =
+      parseArguments(argc, argv, 2,
+                     {"task", "policy", "policy-config", "obs", "split", "objects",
+                      "episodes-per-object", "levels", "seed", "workers", "step-timeout",
+                      "env-timeout", "out", "controller", "config", "set", "policy-cpu-limit",
+                      "policy-memory-limit", "policy-output-limit", "policy-read", "shard"},
+                     {"no-progress", "benchmark", "resume", kTrustedPolicyFlag}, kEvalUsage,
+                     {"config", "set", "policy-read"});
+  if (args.help) {
+    std::cout << kEvalUsage;
+    return 0;
+  }
+  std::string task = valueOr(args, "task", "");
+  if (args.positional.size() > 1 || (args.positional.size() == 1 && !task.empty()))
+    throw UsageError("eval takes one TASK (as a word or --task)", kEvalUsage);
+  if (!args.positional.empty()) task = args.positional[0];
+  if (task.empty()) throw UsageError("eval needs a TASK", kEvalUsage);
+  if (!args.options.count("policy"))
+    throw UsageError("eval needs --policy NAME|PATH.so", kEvalUsage);
+
+  EvaluationOptions options = parseEvaluationOptions(args, task);
 
   const ConfigSources sources = getConfigSources(args, parseObservationMode(args, kEvalUsage));
   for (const std::string& file : sources.files) options.config_notes.push_back("--config " + file);
@@ -194,26 +273,56 @@ int commandEval(int argc, char** argv) {
     return makeEnvironment(registry, task, sources, true);
   };
 
-  const bool progress = !args.options.count("no-progress") && isatty(STDERR_FILENO);
+  // Under mpirun: the ranks share the episodes; rank 0 alone prints and
+  // writes.
+  std::unique_ptr<MpiRanks> mpi;
+  if (MpiRanks::isStartedByMpi()) mpi = std::make_unique<MpiRanks>();
+  const bool writer = !mpi || mpi->getRank() == 0;
+  bool benchmark = args.options.count("benchmark") != 0;
+  if (benchmark && mpi) throw UsageError("--benchmark runs without mpirun", kEvalUsage);
+  if (writer) {
+    options.journal_path = (std::filesystem::path(out_dir) / kJournalFileName).string();
+    if (args.options.count("resume") && std::filesystem::exists(options.journal_path)) {
+      const EvaluationJournal journal = readJournal(options.journal_path);
+      options.resumed = journal.result.episodes;
+      options.resumed_header = journal.header;
+      std::cout << "resuming: " << options.resumed.size() << " episode(s) done in "
+                << options.journal_path << "\n";
+    }
+  }
+
+  const bool progress = writer && !args.options.count("no-progress") && isatty(STDERR_FILENO);
   EvaluationHooks hooks;
   if (progress) hooks.on_progress = drawProgress;
+  if (mpi && writer && !progress && !args.options.count("no-progress")) hooks.on_progress = printProgressLine;
   hooks.should_stop = [] { return StopSignals::isRequested(); };
   std::optional<StopSignals> stop_signals(std::in_place);
+  std::optional<RankedEvaluation> ranked;
+  if (mpi) {
+    ranked.emplace(*mpi);
+    ranked->prepare(options, hooks, hooks.should_stop);
+  }
+  if (!writer) return runOtherRank(registry, options, factory, hooks, *ranked, mpi->getRank());
 
   std::cout << "evaluating policy " << options.policy << " on " << task << " ("
             << (task_id.isFixed() ? "its fixed objects" : options.split + " split") << "), " << options.levels.size() << " level(s) per object, seed " << options.seed
-            << ", " << options.workers << " worker(s), the policy "
+            << ", " << options.workers << " worker(s)"
+            << (options.shards > 1 ? ", shard " + std::to_string(options.shard + 1) + "/" +
+                                         std::to_string(options.shards)
+                                   : std::string())
+            << (mpi ? ", " + std::to_string(mpi->getSize()) + " MPI rank(s)" : std::string())
+            << ", the policy "
             << (options.sandbox_policy ? "sandboxed (" + describeSandbox() + ")"
                                        : std::string("in the workers (--trusted-policy)"))
             << "\n"
             << std::flush;
   EvaluationResult baseline, result;
-  bool benchmark = args.options.count("benchmark") != 0;
   if (benchmark) {
     EvaluationOptions one = options;
     one.workers = 1;
     std::cout << "benchmark: first with 1 worker, then with " << options.workers << "\n"
               << std::flush;
+    one.journal_path.clear();
     baseline = evaluatePolicy(registry, one, factory, hooks);
     if (progress) std::cerr << "\n";
     if (baseline.interrupted) {
@@ -243,6 +352,8 @@ int commandEval(int argc, char** argv) {
               << (sameResults(baseline, result) ? "identical" : "DIFFER") << "\n";
   }
   std::cout.unsetf(std::ios::fixed);
+  if (ranked)
+    for (const std::string& error : ranked->getErrors()) std::cerr << "manibench: " << error << "\n";
   for (const std::string& path : writeEvaluationFiles(out_dir, result))
     std::cout << "wrote " << path << "\n";
   if (result.interrupted) {

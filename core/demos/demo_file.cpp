@@ -142,6 +142,7 @@ void writeInfo(const Handle& file, const DemoFileInfo& info) {
   writeAttribute(meta, "policy", info.policy);
   writeAttribute(meta, "created", info.created);
   writeAttribute(meta, "command", info.command);
+  if (!info.generation.empty()) writeAttribute(meta, "generation", info.generation);
 }
 
 // --- reading ----------------------------------------------------------------------
@@ -171,6 +172,10 @@ DemoFileInfo readInfo(const Handle& file) {
   info.policy = readStringAttribute(meta, "policy");
   info.created = readStringAttribute(meta, "created");
   info.command = readStringAttribute(meta, "command");
+  if (hasAttribute(meta, "generation")) info.generation = readStringAttribute(meta, "generation");
+  // Written by close(), after the last trajectory: absent in a file cut short.
+  if (hasAttribute(file, "generation_result"))
+    info.generation_result = readStringAttribute(file, "generation_result");
   return info;
 }
 
@@ -329,8 +334,11 @@ std::string DemoWriter::append(const Trajectory& trajectory) {
   return name;
 }
 
-void DemoWriter::close() {
+void DemoWriter::close(const std::string& generation_result) {
   if (!impl_ || !impl_->file.valid()) return;
+  if (!generation_result.empty())
+    withContext("'" + impl_->path + "'",
+                [&] { writeAttribute(impl_->file, "generation_result", generation_result); });
   impl_->file.reset();
   std::vector<std::string> names;
   for (std::size_t i = 0; i < impl_->count; ++i) names.push_back(getTrajectoryName(i));

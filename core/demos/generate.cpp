@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <chrono>
 #include <map>
+#include <nlohmann/json.hpp>
+#include <thread>
 
 namespace manibench {
 namespace {
@@ -18,8 +20,8 @@ namespace {
 class RoundWriter {
  public:
   RoundWriter(DemoWriter& writer, std::map<std::string, GenerationObjectResult*>& objects,
-              uint32_t per_object)
-      : writer_(writer), objects_(objects), per_object_(per_object) {}
+              uint32_t per_object, const std::function<void(const Trajectory&)>& on_kept)
+      : writer_(writer), objects_(objects), per_object_(per_object), on_kept_(on_kept) {}
 
   void take(EpisodeRecord& record) {
     pending_.emplace(record.spec.index, Pending{record.spec.object_id, record.failed(),
@@ -49,6 +51,7 @@ class RoundWriter {
     if (p.failed) ++object.failures;
     if (p.success && p.trajectory && object.kept < per_object_) {
       writer_.append(*p.trajectory);
+      if (on_kept_) on_kept_(*p.trajectory);
       ++object.kept;
     }
   }
@@ -56,11 +59,39 @@ class RoundWriter {
   DemoWriter& writer_;
   std::map<std::string, GenerationObjectResult*>& objects_;
   const uint32_t per_object_;
+  const std::function<void(const Trajectory&)>& on_kept_;
   std::map<std::size_t, Pending> pending_;
   std::size_t next_ = 0;
 };
 
 }  // namespace
+
+std::string formatGeneration(const GenerationOptions& options, const std::vector<std::string>& objects,
+                             uint32_t max_attempts) {
+  nlohmann::ordered_json g;
+  g["split"] = options.evaluation.split;
+  g["seed"] = options.evaluation.seed;
+  g["objects"] = objects;
+  g["per_object"] = options.per_object;
+  g["max_attempts"] = max_attempts;
+  g["action_noise"] = options.evaluation.action_noise;
+  g["shard"] = options.shard;
+  g["shards"] = options.shards;
+  return g.dump();
+}
+
+std::string formatGenerationResult(const GenerationResult& result, uint32_t per_object, uint32_t max_attempts) {
+  nlohmann::ordered_json r;
+  r["interrupted"] = result.interrupted;
+  nlohmann::ordered_json objects = nlohmann::ordered_json::object();
+  for (const GenerationObjectResult& o : result.objects) {
+    // Done: it has its trajectories, or it tried as often as it may.
+    const bool done = o.kept >= per_object || o.attempts >= max_attempts;
+    objects[o.object_id] = {{"attempts", o.attempts}, {"kept", o.kept}, {"failures", o.failures}, {"done", done}};
+  }
+  r["objects"] = objects;
+  return r.dump();
+}
 
 bool GenerationResult::isComplete(uint32_t per_object) const {
   return !interrupted && std::all_of(objects.begin(), objects.end(), [&](const GenerationObjectResult& o) {
@@ -81,12 +112,42 @@ GenerationResult generateDemonstrations(const PluginRegistry& registry,
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
 
+  if (options.shards < 1 || options.shard >= options.shards)
+    throw EvaluationError("a shard outside its count");
+  if (options.shards > 1 && options.evaluation.objects.empty())
+    throw EvaluationError("a shard needs the run's whole object list");
+  // This run's objects: its shard of the list, without those done before.
+  // (MPI) the ranks share the objects left, so that a resumed run
+  // spreads the rest.
+  std::vector<std::string> own;
+  std::size_t position = 0;  // among the shard's objects left
+  for (std::size_t i = 0; i < options.evaluation.objects.size(); ++i) {
+    if (i % options.shards != options.shard || options.done_objects.count(options.evaluation.objects[i]))
+      continue;
+    if (position++ % options.ranks == options.rank) own.push_back(options.evaluation.objects[i]);
+  }
+  const bool own_list = options.shards > 1 || options.ranks > 1 || !options.done_objects.empty();
+  if (own_list && own.empty() && options.ranks > 1 && options.rank > 0) return {};  // more ranks than objects
+  if (own_list && own.empty()) throw EvaluationError("no objects left to run");
+
   GenerationResult result;
   result.path = path;
   std::unique_ptr<DemoWriter> writer;
   std::map<std::string, GenerationObjectResult*> by_id;
-  std::size_t failures = 0;
+  std::size_t failures = 0, remote_kept = 0;
   uint64_t next_level = 0;
+  // Other ranks' trajectories, appended as they come once the file exists.
+  auto takeRemote = [&] {
+    if (!hooks.take_remote || !writer) return;
+    for (const Trajectory& t : hooks.take_remote()) {
+      writer->append(t);
+      ++remote_kept;
+    }
+  };
+  auto shouldStop = [&] {
+    takeRemote();
+    return hooks.should_stop && hooks.should_stop();
+  };
   for (;;) {
     // The objects that still need trajectories and may still try; the
     // first round sets the list up from the workers' split.
@@ -103,6 +164,7 @@ GenerationResult generateDemonstrations(const PluginRegistry& registry,
     }
     EvaluationOptions round = options.evaluation;
     round.record_successes = true;
+    if (own_list) round.objects = own;
     if (!needy.empty()) round.objects = needy;
     round.levels.clear();
     const uint64_t count = std::min<uint64_t>(most_needed, max_attempts - next_level);
@@ -111,20 +173,21 @@ GenerationResult generateDemonstrations(const PluginRegistry& registry,
 
     std::unique_ptr<RoundWriter> round_writer;
     EvaluationHooks round_hooks;
-    round_hooks.should_stop = hooks.should_stop;
+    round_hooks.should_stop = shouldStop;
     round_hooks.on_ready = [&](const EvaluationTaskInfo& task) {
       if (!writer) {
         DemoFileInfo complete = info;
         complete.controller = task.controller;
         complete.observation_mode = task.observation_mode;
         complete.condition_names = task.condition_names;
-        writer = std::make_unique<DemoWriter>(path, complete);
         const std::vector<std::string> objects =
             options.evaluation.objects.empty() ? task.split_objects : options.evaluation.objects;
-        for (const std::string& id : objects) result.objects.push_back({id, 0, 0, 0});
+        complete.generation = formatGeneration(options, objects, max_attempts);
+        writer = std::make_unique<DemoWriter>(path, complete);
+        for (const std::string& id : own_list ? own : objects) result.objects.push_back({id, 0, 0, 0});
         for (GenerationObjectResult& o : result.objects) by_id[o.object_id] = &o;
       }
-      round_writer = std::make_unique<RoundWriter>(*writer, by_id, options.per_object);
+      round_writer = std::make_unique<RoundWriter>(*writer, by_id, options.per_object, hooks.on_kept);
     };
     round_hooks.on_episode = [&](EpisodeRecord& record) {
       ++result.episodes;
@@ -135,7 +198,10 @@ GenerationResult generateDemonstrations(const PluginRegistry& registry,
       if (!hooks.on_progress) return;
       GenerationProgress p;
       for (const GenerationObjectResult& o : result.objects) p.kept += std::min(o.kept, options.per_object);
-      p.wanted = std::size_t(options.per_object) * (result.objects.empty() ? 1 : result.objects.size());
+      p.kept += remote_kept;
+      std::size_t objects = result.objects.empty() ? 1 : result.objects.size();
+      if (options.ranks > 1) objects = (options.evaluation.objects.size() + options.shards - 1 - options.shard) / options.shards;
+      p.wanted = std::size_t(options.per_object) * objects;
       p.episodes = result.episodes;
       p.failures = failures;
       p.elapsed = elapsed();
@@ -151,9 +217,21 @@ GenerationResult generateDemonstrations(const PluginRegistry& registry,
       break;
     }
   }
+  // MPI rank 0: the other ranks' trajectories until they are all done.
+  while (hooks.remote_done && writer && !hooks.remote_done()) {
+    if (shouldStop()) {
+      result.interrupted = true;
+      result.stop_reason = "interrupted";
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  takeRemote();
+  if (hooks.take_remote_results)
+    for (GenerationObjectResult& o : hooks.take_remote_results()) result.objects.push_back(std::move(o));
   if (writer) {
     result.trajectories = writer->getCount();
-    writer->close();
+    writer->close(formatGenerationResult(result, options.per_object, max_attempts));
   }
   result.seconds = elapsed();
   return result;

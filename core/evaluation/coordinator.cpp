@@ -18,9 +18,12 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <map>
+#include <set>
 #include <manibench/evaluation.hpp>
 #include <sstream>
 
+#include "journal_writer.hpp"
 #include "wire_format.hpp"
 #include "worker.hpp"
 
@@ -189,6 +192,12 @@ class Coordinator {
   // records the episode.
   void killOverdue();
 
+  // Records the other ranks finished (MPI); whether they are all done.
+  void takeRemote();
+  bool isRemoteDone() const { return !hooks_.remote_done || hooks_.remote_done(); }
+  // Whether every episode of this process's own list is done.
+  bool isLocalDone() const { return planned_ && local_done_ == local_.size(); }
+
   const EvaluationOptions& options_;
   const EvaluationHooks& hooks_;
   EvaluationResult& result_;
@@ -196,7 +205,13 @@ class Coordinator {
   const WorkerContext context_;
   Pool pool_;
   std::vector<EpisodeRecord> records_;
-  std::size_t next_ = 0;  // next episode of result_.planned to hand out
+  // The episodes this process runs: indices into result_.planned (its rank's
+  // part of the share, without those resumed).
+  std::vector<std::size_t> local_;
+  std::size_t next_ = 0;        // next of local_ to hand out
+  std::size_t local_done_ = 0;  // of local_, finished
+  std::map<std::size_t, std::size_t> position_;  // episode index -> position in planned
+  evaluation_detail::JournalWriter journal_;
   bool planned_ = false;
   std::size_t successes_ = 0, failures_ = 0;
   int64_t start_ns_ = getMonotonicNs();
@@ -214,6 +229,7 @@ void Coordinator::report(bool force) {
 
 void Coordinator::record(EpisodeRecord r) {
   if (hooks_.on_episode) hooks_.on_episode(r);
+  journal_.write(formatJournalEpisode(r));
   if (r.success) ++successes_;
   if (r.failed()) ++failures_;
   records_.push_back(std::move(r));
@@ -235,15 +251,38 @@ void Coordinator::plan(EvaluationTaskInfo info) {
   if (objects.empty())
     throw EvaluationError("the " + options_.split + " split of " + options_.task +
                           " has no objects");
-  result_.planned = makeEpisodeList(objects, options_.levels, options_.seed);
+  // The share of the whole list (--shard); its seeds are the whole list's.
+  for (const EpisodeSpec& spec : makeEpisodeList(objects, options_.levels, options_.seed))
+    if (spec.index % options_.shards == options_.shard) {
+      position_[spec.index] = result_.planned.size();
+      result_.planned.push_back(spec);
+    }
+  const std::string header = formatJournalHeader(result_);
+  if (!options_.resumed_header.empty()) {
+    const std::string difference = findJournalDifference(options_.resumed_header, header, true);
+    if (!difference.empty())
+      throw EvaluationError("--resume: the journal is of another evaluation (" + difference +
+                            " here)");
+  }
+  std::set<std::size_t> done;
+  for (const EpisodeRecord& r : options_.resumed)
+    if (position_.count(r.spec.index) && done.insert(r.spec.index).second) {
+      records_.push_back(r);
+      if (r.success) ++successes_;
+      if (r.failed()) ++failures_;
+    }
+  for (std::size_t p = 0; p < result_.planned.size(); ++p)
+    if (p % options_.ranks == options_.rank && !done.count(result_.planned[p].index)) local_.push_back(p);
+  if (!options_.journal_path.empty())
+    journal_.open(options_.journal_path, header, !options_.resumed_header.empty());
   planned_ = true;
   if (hooks_.on_ready) hooks_.on_ready(result_.task);
 }
 
 void Coordinator::dispatch(std::size_t i) {
   Worker& w = pool_.workers()[i];
-  if (!planned_ || !w.ready || w.leaving || w.episode >= 0 || next_ >= result_.planned.size()) return;
-  const EpisodeSpec& spec = result_.planned[next_++];
+  if (!planned_ || !w.ready || w.leaving || w.episode >= 0 || next_ >= local_.size()) return;
+  const EpisodeSpec& spec = result_.planned[local_[next_++]];
   w.episode = static_cast<int64_t>(spec.index);
   Writer m;
   transferRun(m.u8(kRun), spec);
@@ -283,8 +322,9 @@ bool Coordinator::handleMessage(std::size_t i, const std::string& payload) {
     if (w.episode < 0 || uint64_t(w.episode) != index)
       throw EvaluationError("worker reported episode " + std::to_string(index) +
                             " it was not running");
-    r.spec = result_.planned[index];
+    r.spec = result_.planned[position_.at(index)];
     w.episode = -1;
+    ++local_done_;
     record(std::move(r));
   }
   return true;
@@ -322,7 +362,7 @@ void Coordinator::handleExit(std::size_t i) {
   }
   if (episode >= 0) {
     EpisodeRecord r;
-    r.spec = result_.planned[std::size_t(episode)];
+    r.spec = result_.planned[position_.at(std::size_t(episode))];
     r.flags.assign(result_.task.condition_names.size(), 0);
     r.failure_step = step;
     r.steps = step;
@@ -335,9 +375,10 @@ void Coordinator::handleExit(std::size_t i) {
       r.message = std::string(getPhaseName(phase)) + " at step " + std::to_string(step) +
                   ": the worker was " + describeExit(status);
     }
+    ++local_done_;
     record(std::move(r));
   }
-  if (next_ < result_.planned.size()) {
+  if (next_ < local_.size()) {
     pool_.start(i);
     ++result_.worker_restarts;
   }
@@ -374,7 +415,7 @@ void Coordinator::run() {
 
   std::vector<pollfd> fds;
   std::vector<std::size_t> owners;
-  while (!result_.interrupted && !(planned_ && records_.size() == result_.planned.size())) {
+  while (!result_.interrupted && !(isLocalDone() && isRemoteDone())) {
     if (hooks_.should_stop && hooks_.should_stop()) {
       result_.interrupted = true;
       result_.stop_reason = "interrupted";
@@ -387,13 +428,18 @@ void Coordinator::run() {
         fds.push_back({workers[i].fd, POLLIN, 0});
         owners.push_back(i);
       }
+    takeRemote();
     if (fds.empty()) {
-      // Every worker is gone and none can be started: cannot happen unless
-      // the list is done, which the loop condition covers.
+      // Every worker is gone, none is started once this process's own
+      // episodes are done: the other ranks' are awaited.
+      if (isLocalDone()) {
+        usleep(20000);
+        continue;
+      }
       stopRun("no worker left");
       break;
     }
-    const int ready = poll(fds.data(), fds.size(), 100);
+    const int ready = poll(fds.data(), fds.size(), isLocalDone() ? 20 : 100);
     if (ready < 0 && errno != EINTR)
       throw EvaluationError(std::string("poll failed: ") + std::strerror(errno));
     for (std::size_t k = 0; ready > 0 && k < fds.size() && !result_.interrupted; ++k)
@@ -406,11 +452,35 @@ void Coordinator::run() {
   // killed.
   for (std::size_t i = 0; i < workers.size(); ++i)
     pool_.stop(i, result_.interrupted || workers[i].episode >= 0);
+  takeRemote();
+  if (!result_.interrupted && records_.size() < result_.planned.size() && options_.ranks > 1 &&
+      options_.rank == 0) {
+    // Another rank stopped before its episodes were done.
+    std::set<std::size_t> have;
+    for (const EpisodeRecord& r : records_) have.insert(r.spec.index);
+    std::vector<EpisodeSpec> missing;
+    for (const EpisodeSpec& spec : result_.planned)
+      if (!have.count(spec.index)) missing.push_back(spec);
+    result_.interrupted = true;
+    result_.stop_reason = std::to_string(missing.size()) +
+                          " episode(s) of other ranks missing: " + describeEpisodes(missing);
+  }
   report(true);
   std::sort(records_.begin(), records_.end(), [](const EpisodeRecord& a, const EpisodeRecord& b) {
     return a.spec.index < b.spec.index;
   });
   result_.episodes = std::move(records_);
+  journal_.write(evaluation_detail::formatJournalEnd(result_, double(getMonotonicNs() - start_ns_) * 1e-9));
+}
+
+void Coordinator::takeRemote() {
+  if (!hooks_.take_remote || !planned_) return;  // the hook keeps them until the list is made
+  for (EpisodeRecord& r : hooks_.take_remote()) {
+    const auto at = position_.find(r.spec.index);
+    if (at == position_.end()) continue;  // not of this run's list
+    r.spec = result_.planned[at->second];
+    record(std::move(r));
+  }
 }
 
 }  // namespace
@@ -418,6 +488,9 @@ void Coordinator::run() {
 EvaluationResult evaluatePolicy(const PluginRegistry& registry, const EvaluationOptions& options,
                                 const EnvironmentFactory& make_environment,
                                 const EvaluationHooks& hooks) {
+  if (options.shards < 1 || options.shard >= options.shards || options.ranks < 1 ||
+      options.rank >= options.ranks)
+    throw EvaluationError("a shard or rank outside its count");
   if (options.workers < 1 || options.workers > 256)
     throw EvaluationError("the number of workers must be between 1 and 256, got " +
                           std::to_string(options.workers));

@@ -106,6 +106,24 @@ std::vector<uint64_t> parseLevels(const std::string& text) {
   return levels;
 }
 
+void parseShard(const std::string& text, uint32_t& shard, uint32_t& shards) {
+  const std::size_t slash = text.find('/');
+  const std::string bad = "shard '" + text + "': ";
+  if (slash == std::string::npos) throw InvalidArgument(bad + "not I/N (e.g. 2/3)");
+  auto number = [&](const std::string& part) -> uint64_t {
+    if (part.empty() || part.size() > 6 ||
+        !std::all_of(part.begin(), part.end(), [](unsigned char c) { return std::isdigit(c); }))
+      throw InvalidArgument(bad + "'" + part + "' is not a number (I/N, e.g. 2/3)");
+    return std::stoull(part);
+  };
+  const uint64_t i = number(text.substr(0, slash));
+  const uint64_t n = number(text.substr(slash + 1));
+  if (n < 1 || n > 100000) throw InvalidArgument(bad + "N must be 1 to 100000");
+  if (i < 1 || i > n) throw InvalidArgument(bad + "I must be 1 to N");
+  shard = uint32_t(i - 1);
+  shards = uint32_t(n);
+}
+
 std::vector<std::string> parseIdList(const std::string& text) {
   std::vector<std::string> ids;
   for (const std::string& part : splitCommas(text)) {

@@ -247,6 +247,9 @@ void writeEvaluationJson(std::ostream& out, const EvaluationResult& result) {
       << ", \"config\": " << quote(o.policy_config) << "},\n";
   out << "  \"split\": " << quote(o.split) << ",\n";
   out << "  \"seed\": " << o.seed << ",\n";
+  // A shard's files (--shard I/N) say which share they hold; merged or
+  // single runs' files have no such line.
+  if (o.shards > 1) out << "  \"shard\": \"" << o.shard + 1 << "/" << o.shards << "\",\n";
   out << "  \"objects\": " << jsonArray(objects, quote) << ",\n";
   out << "  \"levels\": " << jsonArray(o.levels, [](uint64_t v) { return std::to_string(v); })
       << ",\n";

@@ -85,6 +85,10 @@ Run the same command again to continue a stopped population.
   --eval-seed S           the evaluation's base seed (default 1000)
   --demos N               then N successful episodes per accepted object,
                           each from its own agent: DIR/demos/ID.h5
+  --shard I/N             only the objects at positions I-1 modulo N (a job
+                          array's task; the summary is population-I-of-N.yaml).
+                          Under mpirun each rank takes its objects this way
+                          (docs/distributed.md); DIR must be shared
 Every `manibench train sac` option but --out, --objects, --split, --seed
 and --resume goes to each object's training (--steps, --workers, ...).
 )";
@@ -182,7 +186,7 @@ SacHooks makeHooks(bool progress) {
 
 int runSacPopulation(int argc, char** argv) {
   std::vector<std::string> valued = kValued;
-  valued.insert(valued.end(), {"threshold", "max-attempts", "eval-episodes", "eval-seed", "demos"});
+  valued.insert(valued.end(), {"threshold", "max-attempts", "eval-episodes", "eval-seed", "demos", "shard"});
   const mb::cli::Arguments args = mb::cli::parseArguments(argc, argv, 3, valued, kFlags, kPopulationUsage);
   if (args.help) {
     std::cout << kPopulationUsage;
@@ -207,6 +211,7 @@ int runSacPopulation(int argc, char** argv) {
   if (has("eval-episodes")) o.eval_episodes = unsigned(integer("eval-episodes", 1));
   if (has("eval-seed")) o.eval_seed = uint64_t(integer("eval-seed", 0));
   if (has("demos")) o.demos_per_object = unsigned(integer("demos", 1));
+  placeOnShard(has("shard") ? args.options.at("shard") : "", o.shard, o.shards);
   const std::vector<std::string> own = {"out", "objects", "split", "seed", "resume", "no-progress"};
   for (const auto& [key, value] : args.options)
     if (std::find(kValued.begin(), kValued.end(), key) != kValued.end() &&

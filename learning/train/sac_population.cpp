@@ -9,6 +9,9 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <unistd.h>
+
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -51,6 +54,15 @@ class Population {
     const mb::Environment probe(registry, o_.task);
     objects_ = o_.objects.empty() ? probe.listObjects(o_.split) : o_.objects;
     if (objects_.empty()) throw LearningError(o_.task + " has no " + o_.split + " objects");
+    // Each object's agent depends on its id alone: a shard (or MPI rank)
+    // takes every shards-th object, in its own object directories.
+    std::vector<std::string> share;
+    for (std::size_t i = o_.shard; i < objects_.size(); i += o_.shards) share.push_back(objects_[i]);
+    objects_ = std::move(share);
+    if (objects_.empty()) {
+      std::cerr << "shard " << o_.shard + 1 << "/" << o_.shards << ": no objects\n";
+      return 0;
+    }
     fs::create_directories(dir_ / "objects");
     writeSummary();
     for (const std::string& object : objects_) {
@@ -67,7 +79,7 @@ class Population {
     unsigned accepted = 0;
     for (const auto& [object, r] : results_) accepted += r.accepted ? 1 : 0;
     std::cerr << accepted << " of " << objects_.size() << " objects have an agent at or above "
-              << formatRate(o_.threshold) << " success; " << (dir_ / "population.yaml").string() << "\n";
+              << formatRate(o_.threshold) << " success; " << (dir_ / getSummaryName()).string() << "\n";
     return 0;
   }
 
@@ -196,7 +208,12 @@ class Population {
       objects[object] = entry;
     }
     node["objects"] = objects;
-    writeYamlFile(dir_ / "population.yaml", node);
+    writeYamlFile(dir_ / getSummaryName(), node);
+  }
+
+  std::string getSummaryName() const {
+    if (o_.shards == 1) return "population.yaml";
+    return "population-" + std::to_string(o_.shard + 1) + "-of-" + std::to_string(o_.shards) + ".yaml";
   }
 
   PopulationOptions o_;
@@ -208,5 +225,28 @@ class Population {
 }  // namespace
 
 int runPopulation(const PopulationOptions& options) { return Population(options).run(); }
+
+void placeOnShard(const std::string& text, uint32_t& shard, uint32_t& shards) {
+  const char* rank = std::getenv("OMPI_COMM_WORLD_RANK");
+  const char* size = std::getenv("OMPI_COMM_WORLD_SIZE");
+  if (!text.empty()) {
+    try {
+      mb::parseShard(text, shard, shards);
+    } catch (const mb::InvalidArgument& e) {
+      throw LearningError(std::string("--shard: ") + e.what());
+    }
+  } else if (rank && size) {
+    shard = uint32_t(std::stoul(rank));
+    shards = uint32_t(std::stoul(size));
+  }
+  // The trainings and evaluations this process starts are not ranks.
+  std::vector<std::string> names;
+  for (char** e = environ; *e; ++e) {
+    const std::string entry = *e;
+    if (entry.rfind("OMPI_", 0) == 0 || entry.rfind("PMIX_", 0) == 0 || entry.rfind("PMI_", 0) == 0)
+      names.push_back(entry.substr(0, entry.find('=')));
+  }
+  for (const std::string& name : names) unsetenv(name.c_str());
+}
 
 }  // namespace manibench::learning::programs

@@ -16,6 +16,7 @@
 //                                     accepted object, from its own agent
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -32,11 +33,18 @@ struct PopulationOptions {
   unsigned eval_episodes = 20;
   uint64_t eval_seed = 1000;
   unsigned demos_per_object = 0;  // 0: no demonstrations
+  // --shard I/N (0-based here), or the MPI rank and size: only the objects
+  // at positions % shards == shard (docs/distributed.md).
+  uint32_t shard = 0, shards = 1;
   // The `manibench train sac` options every object's training gets
   // (--steps, --workers, Table 6's overrides, --config, ...).
   std::vector<std::string> sac_args;
 };
 
 int runPopulation(const PopulationOptions& options);
+// The shard from --shard I/N (`text`, may be empty), else from the MPI
+// launcher's rank and size; the launcher's variables are then removed, so
+// that the `manibench` processes the population starts run on their own.
+void placeOnShard(const std::string& text, uint32_t& shard, uint32_t& shards);
 
 }  // namespace manibench::learning::programs

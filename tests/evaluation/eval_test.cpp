@@ -35,15 +35,6 @@ using testing::contains;
 
 using manibench::testing::readFile;
 
-// The JSON without its one timing line.
-std::string withoutTiming(const std::string& json) {
-  std::istringstream in(json);
-  std::string line, out;
-  while (std::getline(in, line))
-    if (!contains(line, "\"timing\"")) out += line + "\n";
-  return out;
-}
-
 // Checks summary.csv and summary.json against episodes.csv; returns the log.
 std::vector<std::map<std::string, std::string>> checkFilesAgree(const fs::path& out) {
   const auto episodes = readCsv(out / "episodes.csv");

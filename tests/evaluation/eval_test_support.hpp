@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <map>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -75,6 +76,15 @@ inline std::vector<std::map<std::string, std::string>> readCsv(const fs::path& p
       row[rows[0][c]] = rows[r][c];
     out.push_back(row);
   }
+  return out;
+}
+
+// summary.json without its one timing line (wall times differ between runs).
+inline std::string withoutTiming(const std::string& json) {
+  std::istringstream in(json);
+  std::string line, out;
+  while (std::getline(in, line))
+    if (line.find("\"timing\"") == std::string::npos) out += line + "\n";
   return out;
 }
 

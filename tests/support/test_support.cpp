@@ -56,6 +56,11 @@ void FixtureCopy::replace(const std::string& name, const std::string& from, cons
 
 CommandResult runCli(const std::vector<std::string>& arguments,
                      const std::vector<std::string>& environment) {
+  return runProgram(MANIBENCH_TEST_CLI, arguments, environment);
+}
+
+CommandResult runProgram(const std::string& program, const std::vector<std::string>& arguments,
+                         const std::vector<std::string>& environment) {
   char out_template[] = "/tmp/manibench_cli_out_XXXXXX";
   char err_template[] = "/tmp/manibench_cli_err_XXXXXX";
   const int out_fd = mkstemp(out_template);
@@ -68,12 +73,12 @@ CommandResult runCli(const std::vector<std::string>& arguments,
     dup2(err_fd, 2);
     for (const std::string& assignment : environment) putenv(const_cast<char*>(assignment.c_str()));
     std::vector<char*> argv;
-    std::string program = MANIBENCH_TEST_CLI;
-    argv.push_back(program.data());
+    std::string name = program;
+    argv.push_back(name.data());
     std::vector<std::string> copies = arguments;
     for (std::string& a : copies) argv.push_back(a.data());
     argv.push_back(nullptr);
-    execv(program.c_str(), argv.data());
+    execvp(name.c_str(), argv.data());
     _exit(127);
   }
   int status = 0;

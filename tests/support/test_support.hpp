@@ -73,5 +73,8 @@ struct CommandResult {
 // with extra environment assignments "NAME=value" in `environment`.
 CommandResult runCli(const std::vector<std::string>& arguments,
                      const std::vector<std::string>& environment = {});
+// The same for another program (found in PATH when `program` has no slash).
+CommandResult runProgram(const std::string& program, const std::vector<std::string>& arguments,
+                         const std::vector<std::string>& environment = {});
 
 }  // namespace manibench::testing

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -33,6 +34,13 @@ struct DemoFileInfo {
   std::string policy;   // "name (library, version)"
   std::string created;  // ISO 8601, UTC
   std::string command;  // the command line that made it
+  // How `demos generate` made it (JSON: split, seed, every object of the
+  // run, per_object, max_attempts, action_noise, its shard), "" otherwise;
+  // and, once it closed, each object's attempts, kept and failures and
+  // whether the run was complete ("" in a file cut short). What `demos
+  // merge` and --resume go by (docs/distributed.md).
+  std::string generation;
+  std::string generation_result;
 };
 
 // Writes a demonstration file: root attributes, then one group per
@@ -47,7 +55,8 @@ class DemoWriter {
   DemoWriter& operator=(const DemoWriter&) = delete;
   // Appends as traj_<count>; returns the name.
   std::string append(const Trajectory& trajectory);
-  void close();
+  // `generation_result`: DemoFileInfo::generation_result ("" for none).
+  void close(const std::string& generation_result = "");
   std::size_t getCount() const;
   const std::string& getPath() const;
 
@@ -155,6 +164,15 @@ struct GenerationOptions {
   // Episodes tried per object at most (0: 10 x per_object); an object
   // whose policy fails that often ends with fewer trajectories.
   uint32_t max_attempts = 0;
+  // --shard I/N (0-based here): only the objects at positions % shards ==
+  // shard of evaluation.objects, which must then list every object of the
+  // run (docs/distributed.md).
+  uint32_t shard = 0, shards = 1;
+  // MPI: of the shard's objects, this rank runs those at positions % ranks
+  // == rank; the file still describes the shard.
+  uint32_t rank = 0, ranks = 1;
+  // Objects a resumed run has done already (--resume): not run again.
+  std::set<std::string> done_objects;
 };
 
 struct GenerationObjectResult {
@@ -186,6 +204,16 @@ struct GenerationProgress {
 struct GenerationHooks {
   std::function<void(const GenerationProgress&)> on_progress;  // may be empty
   std::function<bool()> should_stop;                            // may be empty
+  // Each trajectory as it is written to the file (MPI: the other ranks
+  // send theirs to rank 0). May be empty.
+  std::function<void(const Trajectory&)> on_kept;
+  // MPI rank 0: polled between events for the trajectories the other ranks
+  // kept (appended to the file as they come: the caller puts the file in
+  // the run's order afterwards), whether they have all finished, and then
+  // their objects' results. Empty: none.
+  std::function<std::vector<Trajectory>()> take_remote;
+  std::function<bool()> remote_done;
+  std::function<std::vector<GenerationObjectResult>()> take_remote_results;
 };
 
 // Runs rounds of evaluation episodes (levels 0, 1, ... of every object that
@@ -201,5 +229,36 @@ GenerationResult generateDemonstrations(const PluginRegistry& registry,
                                         const EnvironmentFactory& make_environment,
                                         const std::string& path, const DemoFileInfo& info,
                                         const GenerationHooks& hooks = {});
+// DemoFileInfo::generation and ::generation_result of a run.
+std::string formatGeneration(const GenerationOptions& options, const std::vector<std::string>& objects,
+                             uint32_t max_attempts);
+std::string formatGenerationResult(const GenerationResult& result, uint32_t per_object, uint32_t max_attempts);
+
+// --- shards (merge.cpp, docs/distributed.md) ---------------------------------------
+
+// Demonstration files of one generation (shards, a run cut short and its
+// resumed rest) combined into one at `out_path`, the trajectories in the
+// order the single run writes them (its rounds replayed from the files'
+// levels), so that the set equals the single run's. `shard`/`shards`: the
+// share the output is of (0/1: the whole run). Objects without their
+// trajectories (a file cut short, a shard not given) are listed in
+// `missing` ("object 12: 0 of 2 trajectories"); the output then holds the
+// others. Throws DemoError naming the files and the difference when they
+// are of different runs, and an object found in two of them.
+struct DemoMergeResult {
+  std::size_t trajectories = 0;
+  std::vector<std::string> missing;
+  std::vector<std::string> done_objects;  // objects with all they can get
+};
+DemoMergeResult mergeDemonstrations(const std::vector<std::string>& inputs, const std::string& out_path,
+                                    const DemoFileInfo& out_info_base, uint32_t shard = 0,
+                                    uint32_t shards = 1);
+// Reads what a file says of its objects (mergeDemonstrations on it alone,
+// without writing): the objects done.
+std::vector<std::string> findDoneObjects(const std::string& path);
+// "" when the file at `path` comes from the generation `info` describes
+// (task, policy, configuration, its generation attribute: split, seed,
+// objects, counts, noise, shard), else the first difference.
+std::string findGenerationDifference(const std::string& path, const DemoFileInfo& info);
 
 }  // namespace manibench

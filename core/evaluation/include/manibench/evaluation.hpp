@@ -49,6 +49,9 @@ struct EpisodeSpec {
 // Episode `level` of `object_id` under base seed `seed`: a 32-bit seed (easy
 // to pass to `manibench run --seed`) that depends on all three.
 uint64_t calcEpisodeSeed(uint64_t seed, const std::string& object_id, uint64_t level);
+// "2/3" (1-based, as the command line says) -> shard 1 of 3; throws
+// InvalidArgument naming the bad text.
+void parseShard(const std::string& text, uint32_t& shard, uint32_t& shards);
 // Every object, in the given order, times every level: object-major.
 std::vector<EpisodeSpec> makeEpisodeList(const std::vector<std::string>& objects,
                                          const std::vector<uint64_t>& levels, uint64_t seed);
@@ -134,6 +137,25 @@ struct EvaluationOptions {
   double policy_cpu_limit = 60;                       // s of CPU time per episode
   uint64_t policy_memory_limit = uint64_t(4) << 30;   // bytes of address space it may add
   uint64_t policy_output_limit = uint64_t(16) << 20;  // bytes: its log, each temporary file
+
+  // --- beyond one machine (docs/distributed.md) ---
+  // This run's share of the episode list (--shard I/N, 0-based here):
+  // episodes whose index % shards == shard, with the seeds of the whole
+  // list. `planned` holds the share.
+  uint32_t shard = 0, shards = 1;
+  // Of the share, this process runs the episodes at positions % ranks ==
+  // rank (MPI); the others' records come through
+  // EvaluationHooks::take_remote.
+  uint32_t rank = 0, ranks = 1;
+  // The run's journal (docs/distributed.md, "Journal"): a line per finished
+  // episode, written as each arrives, so that a run killed outright keeps
+  // them; "" for none.
+  std::string journal_path;
+  // Episodes finished by an earlier run of the same evaluation (--resume):
+  // not run again, part of the result; `resumed_header` is that run's
+  // journal header, which must describe this same run.
+  std::vector<EpisodeRecord> resumed;
+  std::string resumed_header;
 };
 
 // What a worker reports after setting up: the task as configured.
@@ -188,6 +210,13 @@ struct EvaluationHooks {
   // arrives (in the order episodes finish); it may take the record's
   // trajectory (the result keeps the rest). May be empty.
   std::function<void(EpisodeRecord&)> on_episode;
+  // With options.ranks > 1 (MPI rank 0): polled between events for the
+  // records the other ranks finished (moved out), and whether every other
+  // rank has finished (or stopped); the run ends when its own episodes are
+  // done and remote_done() says so. Records missing then (a rank died) are
+  // named in the result's stop_reason.
+  std::function<std::vector<EpisodeRecord>()> take_remote;
+  std::function<bool()> remote_done;
 };
 
 // Runs the evaluation. `registry` must hold the policy (and the task); its
@@ -213,5 +242,46 @@ void writeEvaluationJson(std::ostream& out, const EvaluationResult& result);
 // needed); returns the paths written.
 std::vector<std::string> writeEvaluationFiles(const std::string& directory,
                                               const EvaluationResult& result);
+
+// --- journals, shards, merging (journal.cpp, docs/distributed.md) ---
+
+// An evaluation's journal: its first line describes the run (everything
+// that decides its episodes' outcomes, and its shard), then one line per
+// finished episode with its exact numbers, then an end line per run. JSON,
+// one object a line. A line cut short by a kill is ignored.
+// The journal's name in an output folder.
+inline constexpr const char* kJournalFileName = "journal.jsonl";
+std::string formatJournalHeader(const EvaluationResult& result);
+std::string formatJournalEpisode(const EpisodeRecord& record);
+// "" when `a` and `b` (headers) describe the same evaluation, else the
+// first difference, "task: 'Reach-v0' vs 'OpenCabinetDrawer-v0'".
+// `with_shard`: the shard counts too.
+std::string findJournalDifference(const std::string& a, const std::string& b, bool with_shard);
+struct EvaluationJournal {
+  std::string path;
+  std::string header;             // the header line
+  EvaluationResult result;        // options, task, planned (the share) and episodes
+  double seconds = 0;             // of its runs, from their end lines
+  uint32_t worker_restarts = 0;
+};
+// Writes `result` (a merge's) as a journal at `path`: its header, its
+// episodes and an end line; through PATH.partial, renamed into place.
+void writeJournal(const std::string& path, const EvaluationResult& result);
+// Reads a journal; throws EvaluationError naming the file and line.
+EvaluationJournal readJournal(const std::string& path);
+// The whole evaluation from journals of the same run (shards, resumed
+// parts): every episode once, in list order; those no journal has are in
+// `missing` and the result is marked incomplete. Throws EvaluationError
+// naming the difference when the journals are of different runs, and an
+// episode found in two of them.
+EvaluationResult mergeJournals(const std::vector<EvaluationJournal>& journals,
+                               std::vector<EpisodeSpec>& missing);
+// "object 8 seed 1234, object 11 seed 99 (and 3 more)".
+std::string describeEpisodes(const std::vector<EpisodeSpec>& episodes, std::size_t at_most = 10);
+
+// An episode's record (its trajectory too) as bytes and back: what MPI
+// ranks send rank 0.
+std::string packEpisodeRecord(const EpisodeRecord& record);
+EpisodeRecord unpackEpisodeRecord(const std::string& bytes);
 
 }  // namespace manibench

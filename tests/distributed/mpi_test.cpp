@@ -1,0 +1,170 @@
+// MPI ranks (docs/distributed.md): `mpirun -np 3 manibench eval` writes the
+// files one process writes, byte for byte; a rank killed outright loses
+// only its unfinished episodes, which --resume then runs. Open MPI refuses
+// root unless told (CI runs as root), and this machine has fewer cores
+// than ranks (--oversubscribe).
+#include <dirent.h>
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <manibench/demos.hpp>
+#include <manibench/evaluation.hpp>
+#include <sstream>
+#include <thread>
+
+#include "distributed_support.hpp"
+
+namespace manibench {
+namespace {
+
+using testing::contains;
+using testing::readFile;
+using testing::countEpisodes;
+using testing::expectSameFiles;
+using testing::readTrajectories;
+using testing::runCli;
+
+const std::vector<std::string> kMpirun = {"--allow-run-as-root", "--oversubscribe", "--mca", "btl", "self,vader",
+                                          "-x", "MANIBENCH_PLUGIN_PATH"};
+
+std::vector<std::string> evalArguments(const fs::path& out, const std::string& levels,
+                                       const std::string& steps = "25") {
+  return {"eval", "Reach-v0", "--policy", "random", "--objects", "8,11", "--levels", levels,
+          "--set", "episode.max_steps=" + steps, "--no-progress", "--out", out.string()};
+}
+
+std::vector<std::string> underMpirun(int ranks, const std::vector<std::string>& arguments) {
+  std::vector<std::string> a = kMpirun;
+  a.insert(a.end(), {"-np", std::to_string(ranks), MANIBENCH_TEST_CLI});
+  a.insert(a.end(), arguments.begin(), arguments.end());
+  return a;
+}
+
+TEST(Mpi, ThreeRanksWriteWhatOneProcessWrites) {
+  TempDir dir;
+  ASSERT_EQ(runCli(evalArguments(dir / "one", "0-4")).exit_code, 0);
+  const auto three = testing::runProgram(MANIBENCH_TEST_MPIRUN, underMpirun(3, evalArguments(dir / "three", "0-4")));
+  ASSERT_EQ(three.exit_code, 0) << three.out << three.err;
+  testing::expectMentions(three.out, {"3 MPI rank(s)", "10 of 10 episodes"});
+  expectSameFiles(dir / "one", dir / "three");
+  // Rank 0 alone prints and writes: one table, one set of files.
+  EXPECT_EQ(three.out.find("evaluating"), three.out.rfind("evaluating")) << three.out;
+  const auto single = testing::runProgram(MANIBENCH_TEST_MPIRUN, underMpirun(1, evalArguments(dir / "mpi1", "0-4")));
+  ASSERT_EQ(single.exit_code, 0) << single.out << single.err;
+  expectSameFiles(dir / "one", dir / "mpi1");
+}
+
+// Noise makes objects need different numbers of rounds (docs/distributed.md):
+// rank 0 gets the trajectories in any order and must write the single run's.
+TEST(Mpi, ThreeRanksGenerateTheTrajectoriesOneProcessGenerates) {
+  TempDir dir;
+  auto arguments = [](const std::string& out) {
+    return std::vector<std::string>{"demos", "generate", "Reach-v0", "--policy", "reach_expert", "--objects",
+                                    "0,1,2,3,4", "--per-object", "2", "--max-attempts", "6", "--action-noise",
+                                    "0.08", "--seed", "3", "--no-progress", "--out", out};
+  };
+  const std::string one = (dir / "one.h5").string(), three = (dir / "three.h5").string();
+  const auto single = runCli(arguments(one));
+  ASSERT_TRUE(contains(single.out, "wrote 9 trajectories")) << single.out << single.err;
+  const auto ranks = testing::runProgram(MANIBENCH_TEST_MPIRUN, underMpirun(3, arguments(three)));
+  ASSERT_TRUE(contains(ranks.out, "3 MPI rank(s)")) << ranks.out << ranks.err;
+  ASSERT_TRUE(contains(ranks.out, "wrote 9 trajectories")) << ranks.out << ranks.err;
+  EXPECT_TRUE(readTrajectories(three) == readTrajectories(one));
+  EXPECT_FALSE(fs::exists(three + ".unordered.h5"));
+}
+
+// The rank of an Open MPI process, from its environment; -1 if none.
+int readRank(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/environ", std::ios::binary);
+  std::string entry;
+  while (std::getline(in, entry, '\0'))
+    if (entry.rfind("OMPI_COMM_WORLD_RANK=", 0) == 0) return std::stoi(entry.substr(21));
+  return -1;
+}
+
+std::vector<pid_t> listChildren(pid_t parent) {
+  std::vector<pid_t> children;
+  DIR* proc = opendir("/proc");
+  while (dirent* e = readdir(proc)) {
+    const pid_t pid = atoi(e->d_name);
+    if (pid <= 0) continue;
+    std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+    std::string text;
+    std::getline(stat, text);
+    const std::size_t close = text.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream fields(text.substr(close + 2));
+    char state;
+    pid_t ppid = 0;
+    fields >> state >> ppid;
+    if (ppid == parent) children.push_back(pid);
+  }
+  closedir(proc);
+  return children;
+}
+
+TEST(Mpi, KilledRankLosesOnlyItsUnfinishedEpisodesAndResumeCompletes) {
+  TempDir dir;
+  const fs::path out = dir / "ranks";
+  ASSERT_EQ(runCli(evalArguments(dir / "one", "0-29", "150")).exit_code, 0);
+  std::vector<std::string> words = underMpirun(3, evalArguments(out, "0-29", "150"));
+  words.insert(words.begin(), MANIBENCH_TEST_MPIRUN);
+  const pid_t mpirun = testing::startInBackground(words);
+  ASSERT_GT(mpirun, 0);
+  // Rank 2 is killed once rank 0's journal has a few episodes.
+  for (int i = 0; i < 6000 && countEpisodes(out / "journal.jsonl") < 4; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  pid_t victim = -1;
+  for (pid_t child : listChildren(mpirun))
+    if (readRank(child) == 2) victim = child;
+  ASSERT_GT(victim, 0);
+  kill(victim, SIGKILL);
+  int status = 0;
+  waitpid(mpirun, &status, 0);
+  const std::size_t kept = countEpisodes(out / "journal.jsonl");
+  ASSERT_GE(kept, 4u);
+  ASSERT_LT(kept, 60u) << "the run finished before the rank was killed";
+  EXPECT_NE(status, 0);
+
+  const auto resumed = testing::runProgram(MANIBENCH_TEST_MPIRUN, [&] {
+    auto a = underMpirun(2, evalArguments(out, "0-29", "150"));
+    a.push_back("--resume");
+    return a;
+  }());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.out << resumed.err;
+  testing::expectMentions(resumed.out, {"resuming: " + std::to_string(kept) + " episode(s) done"});
+  expectSameFiles(dir / "one", out);
+  EXPECT_EQ(countEpisodes(out / "journal.jsonl"), 60u);  // nothing twice
+}
+
+// What Slurm sends at a time limit: mpirun forwards it, rank 0 writes the
+// episodes it has as partial results, as a single run does.
+TEST(Mpi, SigtermOnMpirunLeavesReadablePartialResults) {
+  TempDir dir;
+  const fs::path out = dir / "ranks";
+  std::vector<std::string> words = underMpirun(3, evalArguments(out, "0-199", "150"));
+  words.insert(words.begin(), MANIBENCH_TEST_MPIRUN);
+  const pid_t mpirun = testing::startInBackground(words);
+  ASSERT_GT(mpirun, 0);
+  for (int i = 0; i < 6000 && countEpisodes(out / "journal.jsonl") < 4; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  kill(mpirun, SIGTERM);
+  int status = 0;
+  waitpid(mpirun, &status, 0);
+  const std::string json = readFile(out / "summary.json");
+  EXPECT_TRUE(contains(json, "\"complete\": false")) << json;
+  EXPECT_TRUE(contains(json, "\"episodes_planned\": 400")) << json;
+  const auto episodes = readCsv(out / "episodes.csv");
+  EXPECT_GE(episodes.size(), 4u);
+  EXPECT_LT(episodes.size(), 400u);
+  EXPECT_EQ(episodes.size(), countEpisodes(out / "journal.jsonl"));
+}
+
+}  // namespace
+}  // namespace manibench
