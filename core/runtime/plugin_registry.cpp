@@ -29,13 +29,14 @@ std::string abiString(unsigned major, unsigned minor) {
 
 // The smallest struct a plugin may hand us for each kind: the size the
 // oldest accepted minor version (kRequiredAbiMinor) defined. ABI 1.2's
-// state functions are optional: an older plugin ends before them.
+// state functions and 1.4's policy controller are optional: an older
+// plugin ends before them.
 std::size_t calcMinimumDescriptorSize(uint32_t kind) {
   static_assert(kRequiredAbiMinor < 2, "raise the minimum sizes with kRequiredAbiMinor");
   switch (kind) {
     case MB_KIND_TASK: return offsetof(mb_task_descriptor, get_state);
     case MB_KIND_CONTROLLER: return offsetof(mb_controller_descriptor, get_state);
-    case MB_KIND_POLICY: return sizeof(mb_policy_descriptor);
+    case MB_KIND_POLICY: return offsetof(mb_policy_descriptor, controller);
     default: return 0;
   }
 }
@@ -270,6 +271,12 @@ const mb_controller_descriptor& PluginRegistry::getController(const std::string&
 }
 const mb_policy_descriptor& PluginRegistry::getPolicy(const std::string& name) const {
   return *reinterpret_cast<const mb_policy_descriptor*>(getEntry(PluginKind::Policy, name).descriptor);
+}
+
+std::string getPolicyController(const mb_policy_descriptor& policy) {
+  if (!MB_HAS_FIELD(mb_policy_descriptor, controller, policy.header.struct_size) || policy.controller == nullptr)
+    return "";
+  return policy.controller;
 }
 
 }  // namespace manibench

@@ -473,6 +473,19 @@ TEST(PluginRegistry, SearchPathOrderAndFirstMatchByFileNameWins) {
     EXPECT_FALSE(contains(f.path, file)) << f.path << ": " << f.message;
 }
 
+// ABI 1.4's optional policy field: an older policy loads and names no
+// controller.
+TEST(PluginRegistry, PolicyControllerIsOptional) {
+  static_assert(MB_ABI_MINOR >= 4, "mb_policy_descriptor.controller is ABI 1.4");
+  PluginRegistry registry;
+  ASSERT_NO_THROW(registry.loadLibrary(fixturePath("fixture_pre_controller_policy")));
+  EXPECT_TRUE(registry.getFailures().empty()) << describeFailures(registry);
+  const mb_policy_descriptor& old_policy = registry.getPolicy("pre_controller_policy");
+  EXPECT_LT(old_policy.header.struct_size, sizeof(mb_policy_descriptor));
+  EXPECT_EQ(getPolicyController(old_policy), "");
+  expectZeroPolicyWorks(old_policy);
+}
+
 TEST(PluginRegistry, SameLibraryIsLoadedOnce) {
   TempDir temp;
   const std::string path = fixturePath("fixture_newer_minor");

@@ -58,6 +58,10 @@ struct LoadFailure {
   std::string message;
 };
 
+// The controller a policy's actions are for (ABI 1.4), or "" when it names
+// none (a policy built against ABI 1.3 or older never does).
+std::string getPolicyController(const mb_policy_descriptor& policy);
+
 class PluginRegistry {
  public:
   PluginRegistry() = default;
