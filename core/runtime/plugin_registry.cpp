@@ -1,5 +1,7 @@
 #include <manibench/plugin_registry.hpp>
 
+#include <manibench/sdk/data.hpp>
+
 #include <boost/dll/shared_library.hpp>
 
 #include <algorithm>
@@ -89,12 +91,30 @@ std::vector<std::string> PluginRegistry::calcDefaultSearchPath() {
   }
   if (const char* home = std::getenv("HOME"))
     appendExistingDirectory(dirs, std::string(home) + "/.local/lib/manibench/plugins");
-  appendExistingDirectory(dirs, MANIBENCH_INSTALL_PLUGIN_DIR);
-  appendExistingDirectory(dirs, MANIBENCH_BUILD_PLUGIN_DIR);
+  const std::string prefix = findHostPrefix();
+  if (!prefix.empty()) appendExistingDirectory(dirs, prefix + "/" + MANIBENCH_PLUGIN_SUBDIR);
   return dirs;
 }
 
-void PluginRegistry::loadSearchPath() { loadDirectories(calcDefaultSearchPath()); }
+void PluginRegistry::loadSearchPath() {
+  // Before any plugin is created: tasks read it through
+  // sdk::findDataDirectory. setenv here, at start-up, before threads read
+  // the environment; an explicit setting (the user's) is kept.
+  const std::string data = findHostDataRoot();
+  if (!data.empty()) setenv("MANIBENCH_DATA_DIR", data.c_str(), 0);
+  loadDirectories(calcDefaultSearchPath());
+}
+
+std::string findHostPrefix() {
+  return sdk::findPrefixAbove(sdk::findOwnImageFolder(), MANIBENCH_PLUGIN_SUBDIR).string();
+}
+
+std::string findHostDataRoot() {
+  const std::string prefix = findHostPrefix();
+  std::error_code ec;
+  if (prefix.empty() || !fs::is_directory(prefix + "/" + sdk::kDataSubdir, ec)) return "";
+  return prefix + "/" + sdk::kDataSubdir;
+}
 
 void PluginRegistry::loadDirectories(const std::vector<std::string>& directories) {
   for (const std::string& dir : directories) {
