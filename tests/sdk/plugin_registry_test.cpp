@@ -474,7 +474,7 @@ TEST(PluginRegistry, SearchPathOrderAndFirstMatchByFileNameWins) {
 }
 
 // ABI 1.4's optional policy field: an older policy loads and names no
-// controller.
+// controller; an SDK policy names the one it was registered for.
 TEST(PluginRegistry, PolicyControllerIsOptional) {
   static_assert(MB_ABI_MINOR >= 4, "mb_policy_descriptor.controller is ABI 1.4");
   PluginRegistry registry;
@@ -484,6 +484,12 @@ TEST(PluginRegistry, PolicyControllerIsOptional) {
   EXPECT_LT(old_policy.header.struct_size, sizeof(mb_policy_descriptor));
   EXPECT_EQ(getPolicyController(old_policy), "");
   expectZeroPolicyWorks(old_policy);
+
+  PluginRegistry tree;
+  tree.loadDirectories({kBuildPluginDir});
+  EXPECT_EQ(getPolicyController(tree.getPolicy("open_cabinet_expert")), "mobile_panda_ee");
+  EXPECT_EQ(getPolicyController(tree.getPolicy("zero")), "");
+  EXPECT_EQ(tree.getPolicy("zero").header.struct_size, sizeof(mb_policy_descriptor));
 }
 
 TEST(PluginRegistry, SameLibraryIsLoadedOnce) {
