@@ -17,7 +17,7 @@ prefix=$1 work=$2
 if ((${#hidden[@]})); then
   here=$(dirname "$(realpath "$0")")
   cp -r "$here/../../examples/hello_task" "$work/hello_task"
-  cp -r "$here/../../examples/slider_family" "$work/slider_family"
+  cp -r "$here/../../examples/turntable_family" "$work/turntable_family"
   cp "$0" "$work/installed_checks.sh"
   mounts=""
   # Deepest first: a build tree inside the source tree is covered before it.
@@ -39,7 +39,7 @@ echo "installed checks: manibench list OK ($plugins)"
 # 2. A cabinet evaluation with the expert: the plugin reads the robot from
 # the installed share/manibench, the expert chooses its controller.
 env -u MANIBENCH_PLUGIN_PATH -u MANIBENCH_DATA_DIR HOME="$work" "$cli" eval OpenCabinetDrawer-v0 \
-  --policy open_cabinet_expert --split train --objects 0 --episodes-per-object 1 \
+  --policy open_cabinet_expert --split train --objects 2000_link_0 --episodes-per-object 1 \
   --out "$work/eval" --no-progress >"$work/eval.log" 2>&1 || { cat "$work/eval.log"; fail "manibench eval"; }
 summary="$work/eval/summary.csv"
 [[ -f "$summary" ]] || fail "no $summary"
@@ -60,11 +60,11 @@ echo "installed checks: out-of-tree hello_task OK"
 
 # 3b. The multi-file family template: built, its catalog test and its
 # expert's evaluation through the installed host (ctest).
-cmake -S "$work/slider_family" -B "$work/slider_build" -G Ninja -DCMAKE_PREFIX_PATH="$prefix" >"$work/slider.log" 2>&1 &&
-  cmake --build "$work/slider_build" >>"$work/slider.log" 2>&1 &&
-  (cd "$work/slider_build" && HOME="$work" ctest --output-on-failure) >>"$work/slider.log" 2>&1 ||
-  { cat "$work/slider.log"; fail "slider_family build or tests"; }
-echo "installed checks: out-of-tree slider_family OK"
+cmake -S "$work/turntable_family" -B "$work/turntable_build" -G Ninja -DCMAKE_PREFIX_PATH="$prefix" >"$work/turntable.log" 2>&1 &&
+  cmake --build "$work/turntable_build" >>"$work/turntable.log" 2>&1 &&
+  (cd "$work/turntable_build" && HOME="$work" ctest --output-on-failure) >>"$work/turntable.log" 2>&1 ||
+  { cat "$work/turntable.log"; fail "turntable_family build or tests"; }
+echo "installed checks: out-of-tree turntable_family OK"
 
 # 4. The Python package from Debian's interpreter: a cabinet environment
 # resets and steps (its plugins and robot found from the module's place).

@@ -325,9 +325,10 @@ TEST(PluginRegistry, LoadDirectoriesRecordsOneFailurePerBrokenFixture) {
   for (const auto& library : registry.getLibraries()) loaded.push_back(library.name);
   std::sort(loaded.begin(), loaded.end());
   EXPECT_EQ(loaded, (std::vector<std::string>{"fixture_duplicate_a", "fixture_newer_minor",
-                                              "fixture_robot_testbed", "fixture_throwing_create"}));
+                                              "fixture_pre_controller_policy", "fixture_robot_testbed",
+                                              "fixture_throwing_create"}));
   EXPECT_EQ(registry.getNames(PluginKind::Policy),
-            (std::vector<std::string>{"duplicate_policy", "newer_minor_policy",
+            (std::vector<std::string>{"duplicate_policy", "newer_minor_policy", "pre_controller_policy",
                                       "throwing_policy"}));
   EXPECT_EQ(registry.getNames(PluginKind::Task),
             (std::vector<std::string>{"RobotTestbed-v0", "Throwing-v0"}));
@@ -482,13 +483,13 @@ TEST(PluginRegistry, PolicyControllerIsOptional) {
   EXPECT_TRUE(registry.getFailures().empty()) << describeFailures(registry);
   const mb_policy_descriptor& old_policy = registry.getPolicy("pre_controller_policy");
   EXPECT_LT(old_policy.header.struct_size, sizeof(mb_policy_descriptor));
-  EXPECT_EQ(getPolicyController(old_policy), "");
+  EXPECT_EQ(manibench::getPolicyController(old_policy), "");
   expectZeroPolicyWorks(old_policy);
 
   PluginRegistry tree;
   tree.loadDirectories({kBuildPluginDir});
-  EXPECT_EQ(getPolicyController(tree.getPolicy("open_cabinet_expert")), "mobile_panda_ee");
-  EXPECT_EQ(getPolicyController(tree.getPolicy("zero")), "");
+  EXPECT_EQ(manibench::getPolicyController(tree.getPolicy("open_cabinet_expert")), "mobile_panda_ee");
+  EXPECT_EQ(manibench::getPolicyController(tree.getPolicy("zero")), "");
   EXPECT_EQ(tree.getPolicy("zero").header.struct_size, sizeof(mb_policy_descriptor));
 }
 
