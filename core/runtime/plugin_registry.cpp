@@ -4,7 +4,12 @@
 
 #include <boost/dll/shared_library.hpp>
 
+#include <dlfcn.h>
+#include <link.h>
+#include <sys/auxv.h>
+
 #include <algorithm>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <mutex>
@@ -71,6 +76,23 @@ void appendExistingDirectory(std::vector<std::string>& out, const std::string& d
   if (std::find(out.begin(), out.end(), canonical) == out.end()) out.push_back(canonical);
 }
 
+// The folder of the image holding the host (this code): the executable, or
+// the Python module. dladdr names the main program by its argv[0] (a bare
+// "manibench" when a shell or subprocess found it through PATH), so the
+// main program is recognised by its program headers (AT_PHDR) and read
+// from /proc/self/exe instead.
+fs::path findHostImageFolder() {
+  Dl_info info{};
+  if (dladdr(reinterpret_cast<const void*>(&findHostImageFolder), &info) == 0 || info.dli_fbase == nullptr)
+    return {};
+  const auto* header = static_cast<const ElfW(Ehdr)*>(info.dli_fbase);
+  const bool main_program = reinterpret_cast<std::uintptr_t>(info.dli_fbase) + header->e_phoff == getauxval(AT_PHDR);
+  std::error_code ec;
+  const fs::path image =
+      fs::canonical(main_program ? "/proc/self/exe" : (info.dli_fname ? info.dli_fname : ""), ec);
+  return ec ? fs::path() : image.parent_path();
+}
+
 }  // namespace
 
 const char* toString(PluginKind kind) {
@@ -106,7 +128,7 @@ void PluginRegistry::loadSearchPath() {
 }
 
 std::string findHostPrefix() {
-  return sdk::findPrefixAbove(sdk::findOwnImageFolder(), MANIBENCH_PLUGIN_SUBDIR).string();
+  return sdk::findPrefixAbove(findHostImageFolder(), MANIBENCH_PLUGIN_SUBDIR).string();
 }
 
 std::string findHostDataRoot() {
