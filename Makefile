@@ -1,5 +1,9 @@
 # Thin wrapper over CMake + Ninja. Both main targets install the Debian
-# packages first (quietly, and only what is missing).
+# packages first (quietly, and only what is missing): `make demo` only the
+# ones the demo builds and runs, and builds only the host and the plugins it
+# loads; `make test` the rest, reconfigures (finding what was just
+# installed: tests, Python, learning, viewer, benchmarks) and builds
+# everything.
 BUILD_DIR ?= build
 CMAKE_FLAGS ?=
 CTEST_FLAGS ?=
@@ -7,25 +11,35 @@ CTEST_FLAGS ?=
 BENCH_FLAGS ?=
 JOBS ?= $(shell nproc)
 
-.PHONY: all deps configure build test demo bench sanitize clean
+.PHONY: all deps deps-demo configure build test demo bench sanitize package clean
 
 all: build
 
 deps:
 	@scripts/install-deps
 
+deps-demo:
+	@scripts/install-deps --demo
+
 $(BUILD_DIR)/build.ninja:
 	cmake -S . -B $(BUILD_DIR) -G Ninja $(CMAKE_FLAGS)
 
 configure: deps $(BUILD_DIR)/build.ninja
 
-build: configure
+# Always reconfigures (a few seconds): a build folder that `make demo`
+# configured before the test packages were installed finds them now, and
+# MANIBENCH_REQUIRE_TESTS makes a missing GoogleTest an error, not a silent
+# build without tests.
+build: deps
+	cmake -S . -B $(BUILD_DIR) -G Ninja -DMANIBENCH_REQUIRE_TESTS=ON $(CMAKE_FLAGS)
 	cmake --build $(BUILD_DIR) -j $(JOBS)
 
 test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS) $(CTEST_FLAGS)
 
-demo: build
+# The fast first run: the demo's packages, the host and the task plugins.
+demo: deps-demo $(BUILD_DIR)/build.ninja
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target manibench_demo
 	$(BUILD_DIR)/bin/manibench demo --out $(BUILD_DIR)/demo-results
 
 # Simbody vs MuJoCo env steps per second (docs/performance.md).
@@ -50,6 +64,11 @@ sanitize: deps
 	cd $(SANITIZE_DIR) && ASAN_OPTIONS=detect_leaks=0:abort_on_error=1:handle_segv=0 \
 	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --output-on-failure -j $(JOBS) $(CTEST_FLAGS)
+
+# The Debian package: build/manibench_<version>_amd64.deb (README.md,
+# "Installing"); `dpkg-deb -I` shows its dependencies.
+package: build
+	cd $(BUILD_DIR) && cpack -G DEB
 
 clean:
 	rm -rf $(BUILD_DIR) $(SANITIZE_DIR)

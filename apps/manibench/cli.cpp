@@ -144,6 +144,37 @@ void printSegments(const std::vector<mb::sdk::Segment>& segments) {
   }
 }
 
+std::pair<int, int> parseVideoSize(const Arguments& args, const char* usage) {
+  const auto given = args.options.find("video-size");
+  if (given == args.options.end()) return {640, 480};
+  char x = 0;
+  int w = 0, h = 0;
+  if (std::sscanf(given->second.c_str(), "%d%c%d", &w, &x, &h) != 3 || x != 'x' || w < 16 || h < 16 || w > 8192 ||
+      h > 8192 || w % 2 || h % 2)
+    throw UsageError("--video-size must be WxH, even numbers from 16 to 8192, got '" + given->second + "'", usage);
+  return {w, h};
+}
+
+void applyPolicyController(const mb::PluginRegistry& registry, const std::string& policy, const Arguments& args,
+                           mb::ConfigSources& sources, const char* usage) {
+  const mb::PluginEntry* entry = registry.findEntry(mb::PluginKind::Policy, policy);
+  if (entry == nullptr) return;  // the caller's getEntry reports it
+  const std::string wanted =
+      mb::getPolicyController(*reinterpret_cast<const mb_policy_descriptor*>(entry->descriptor));
+  if (wanted.empty()) return;
+  const auto given = args.options.find("controller");
+  if (given != args.options.end()) {
+    if (given->second != wanted)
+      throw UsageError("--policy " + policy + " drives the " + wanted + " controller, but --controller " +
+                           given->second + " was given (leave --controller out, or give --controller " + wanted + ")",
+                       usage);
+    return;
+  }
+  for (const std::string& set : sources.overrides)
+    if (set.rfind("control.controller=", 0) == 0) return;  // the user's --set decides
+  sources.overrides.insert(sources.overrides.begin(), "control.controller=" + wanted);
+}
+
 std::string resolvePolicy(mb::PluginRegistry& registry, const std::string& policy) {
   const bool is_path = policy.find('/') != std::string::npos ||
                        (policy.size() > 3 && policy.compare(policy.size() - 3, 3, ".so") == 0);

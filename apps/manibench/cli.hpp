@@ -20,6 +20,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace manibench::cli {
@@ -94,6 +95,15 @@ void printSegments(const std::vector<mb::sdk::Segment>& segments);
 // The YAML of --policy-config FILE handed to the policy's create ("" when
 // not given); an unreadable file is an error naming it.
 std::string readPolicyConfig(const Arguments& args);
+// The controller `policy` names (ABI 1.4's mb_policy_descriptor.controller)
+// becomes the first --set control.controller=NAME, unless --controller or a
+// --set of that key is given; a --controller other than the policy's is a
+// UsageError naming both. Nothing for a policy that names none.
+void applyPolicyController(const mb::PluginRegistry& registry, const std::string& policy, const Arguments& args,
+                           mb::ConfigSources& sources, const char* usage);
+// --video-size WxH (even, 16 to 8192), default 640x480; a UsageError with
+// `usage` otherwise. Shared by run, render and demos replay.
+std::pair<int, int> parseVideoSize(const Arguments& args, const char* usage);
 // Resolves --policy: a registered name, or a library path to load first.
 std::string resolvePolicy(mb::PluginRegistry& registry, const std::string& policy);
 // --policy FILE.py: whether `policy` names a Python file, and the `python`

@@ -38,7 +38,8 @@ Options:
                           (the visual modes render every camera at every step)
   --steps N               environment steps to time (default 2000)
   --split train|test      objects to cycle through (default train)
-  --controller NAME       override the task's default controller
+  --controller NAME       override the task's default controller (default: the
+                          one the policy names, e.g. an expert's mobile_panda_ee)
   --config FILE, --set KEY=VALUE   configuration layers, as for run
 )";
 
@@ -53,7 +54,7 @@ int commandBench(int argc, char** argv) {
     return 0;
   }
   if (args.positional.size() != 1) throw UsageError("bench needs exactly one TASK", kBenchUsage);
-  const mb::ConfigSources sources = getConfigSources(args, parseObservationMode(args, kBenchUsage));
+  mb::ConfigSources sources = getConfigSources(args, parseObservationMode(args, kBenchUsage));
   const std::string split = parseSplit(args, "train", kBenchUsage);
   const uint64_t target_steps = parseSeed(valueOr(args, "steps", "2000"), kBenchUsage, "--steps");
   if (target_steps == 0) throw UsageError("--steps must be positive", kBenchUsage);
@@ -62,6 +63,7 @@ int commandBench(int argc, char** argv) {
   loadPlugins(registry);
   const std::string policy_name = resolvePolicy(registry, valueOr(args, "policy", "random"));
   registry.getEntry(mb::PluginKind::Policy, policy_name);
+  applyPolicyController(registry, policy_name, args, sources, kBenchUsage);
   const std::unique_ptr<mb::Environment> env =
       makeEnvironment(registry, args.positional[0], sources, true);
   const std::vector<std::string> objects = env->listObjects(split);

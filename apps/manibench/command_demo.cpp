@@ -12,13 +12,13 @@ namespace {
 
 const char* kDemoUsage = R"(usage: manibench demo [--out DIR]
 
-Lists the plugins, then evaluates the scripted expert (open_cabinet_expert on
-the mobile_panda_ee controller) on the test split of OpenCabinetDrawer-v0 in
+Lists the plugins, then evaluates the scripted expert (open_cabinet_expert,
+on the mobile_panda_ee controller it names) on the test split of OpenCabinetDrawer-v0 in
 state mode, one episode per object with two workers, and prints the table:
 the same as
 
   manibench eval OpenCabinetDrawer-v0 --policy open_cabinet_expert \
-      --controller mobile_panda_ee --obs state --split test \
+      --obs state --split test \
       --episodes-per-object 1 --workers 2 --seed 0 --out DIR
 
 Options:
@@ -38,7 +38,6 @@ int commandDemo(int argc, char** argv) {
   std::cout << "\n" << std::flush;
   std::vector<std::string> words = {argv[0], "eval", "OpenCabinetDrawer-v0",
                                     "--policy", "open_cabinet_expert",
-                                    "--controller", "mobile_panda_ee",
                                     "--obs", "state", "--split", "test",
                                     "--episodes-per-object", "1", "--workers", "2",
                                     "--seed", "0", "--out", valueOr(args, "out", "demo-results")};

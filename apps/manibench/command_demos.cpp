@@ -223,9 +223,10 @@ int generate(int argc, char** argv) {
     applySandboxOptions(args, evaluation, policy_files, kDemosUsage);
   }
   const TaskId task_id = resolveTaskId(registry, task);
-  const ConfigSources sources = getConfigSources(args, parseObservationMode(args, kDemosUsage));
+  ConfigSources sources = getConfigSources(args, parseObservationMode(args, kDemosUsage));
   for (const std::string& file : sources.files) evaluation.config_notes.push_back("--config " + file);
   for (const std::string& set : sources.overrides) evaluation.config_notes.push_back("--set " + set);
+  applyPolicyController(registry, evaluation.policy, args, sources, kDemosUsage);
   const ConfigNode config = loadTaskConfig(registry, task, sources);
   const EnvironmentOptions environment = calcEnvironmentOptions(config);  // bad values fail here
   // Under mpirun the ranks share the objects; rank 0 alone writes the file.
@@ -364,14 +365,7 @@ int replay(int argc, char** argv) {
   const std::string path = onePositional(args, "replay");
   const bool check = args.options.count("check") != 0;
   const std::string video_dir = valueOr(args, "video", "");
-  int video_width = 640, video_height = 480;
-  if (args.options.count("video-size")) {
-    char x = 0;
-    if (std::sscanf(args.options.at("video-size").c_str(), "%d%c%d", &video_width, &x, &video_height) != 3 ||
-        x != 'x' || video_width < 16 || video_height < 16 || video_width > 8192 || video_height > 8192 ||
-        video_width % 2 || video_height % 2)
-      throw UsageError("--video-size must be WxH, even numbers from 16 to 8192", kDemosUsage);
-  }
+  const auto [video_width, video_height] = parseVideoSize(args, kDemosUsage);
   if (!video_dir.empty()) {
     std::error_code error;
     std::filesystem::create_directories(video_dir, error);

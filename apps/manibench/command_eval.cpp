@@ -66,7 +66,8 @@ Options:
   --resume                run only the episodes the journal in --out lacks
                           (a run that was killed or stopped); the files then
                           hold every episode
-  --controller NAME       override the task's default controller
+  --controller NAME       override the task's default controller (default: the
+                          one the policy names, e.g. an expert's mobile_panda_ee)
   --config FILE           a YAML configuration layer; repeatable, later wins
   --set KEY=VALUE         one key; repeatable
 )" + std::string(kSandboxUsage) + R"(Exit status: 0 when every episode ran (failed episodes included), 1 on an
@@ -226,7 +227,7 @@ int commandEval(int argc, char** argv) {
 
   EvaluationOptions options = parseEvaluationOptions(args, task);
 
-  const ConfigSources sources = getConfigSources(args, parseObservationMode(args, kEvalUsage));
+  ConfigSources sources = getConfigSources(args, parseObservationMode(args, kEvalUsage));
   for (const std::string& file : sources.files) options.config_notes.push_back("--config " + file);
   for (const std::string& set : sources.overrides) options.config_notes.push_back("--set " + set);
   if (args.options.count("policy-config")) {
@@ -256,6 +257,7 @@ int commandEval(int argc, char** argv) {
   loadPlugins(registry);
   options.policy = resolvePolicy(registry, policy_arg);
   const PluginEntry& policy_entry = registry.getEntry(PluginKind::Policy, options.policy);
+  applyPolicyController(registry, options.policy, args, sources, kEvalUsage);
   policy_files.push_back(registry.getLibraries()[policy_entry.library].path);
   applySandboxOptions(args, options, policy_files, kEvalUsage);
   const TaskId task_id = resolveTaskId(registry, task);

@@ -118,18 +118,7 @@ int commandRender(int argc, char** argv) {
   const std::string video = valueOr(args, "video", "");
   if (!video.empty() && !args.options.count("policy"))
     throw UsageError("--video needs --policy NAME", kRenderUsage);
-  int video_width = 640, video_height = 480;
-  if (args.options.count("video-size")) {
-    const std::string size = args.options.at("video-size");
-    char x = 0;
-    int w = 0, h = 0;
-    if (std::sscanf(size.c_str(), "%d%c%d", &w, &x, &h) != 3 || x != 'x' || w < 16 || h < 16 ||
-        w > 8192 || h > 8192 || w % 2 || h % 2)
-      throw UsageError("--video-size must be WxH, even numbers from 16 to 8192, got '" + size + "'",
-                       kRenderUsage);
-    video_width = w;
-    video_height = h;
-  }
+  const auto [video_width, video_height] = parseVideoSize(args, kRenderUsage);
 
   PluginRegistry registry;
   loadPlugins(registry);

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "cli.hpp"
+#include "video.hpp"
 
 namespace manibench::cli {
 
@@ -22,9 +23,14 @@ Options:
   --seed S                episode seed (default 0)
   --object ID             object id (default: drawn from the split by the seed)
   --split train|test      split to draw the object from (default train)
-  --controller NAME       override the task's default controller
+  --controller NAME       override the task's default controller (default: the
+                          one the policy names, e.g. an expert's mobile_panda_ee)
   --obs MODE              observation mode: state (default), pointcloud or rgbd
   --no-early-stop         run to the time limit even after success
+  --video FILE.mp4        record the episode from a third-person camera (any
+                          --obs; needs the `ffmpeg` program): one frame per
+                          state the policy saw, then the last (steps + 1)
+  --video-size WxH        its frame size (default 640x480)
   --trace FILE.csv        one row per env step: the observation the policy
                           acted on (one column per value, named after its
                           segment: tcp_pose[2]), the action, the reward, each
@@ -84,9 +90,12 @@ class TraceWriter {
 
 int runOne(mb::PluginRegistry& registry, const std::string& task_name, const std::string& policy_arg,
            const std::string& policy_config, uint64_t seed, const std::string& object_arg, const std::string& split,
-           const mb::ConfigSources& sources, bool stop_on_success, const std::string& trace_path) {
+           const Arguments& args, bool stop_on_success, const std::string& trace_path,
+           const std::string& video_path) {
   const std::string policy_name = resolvePolicy(registry, policy_arg);
   registry.getEntry(mb::PluginKind::Policy, policy_name);  // fail before building anything
+  mb::ConfigSources sources = getConfigSources(args, parseObservationMode(args, kRunUsage));
+  applyPolicyController(registry, policy_name, args, sources, kRunUsage);
   const std::unique_ptr<mb::Environment> env_owner =
       makeEnvironment(registry, task_name, sources, stop_on_success);
   mb::Environment& env = *env_owner;
@@ -100,8 +109,18 @@ int runOne(mb::PluginRegistry& registry, const std::string& task_name, const std
   // own errors are.
   mb::EpisodeHooks hooks;
   bool acting = false;
-  hooks.on_phase = [&acting](mb::EpisodePhase phase, uint32_t) {
+  // The video: a frame of every state the policy sees, then of the last one
+  // (render --video, demos replay --video and Python's render() draw the
+  // same third-person view: EpisodeVideo, calcThirdPersonView).
+  std::unique_ptr<EpisodeVideo> video;
+  if (!video_path.empty()) {
+    const auto [width, height] = parseVideoSize(args, kRunUsage);
+    video = std::make_unique<EpisodeVideo>(env, video_path, width, height);
+  }
+  hooks.on_phase = [&acting, &video](mb::EpisodePhase phase, uint32_t) {
     acting = phase == mb::EpisodePhase::PolicyAct;
+    if (video && phase == mb::EpisodePhase::PolicyReset) video->aimAtRobot();
+    if (video && acting) video->record();
   };
   std::unique_ptr<TraceWriter> trace;
   if (!trace_path.empty()) {
@@ -113,6 +132,12 @@ int runOne(mb::PluginRegistry& registry, const std::string& task_name, const std
   }
   try {
     printEpisode(mb::runEpisode(env, policy, object, seed, hooks));
+    if (video) {
+      video->record();
+      video->close();
+      std::cout << "wrote " << video_path << ": " << video->getFrameCount() << " frames, "
+                << env.getElapsedSteps() << " steps\n";
+    }
     if (trace) {
       trace->close(trace_path);
       std::cout << "wrote " << trace_path << "\n";
@@ -134,7 +159,7 @@ int commandRun(int argc, char** argv) {
   const Arguments args =
       parseArguments(argc, argv, 2,
                      {"policy", "policy-config", "seed", "object", "split", "controller", "obs", "config", "set",
-                      "trace"},
+                      "trace", "video", "video-size"},
                      {"no-early-stop"}, kRunUsage);
   if (args.help) {
     std::cout << kRunUsage;
@@ -143,13 +168,15 @@ int commandRun(int argc, char** argv) {
   if (args.positional.size() != 1) throw UsageError("run needs exactly one TASK", kRunUsage);
   if (!args.options.count("policy")) throw UsageError("run needs --policy NAME", kRunUsage);
   const std::string split = parseSplit(args, "train", kRunUsage);
-  const mb::ConfigSources sources = getConfigSources(args, parseObservationMode(args, kRunUsage));
+  // A bad --obs or --video-size fails before the plugins load.
+  parseObservationMode(args, kRunUsage);
+  parseVideoSize(args, kRunUsage);
   const uint64_t seed = parseSeed(valueOr(args, "seed", "0"), kRunUsage);
   mb::PluginRegistry registry;
   loadPlugins(registry);
   return runOne(registry, args.positional[0], args.options.at("policy"), readPolicyConfig(args), seed,
-                valueOr(args, "object", ""), split, sources,
-                !args.options.count("no-early-stop"), valueOr(args, "trace", ""));
+                valueOr(args, "object", ""), split, args,
+                !args.options.count("no-early-stop"), valueOr(args, "trace", ""), valueOr(args, "video", ""));
 }
 
 }  // namespace manibench::cli

@@ -1,6 +1,7 @@
 // manibench: the host program. Loads plugins by name and runs them.
-//   manibench list | info | run | bench | config | render | objects | eval | demos | demo | train | view
-// `train` and `view` are other programs, manibench-train and manibench-view,
+//   manibench list | info | run | bench | config | render | objects | eval | demos | demo | train | plot | view
+// `train`, `plot` and `view` are other programs, manibench-train,
+// manibench-plot and manibench-view,
 // found beside this one (as git runs git-<command>): the learning module's
 // libtorch and the viewer's GLFW never load here.
 // Exit codes: 0 success, 1 failure (reported on stderr), 2 usage error.
@@ -44,6 +45,9 @@ Commands:
                             built where libtorch is installed)
   train sac|sac-population  SAC agents on the dense reward, one per object for
                             demonstrations (supplement C.2; docs/learning.md)
+  plot DIR...               figures: eval results (success and each condition
+                            per object, train vs test) or training curves
+                            (matplotlib; docs/evaluation.md)
   view TASK                 a window on a task: free and task cameras, masks,
                             point cloud, overlay; drive the robot by keyboard
                             (--record FILE.h5), watch --policy NAME or
@@ -55,7 +59,7 @@ Run `manibench <command> --help` for a command's options. info, run, bench,
 render, eval, objects and config take --config FILE and --set KEY=VALUE
 (docs/configuration.md).
 Plugins are searched in $MANIBENCH_PLUGIN_PATH, ~/.local/lib/manibench/plugins,
-the install prefix and the build tree, in that order.
+then lib/manibench/plugins of this program's own installation (or build tree).
 )";
 
 // Replaces this process with manibench-<command> from this program's folder;
@@ -94,6 +98,10 @@ int dispatch(int argc, char** argv) {
     return runExternalCommand(command, argc, argv,
                               "the learning module, built where libtorch is installed (Debian's "
                               "libtorch-dev; scripts/install-deps installs it), docs/learning.md");
+  if (command == "plot")
+    return runExternalCommand(command, argc, argv,
+                              "the Python package (built where pybind11, python3-dev and numpy are installed) "
+                              "and matplotlib (Debian's python3-matplotlib; scripts/install-deps installs them)");
   if (command == "view")
     return runExternalCommand(command, argc, argv,
                               "the viewer, built where GLFW and Dear ImGui are installed (Debian's "

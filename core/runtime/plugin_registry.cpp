@@ -1,8 +1,15 @@
 #include <manibench/plugin_registry.hpp>
 
+#include <manibench/sdk/data.hpp>
+
 #include <boost/dll/shared_library.hpp>
 
+#include <dlfcn.h>
+#include <link.h>
+#include <sys/auxv.h>
+
 #include <algorithm>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <mutex>
@@ -29,13 +36,14 @@ std::string abiString(unsigned major, unsigned minor) {
 
 // The smallest struct a plugin may hand us for each kind: the size the
 // oldest accepted minor version (kRequiredAbiMinor) defined. ABI 1.2's
-// state functions are optional: an older plugin ends before them.
+// state functions and 1.4's policy controller are optional: an older
+// plugin ends before them.
 std::size_t calcMinimumDescriptorSize(uint32_t kind) {
   static_assert(kRequiredAbiMinor < 2, "raise the minimum sizes with kRequiredAbiMinor");
   switch (kind) {
     case MB_KIND_TASK: return offsetof(mb_task_descriptor, get_state);
     case MB_KIND_CONTROLLER: return offsetof(mb_controller_descriptor, get_state);
-    case MB_KIND_POLICY: return sizeof(mb_policy_descriptor);
+    case MB_KIND_POLICY: return offsetof(mb_policy_descriptor, controller);
     default: return 0;
   }
 }
@@ -68,6 +76,23 @@ void appendExistingDirectory(std::vector<std::string>& out, const std::string& d
   if (std::find(out.begin(), out.end(), canonical) == out.end()) out.push_back(canonical);
 }
 
+// The folder of the image holding the host (this code): the executable, or
+// the Python module. dladdr names the main program by its argv[0] (a bare
+// "manibench" when a shell or subprocess found it through PATH), so the
+// main program is recognised by its program headers (AT_PHDR) and read
+// from /proc/self/exe instead.
+fs::path findHostImageFolder() {
+  Dl_info info{};
+  if (dladdr(reinterpret_cast<const void*>(&findHostImageFolder), &info) == 0 || info.dli_fbase == nullptr)
+    return {};
+  const auto* header = static_cast<const ElfW(Ehdr)*>(info.dli_fbase);
+  const bool main_program = reinterpret_cast<std::uintptr_t>(info.dli_fbase) + header->e_phoff == getauxval(AT_PHDR);
+  std::error_code ec;
+  const fs::path image =
+      fs::canonical(main_program ? "/proc/self/exe" : (info.dli_fname ? info.dli_fname : ""), ec);
+  return ec ? fs::path() : image.parent_path();
+}
+
 }  // namespace
 
 const char* toString(PluginKind kind) {
@@ -88,12 +113,30 @@ std::vector<std::string> PluginRegistry::calcDefaultSearchPath() {
   }
   if (const char* home = std::getenv("HOME"))
     appendExistingDirectory(dirs, std::string(home) + "/.local/lib/manibench/plugins");
-  appendExistingDirectory(dirs, MANIBENCH_INSTALL_PLUGIN_DIR);
-  appendExistingDirectory(dirs, MANIBENCH_BUILD_PLUGIN_DIR);
+  const std::string prefix = findHostPrefix();
+  if (!prefix.empty()) appendExistingDirectory(dirs, prefix + "/" + MANIBENCH_PLUGIN_SUBDIR);
   return dirs;
 }
 
-void PluginRegistry::loadSearchPath() { loadDirectories(calcDefaultSearchPath()); }
+void PluginRegistry::loadSearchPath() {
+  // Before any plugin is created: tasks read it through
+  // sdk::findDataDirectory. setenv here, at start-up, before threads read
+  // the environment; an explicit setting (the user's) is kept.
+  const std::string data = findHostDataRoot();
+  if (!data.empty()) setenv("MANIBENCH_DATA_DIR", data.c_str(), 0);
+  loadDirectories(calcDefaultSearchPath());
+}
+
+std::string findHostPrefix() {
+  return sdk::findPrefixAbove(findHostImageFolder(), MANIBENCH_PLUGIN_SUBDIR).string();
+}
+
+std::string findHostDataRoot() {
+  const std::string prefix = findHostPrefix();
+  std::error_code ec;
+  if (prefix.empty() || !fs::is_directory(prefix + "/" + sdk::kDataSubdir, ec)) return "";
+  return prefix + "/" + sdk::kDataSubdir;
+}
 
 void PluginRegistry::loadDirectories(const std::vector<std::string>& directories) {
   for (const std::string& dir : directories) {
@@ -270,6 +313,12 @@ const mb_controller_descriptor& PluginRegistry::getController(const std::string&
 }
 const mb_policy_descriptor& PluginRegistry::getPolicy(const std::string& name) const {
   return *reinterpret_cast<const mb_policy_descriptor*>(getEntry(PluginKind::Policy, name).descriptor);
+}
+
+std::string getPolicyController(const mb_policy_descriptor& policy) {
+  if (!MB_HAS_FIELD(mb_policy_descriptor, controller, policy.header.struct_size) || policy.controller == nullptr)
+    return "";
+  return policy.controller;
 }
 
 }  // namespace manibench

@@ -5,7 +5,6 @@
 #include "rail.hpp"
 
 #include <cmath>
-#include <random>
 
 namespace {
 
@@ -32,8 +31,12 @@ class HelloSlider : public sdk::Task {
     rail_ = scene.addUrdfString(kRailUrdf, "", "rail", root, true);
   }
   void reset(sdk::SceneView& scene, uint64_t seed) override {
-    std::mt19937_64 rng(seed);
-    target_ = std::uniform_real_distribution<double>(-0.4, 0.4)(rng);
+    // sdk::Random (sdk/random.hpp), not std::mt19937_64 with a
+    // std::uniform_real_distribution: the standard leaves a distribution's
+    // output to the library, so resets would differ between libstdc++ and
+    // libc++; Random's numbers are the same everywhere.
+    sdk::Random rng(seed);
+    target_ = rng.uniform(-0.4, 0.4);
     scene.setJointPositions(rail_, Eigen::VectorXd::Zero(1));
   }
   void observe(const sdk::SceneView& scene, Eigen::Map<Eigen::VectorXd> out) override {

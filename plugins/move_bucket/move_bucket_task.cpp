@@ -8,9 +8,6 @@
 #include <fstream>
 #include <sstream>
 
-#ifndef MANIBENCH_ROBOT_DIR
-#define MANIBENCH_ROBOT_DIR ""
-#endif
 
 namespace move_bucket {
 namespace {
@@ -64,7 +61,7 @@ MoveBucketTask::MoveBucketTask(const Config& config)
   if (cache_dir_.empty()) cache_dir_ = getDefaultCacheRoot();
   // The observation layout (ObservationLayout) and the expert assume the
   // dual-arm robot's 22 joints and 88-value agent vector.
-  robot_state_ = std::make_unique<mobile_panda::AgentState>(config.get<std::string>("robot_dir", MANIBENCH_ROBOT_DIR),
+  robot_state_ = std::make_unique<mobile_panda::AgentState>(mobile_panda::readRobotDir(config),
                                                             "mobile_panda_dual", kTaskName, 2, kRobotDof);
 }
 

@@ -5,9 +5,6 @@
 #include <algorithm>
 #include <cmath>
 
-#ifndef MANIBENCH_ROBOT_DIR
-#define MANIBENCH_ROBOT_DIR ""
-#endif
 
 namespace open_cabinet {
 namespace {
@@ -44,7 +41,7 @@ OpenCabinetTask::OpenCabinetTask(const Config& config, TargetKind kind)
   if (!(static_speed_ > 0) || !(static_angular_speed_ > 0) || hold_steps_ == 0)
     throw Error(taskName(kind) + ": static_speed, static_angular_speed and hold_steps must be positive",
                 MB_INVALID_ARGUMENT);
-  robot_ = std::make_unique<mobile_panda::AgentState>(config.get<std::string>("robot_dir", MANIBENCH_ROBOT_DIR),
+  robot_ = std::make_unique<mobile_panda::AgentState>(mobile_panda::readRobotDir(config),
                                                       "mobile_panda_single", taskName(kind), 1, kRobotDof);
 }
 

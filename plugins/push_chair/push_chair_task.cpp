@@ -6,9 +6,6 @@
 #include <limits>
 #include <sstream>
 
-#ifndef MANIBENCH_ROBOT_DIR
-#define MANIBENCH_ROBOT_DIR ""
-#endif
 
 namespace push_chair {
 namespace {
@@ -54,7 +51,7 @@ PushChairTask::PushChairTask(const Config& config)
   if (!(static_speed_ > 0) || !(static_angular_speed_ > 0) || hold_steps_ == 0)
     throw Error("PushChair: static_speed, static_angular_speed and hold_steps must be positive", MB_INVALID_ARGUMENT);
   if (!(partnet_scale_ > 0)) throw Error("PushChair: task.partnet_scale must be positive", MB_INVALID_ARGUMENT);
-  robot_ = std::make_unique<mobile_panda::AgentState>(config.get<std::string>("robot_dir", MANIBENCH_ROBOT_DIR),
+  robot_ = std::make_unique<mobile_panda::AgentState>(mobile_panda::readRobotDir(config),
                                                       "mobile_panda_dual", kTaskName, 2, kRobotDof);
 }
 

@@ -7,8 +7,9 @@
     obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
 
 Plugins are found as the ``manibench`` program finds them
-($MANIBENCH_PLUGIN_PATH, ~/.local/lib/manibench/plugins, the install
-prefix, the build tree). docs/python.md has the whole story.
+($MANIBENCH_PLUGIN_PATH, ~/.local/lib/manibench/plugins, then the
+lib/manibench/plugins of the installation or build tree this module lies
+in). docs/python.md has the whole story.
 """
 
 from __future__ import annotations

@@ -325,9 +325,10 @@ TEST(PluginRegistry, LoadDirectoriesRecordsOneFailurePerBrokenFixture) {
   for (const auto& library : registry.getLibraries()) loaded.push_back(library.name);
   std::sort(loaded.begin(), loaded.end());
   EXPECT_EQ(loaded, (std::vector<std::string>{"fixture_duplicate_a", "fixture_newer_minor",
-                                              "fixture_robot_testbed", "fixture_throwing_create"}));
+                                              "fixture_pre_controller_policy", "fixture_robot_testbed",
+                                              "fixture_throwing_create"}));
   EXPECT_EQ(registry.getNames(PluginKind::Policy),
-            (std::vector<std::string>{"duplicate_policy", "newer_minor_policy",
+            (std::vector<std::string>{"duplicate_policy", "newer_minor_policy", "pre_controller_policy",
                                       "throwing_policy"}));
   EXPECT_EQ(registry.getNames(PluginKind::Task),
             (std::vector<std::string>{"RobotTestbed-v0", "Throwing-v0"}));
@@ -471,6 +472,25 @@ TEST(PluginRegistry, SearchPathOrderAndFirstMatchByFileNameWins) {
   EXPECT_TRUE(fs::equivalent(from_search_path.getLibraries()[entry->library].path, dir_a / file));
   for (const LoadFailure& f : from_search_path.getFailures())
     EXPECT_FALSE(contains(f.path, file)) << f.path << ": " << f.message;
+}
+
+// ABI 1.4's optional policy field: an older policy loads and names no
+// controller; an SDK policy names the one it was registered for.
+TEST(PluginRegistry, PolicyControllerIsOptional) {
+  static_assert(MB_ABI_MINOR >= 4, "mb_policy_descriptor.controller is ABI 1.4");
+  PluginRegistry registry;
+  ASSERT_NO_THROW(registry.loadLibrary(fixturePath("fixture_pre_controller_policy")));
+  EXPECT_TRUE(registry.getFailures().empty()) << describeFailures(registry);
+  const mb_policy_descriptor& old_policy = registry.getPolicy("pre_controller_policy");
+  EXPECT_LT(old_policy.header.struct_size, sizeof(mb_policy_descriptor));
+  EXPECT_EQ(manibench::getPolicyController(old_policy), "");
+  expectZeroPolicyWorks(old_policy);
+
+  PluginRegistry tree;
+  tree.loadDirectories({kBuildPluginDir});
+  EXPECT_EQ(manibench::getPolicyController(tree.getPolicy("open_cabinet_expert")), "mobile_panda_ee");
+  EXPECT_EQ(manibench::getPolicyController(tree.getPolicy("zero")), "");
+  EXPECT_EQ(tree.getPolicy("zero").header.struct_size, sizeof(mb_policy_descriptor));
 }
 
 TEST(PluginRegistry, SameLibraryIsLoadedOnce) {

@@ -57,7 +57,7 @@ extern "C" {
 #endif
 
 #define MB_ABI_MAJOR 1
-#define MB_ABI_MINOR 3
+#define MB_ABI_MINOR 4
 #define MB_ENTRY_POINT_NAME "manibench_plugin_entry"
 
 /* True when `field` of struct type `type` lies within `size` bytes. */
@@ -450,6 +450,14 @@ typedef struct mb_policy_descriptor {
   mb_status (*reset)(mb_policy* policy, uint64_t seed, mb_error* err);
   mb_status (*act)(mb_policy* policy, const mb_observation* observation,
                    double* out_action, uint32_t action_dim, mb_error* err);
+
+  /* ---- ABI 1.4 ------------------------------------------------------- */
+  /* The controller whose actions the policy outputs (a controller's name,
+   * e.g. a scripted expert's "mobile_panda_ee"), or NULL / "" for a policy
+   * that acts through whatever controller the task configures. A host runs
+   * the policy on it when the user names no controller, and refuses a
+   * different one the user names. */
+  const char* controller;
 } mb_policy_descriptor;
 
 #ifdef __cplusplus

@@ -4,8 +4,11 @@
 // Search path, first match wins (by file name, as PATH does for programs):
 //   1. $MANIBENCH_PLUGIN_PATH (colon-separated directories)
 //   2. ~/.local/lib/manibench/plugins
-//   3. <install prefix>/lib/manibench/plugins
-//   4. <build tree>/lib/manibench/plugins
+//   3. <prefix>/lib/manibench/plugins (lib/<multiarch>/... for /usr), the
+//      host's own installation or build tree: <prefix> is the nearest
+//      ancestor of the folder of the host's executable (or Python module)
+//      that has that folder (findHostPrefix). Nothing is compiled in, so an
+//      installed tree keeps working when moved.
 // A library is loaded with Boost.DLL and checked: ABI major equal to the
 // host's, minor at least the host's required minor, every struct large
 // enough. Descriptors of kinds this host does not know are skipped when the
@@ -58,6 +61,16 @@ struct LoadFailure {
   std::string message;
 };
 
+// The installation prefix (or build tree) of the running host, found from
+// its executable's or Python module's own location; "" when not found.
+std::string findHostPrefix();
+// <prefix>/share/manibench when it exists (the robots: sdk/data.hpp), else "".
+std::string findHostDataRoot();
+
+// The controller a policy's actions are for (ABI 1.4), or "" when it names
+// none (a policy built against ABI 1.3 or older never does).
+std::string getPolicyController(const mb_policy_descriptor& policy);
+
 class PluginRegistry {
  public:
   PluginRegistry() = default;
@@ -66,7 +79,9 @@ class PluginRegistry {
   static std::vector<std::string> calcDefaultSearchPath();
 
   // Loads every *.so in the given directories (default: the search path).
-  // Failures are recorded (getFailures), never thrown.
+  // Failures are recorded (getFailures), never thrown. loadSearchPath also
+  // sets MANIBENCH_DATA_DIR to findHostDataRoot() unless it is set, so that
+  // the plugins it loads read this installation's data (sdk/data.hpp).
   void loadSearchPath();
   void loadDirectories(const std::vector<std::string>& directories);
   // Loads one library and returns its index in getLibraries(); throws

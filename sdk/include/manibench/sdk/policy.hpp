@@ -184,9 +184,10 @@ struct PolicyTrampolines {
 };
 
 template <class T>
-bool registerPolicy(const char* name, const char* summary) {
+bool registerPolicy(const char* name, const char* summary, const char* controller = nullptr) {
   static_assert(std::is_base_of_v<Policy, T>, "a policy derives from manibench::sdk::Policy");
   auto* d = newDescriptor<mb_policy_descriptor>(MB_KIND_POLICY, name, summary);
+  d->controller = controller;  // ABI 1.4
   d->create = &PolicyTrampolines<T>::create;
   d->destroy = &PolicyTrampolines<T>::destroy;
   d->reset = &PolicyTrampolines<T>::reset;
@@ -201,3 +202,10 @@ bool registerPolicy(const char* name, const char* summary) {
   static const bool MANIBENCH_SDK_CONCAT(manibench_registered_policy_,   \
                                          __COUNTER__) =                  \
       ::manibench::sdk::detail::registerPolicy<Class>(name, summary)
+
+// A policy whose actions are for one controller (ABI 1.4): the host runs it
+// on `controller` when the user names none, and refuses another one.
+#define MANIBENCH_REGISTER_POLICY_FOR_CONTROLLER(Class, name, summary, controller) \
+  static const bool MANIBENCH_SDK_CONCAT(manibench_registered_policy_,   \
+                                         __COUNTER__) =                  \
+      ::manibench::sdk::detail::registerPolicy<Class>(name, summary, controller)

@@ -11,6 +11,7 @@
 
 #include <manibench/kit/common.hpp>
 #include <manibench/kit/policy_math.hpp>
+#include <manibench/sdk/data.hpp>
 #include <manibench/sdk/policy.hpp>
 #include <manibench/sdk/random.hpp>
 #include <manibench/sdk/task.hpp>
@@ -40,6 +41,13 @@ struct Facts {
   std::vector<std::string> arm_sides;     // "right", "left"
   std::string camera_yaml;           // a `cameras:` list: the head cameras at the task's height
 };
+
+// The robots' folder: the task's `robot_dir` key when set, else the one
+// of the manibench installation the plugin runs under
+// (sdk::findDataDirectory("robots"), sdk/data.hpp).
+inline std::string readRobotDir(const sdk::Config& config) {
+  return config.has("robot_dir") ? config.get<std::string>("robot_dir", "") : sdk::findDataDirectory("robots");
+}
 
 // Reads <robot_dir>/<robot>.yaml (robot: mobile_panda_single or
 // mobile_panda_dual) for `task` (the key of its lift_height and
@@ -334,7 +342,7 @@ struct EeAction {
       if (s == nullptr || s->size != size)
         throw Error(policy + " needs the mobile_panda_ee controller" + (arms == 1 ? "" : " on the dual-arm robot") +
                         " (action segment '" + name + "' of size " + std::to_string(size) +
-                        " is missing); run it with --controller mobile_panda_ee",
+                        " is missing); leave --controller out (it chooses mobile_panda_ee)",
                     MB_INVALID_ARGUMENT);
     }
     base = action.get("base_forward").offset;

@@ -1,0 +1,163 @@
+"""Figures of manibench's results through matplotlib (Debian's python3-matplotlib).
+
+    manibench plot DIR [DIR ...] [--out FIGURE.png]
+    python3 -m manibench.plot DIR [DIR ...] [--out FIGURE.png]
+
+A DIR of ``manibench eval --out DIR`` (summary.csv, summary.json): per
+object, the success rate and each success condition's satisfactory rate,
+one bar per split when several results (``--split train`` and ``--split
+test`` of one task, say) are given; the numbers are summary.csv's. A DIR of
+``manibench train`` (log.csv, and eval.csv for behaviour cloning): the
+training curves, each loss (and SAC's return and success rate) against the
+iteration or environment step, and the evaluations' success rate per split.
+The default figure is DIR/results.png (first DIR) or DIR/curves.png.
+
+Only the standard library and matplotlib: it never imports the extension
+module. `manibench plot` runs this file (bin/manibench-plot finds it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import sys
+from typing import Any
+
+SPLIT_COLOURS = {"train": "#4C72B0", "test": "#DD8452"}
+
+
+def read_eval(directory: str) -> dict[str, Any]:
+    """One evaluation's numbers: task, split and summary.csv's rows (the
+    per-object rows; the "all" row apart) as floats."""
+    summary_csv = os.path.join(directory, "summary.csv")
+    if not os.path.exists(summary_csv):
+        raise FileNotFoundError(f"{directory}: no summary.csv (not a `manibench eval --out` folder)")
+    with open(os.path.join(directory, "summary.json"), encoding="utf-8") as f:
+        meta = json.load(f)
+    with open(summary_csv, newline="", encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+    conditions = [c[len("condition_"):] for c in rows[0] if c.startswith("condition_")] if rows else []
+    objects = {}
+    overall = None
+    for row in rows:
+        values = {"success_rate": float(row["success_rate"])}
+        values.update({c: float(row["condition_" + c]) for c in conditions})
+        if row["object"] == "all":
+            overall = values
+        else:
+            objects[row["object"]] = values
+    return {"task": meta.get("task", ""), "split": meta.get("split", ""), "policy": meta.get("policy", {}).get("name", ""),
+            "conditions": conditions, "objects": objects, "overall": overall}
+
+
+def plot_eval(directories: list[str]):
+    """The evaluation figure: one panel for the success rate and one per
+    condition, a group of bars per object, one bar per result folder
+    (labelled with its split). Each axis's ``manibench_metric`` names its
+    summary.csv column (success_rate, or the condition)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    results = [read_eval(d) for d in directories]
+    metrics = ["success_rate"] + [c for c in results[0]["conditions"] if c != "success"]
+    objects = []
+    for r in results:
+        objects += [o for o in r["objects"] if o not in objects]
+    width = 0.8 / len(results)
+    fig, axes = plt.subplots(len(metrics), 1, figsize=(max(6.0, 0.45 * len(objects) + 2), 2.4 * len(metrics)),
+                             squeeze=False, sharex=True)
+    for ax, metric in zip(axes[:, 0], metrics):
+        ax.manibench_metric = "success_rate" if metric == "success_rate" else "condition_" + metric
+        for i, r in enumerate(results):
+            label = r["split"] or os.path.basename(os.path.normpath(directories[i]))
+            xs = [j + (i - (len(results) - 1) / 2) * width for j, o in enumerate(objects) if o in r["objects"]]
+            ys = [r["objects"][o][metric] for o in objects if o in r["objects"]]
+            ax.bar(xs, ys, width, label=label, color=SPLIT_COLOURS.get(label))
+        ax.set_ylim(0, 1.05)
+        ax.set_ylabel("success" if metric == "success_rate" else metric.replace("_", " "))
+        ax.grid(axis="y", alpha=0.3)
+    axes[0, 0].legend(loc="upper right", fontsize="small")
+    axes[0, 0].set_title(f"{results[0]['task']}: {results[0]['policy']}, rate per object")
+    axes[-1, 0].set_xticks(range(len(objects)))
+    axes[-1, 0].set_xticklabels(objects, rotation=60, ha="right", fontsize="small")
+    fig.tight_layout()
+    return fig
+
+
+def read_csv_columns(path: str) -> dict[str, list]:
+    with open(path, newline="", encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+    columns: dict[str, list] = {name: [] for name in (rows[0] if rows else {})}
+    for row in rows:
+        for name, value in row.items():
+            try:
+                columns[name].append(float(value))
+            except (TypeError, ValueError):
+                columns[name].append(value)
+    return columns
+
+
+def plot_training(directory: str):
+    """The training curves of a `manibench train` folder: log.csv's columns
+    against its first (iteration or env_steps), eval.csv's success rate per
+    split."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    log = read_csv_columns(os.path.join(directory, "log.csv"))
+    names = list(log)
+    x_name = names[0]
+    skip = {x_name, "seconds", "updates", "episodes", "iterations_per_second", "env_steps_per_second",
+            "updates_per_second", "physics_share", "acting_share", "updates_share", "waiting_share"}
+    curves = [n for n in names if n not in skip]
+    eval_path = os.path.join(directory, "eval.csv")
+    panels = len(curves) + (1 if os.path.exists(eval_path) else 0)
+    fig, axes = plt.subplots(max(panels, 1), 1, figsize=(7, 2.2 * max(panels, 1)), squeeze=False, sharex=True)
+    for ax, name in zip(axes[:, 0], curves):
+        ax.plot(log[x_name], log[name], lw=1)
+        ax.set_ylabel(name.replace("_", " "))
+        ax.grid(alpha=0.3)
+    if os.path.exists(eval_path):
+        ev = read_csv_columns(eval_path)
+        ax = axes[len(curves), 0]
+        for split in sorted(set(ev.get("split", []))):
+            pts = [(i, r) for i, s, r in zip(ev["iteration"], ev["split"], ev["success_rate"]) if s == split]
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", label=split, color=SPLIT_COLOURS.get(split))
+        ax.set_ylim(0, 1.05)
+        ax.set_ylabel("success rate")
+        ax.legend(fontsize="small")
+        ax.grid(alpha=0.3)
+    axes[-1, 0].set_xlabel(x_name.replace("_", " "))
+    axes[0, 0].set_title(os.path.basename(os.path.normpath(directory)))
+    fig.tight_layout()
+    return fig
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="manibench plot", description=__doc__.split("\n\n")[0])
+    parser.add_argument("dirs", nargs="+", metavar="DIR", help="eval --out folders, or one train --out folder")
+    parser.add_argument("--out", help="the figure (.png, .pdf, .svg)")
+    args = parser.parse_args(argv)
+    try:
+        if all(os.path.exists(os.path.join(d, "summary.csv")) for d in args.dirs):
+            fig, default = plot_eval(args.dirs), os.path.join(args.dirs[0], "results.png")
+        elif len(args.dirs) == 1 and os.path.exists(os.path.join(args.dirs[0], "log.csv")):
+            fig, default = plot_training(args.dirs[0]), os.path.join(args.dirs[0], "curves.png")
+        else:
+            raise FileNotFoundError("each DIR must hold summary.csv (manibench eval --out), or one DIR log.csv "
+                                    "(manibench train --out): " + ", ".join(args.dirs))
+        out = args.out or default
+        fig.savefig(out, dpi=120)
+    except (OSError, ValueError, KeyError) as e:
+        print(f"manibench plot: {e}", file=sys.stderr)
+        return 1
+    print(f"wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
