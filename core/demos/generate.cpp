@@ -118,9 +118,10 @@ GenerationResult generateDemonstrations(const PluginRegistry& registry,
         complete.controller = task.controller;
         complete.observation_mode = task.observation_mode;
         complete.condition_names = task.condition_names;
-        writer = std::make_unique<DemoWriter>(path, complete);
         const std::vector<std::string> objects =
             options.evaluation.objects.empty() ? task.split_objects : options.evaluation.objects;
+        // At most per_object of each: the root's header is sized for them.
+        writer = std::make_unique<DemoWriter>(path, complete, objects.size() * options.per_object);
         for (const std::string& id : objects) result.objects.push_back({id, 0, 0, 0});
         for (GenerationObjectResult& o : result.objects) by_id[o.object_id] = &o;
       }
