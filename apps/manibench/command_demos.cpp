@@ -487,8 +487,12 @@ int info(int argc, char** argv) {
   std::vector<std::string> names;  // of the summaries
   uint64_t bytes = 0, steps = 0;
   std::size_t unreadable = 0;
+  // A file cut short: only a trajectory that reads whole counts (its
+  // attributes may lie before the cut and its data after).
+  const bool cut = reader.getRecordedBytes() > reader.getFileBytes();
   for (const std::string& name : reader.getTrajectoryNames()) {
     try {
+      if (cut) reader.read(name);
       const Trajectory t = reader.readSummary(name);
       bytes += reader.calcStorageBytes(name);
       steps += t.steps;
@@ -507,7 +511,11 @@ int info(int argc, char** argv) {
   }
   std::cout << "trajectories   " << summaries.size() << " of " << objects.size() << " object(s), "
             << steps << " steps";
-  if (unreadable) std::cout << " (" << unreadable << " unreadable: the file was cut short?)";
+  if (cut)
+    std::cout << " (" << unreadable << " unreadable: the file is cut short, " << reader.getFileBytes()
+              << " of the " << reader.getRecordedBytes() << " bytes its HDF5 superblock records)";
+  else if (unreadable)
+    std::cout << " (" << unreadable << " unreadable)";
   std::cout << "\n"
             << "storage        " << bytes << " bytes, " << std::fixed << std::setprecision(0)
             << (steps ? double(bytes) / double(steps) : 0.0) << " bytes per step\n\n";

@@ -53,7 +53,7 @@ std::string oneLine(std::string text) {
   try {
     const DemoReader reader(in_path);
     const std::unique_ptr<Environment> env = makeDemoEnvironment(registry, reader.getInfo(), overrides);
-    DemoWriter writer(part_path, out_info);
+    DemoWriter writer(part_path, out_info, mine.size());
     for (std::size_t index : mine) {
       try {
         const Trajectory converted = convertTrajectory(*env, reader.read(names[index]));
@@ -209,7 +209,7 @@ ConversionResult convertDemonstrations(const PluginRegistry& registry, const std
   }
   {
     std::vector<std::unique_ptr<DemoReader>> parts(children.size());
-    DemoWriter writer(out_path, out_info);
+    DemoWriter writer(out_path, out_info, where.size());
     for (const auto& [index, at] : where) {
       try {
         if (!parts[at.first]) parts[at.first] = std::make_unique<DemoReader>(children[at.first].part);

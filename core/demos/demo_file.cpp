@@ -21,8 +21,10 @@ namespace {
 
 constexpr const char* kFormat = "manibench-demonstrations";
 constexpr uint64_t kFormatVersion = 1;
-// Room in a trajectory group's header for its links (datasets, obs).
-constexpr unsigned kTrajectoryLinks = 16;
+// Room in a trajectory group's header for its links (datasets, obs) and,
+// as much again, its attributes: 16 left the links of a state-mode
+// trajectory spilling into a second header chunk.
+constexpr unsigned kTrajectoryLinks = 32;
 
 std::string getTrajectoryName(std::size_t index) { return "traj_" + std::to_string(index); }
 
@@ -55,6 +57,50 @@ std::vector<hsize_t> expectDims(const Handle& group, const std::string& name,
     throw DemoError("dataset '" + name + "' has shape " + formatDims(dims) + ", expected " + wanted + ")");
   }
   return dims;
+}
+
+// Calls visit(parent, name, path) for each dataset of a trajectory group,
+// those of its `obs` group in the visual modes ("obs/xyz").
+template <class F>
+void forEachDataset(const Handle& group, ObservationMode mode, F&& visit) {
+  for (const std::string& link : listLinks(group)) {
+    if (link == "obs" && mode != ObservationMode::State) {
+      const Handle obs = openGroup(group, "obs");
+      for (const std::string& inner : listLinks(obs)) visit(obs, inner, "obs/" + inner);
+    } else {
+      visit(group, link, link);
+    }
+  }
+}
+
+bool canOpenGroup(const Handle& file, const std::string& name) {
+  if (!hasLink(file, name)) return false;
+  try {
+    openGroup(file, name);
+    return true;
+  } catch (const Hdf5Error&) {
+    return false;
+  }
+}
+
+std::string describeCut(const FileLayout& layout) {
+  return "cut short: " + std::to_string(layout.bytes) + " of the " +
+         std::to_string(layout.recorded_bytes) + " bytes its superblock records";
+}
+
+// Throws unless every byte of the trajectory's data (but the environment
+// states, unless `with_env_states`) lies before the file's end. HDF5 reads
+// what lies past a file's end as zeros: metadata fails its checksum, but an
+// uncompressed dataset would read wrong values without an error.
+void expectWithinFile(const Handle& group, ObservationMode mode, const FileLayout& layout,
+                      bool with_env_states) {
+  forEachDataset(group, mode, [&](const Handle& parent, const std::string& name, const std::string& path) {
+    if (!with_env_states && (name == "env_states" || name == "env_state_offsets")) return;
+    const uint64_t end = calcDataEnd(parent, name);
+    if (end > layout.bytes)
+      throw DemoError("lies past the cut: dataset '" + path + "' ends at byte " + std::to_string(end) +
+                      ", the file at " + std::to_string(layout.bytes) + " (" + describeCut(layout) + ")");
+  });
 }
 
 // --- writing ----------------------------------------------------------------------
@@ -291,11 +337,13 @@ struct DemoWriter::Impl {
   std::vector<Trajectory> summaries;
 };
 
-DemoWriter::DemoWriter(const std::string& path, const DemoFileInfo& info) : impl_(new Impl) {
+DemoWriter::DemoWriter(const std::string& path, const DemoFileInfo& info, std::size_t expected_trajectories)
+    : impl_(new Impl) {
   impl_->path = path;
   impl_->info = info;
   withContext("'" + path + "'", [&] {
-    impl_->file = createFile(path);
+    // The root's links: meta and the trajectories.
+    impl_->file = createFile(path, unsigned(std::min<std::size_t>(expected_trajectories + 1, 60000)));
     writeInfo(impl_->file, info);
     flushFile(impl_->file);
   });
@@ -355,6 +403,7 @@ const std::string& DemoWriter::getPath() const { return impl_->path; }
 
 struct DemoReader::Impl {
   std::string path;
+  FileLayout layout;
   Handle file;
   DemoFileInfo info;
   std::vector<std::string> names;
@@ -371,13 +420,30 @@ DemoReader::DemoReader(const std::string& path) : impl_(new Impl) {
     probe.read(signature, 8);
     if (probe.gcount() != 8 || std::string(signature, 8) != "\x89HDF\r\n\x1a\n")
       throw DemoError("is not an HDF5 file (no HDF5 signature)");
-    impl_->file = openForReading(path);
-    impl_->info = readInfo(impl_->file);
-    std::vector<std::pair<long, std::string>> found;
-    for (const std::string& name : listLinks(impl_->file))
-      if (const long index = parseTrajectoryIndex(name); index >= 0) found.emplace_back(index, name);
-    std::sort(found.begin(), found.end());
-    for (auto& [index, name] : found) impl_->names.push_back(std::move(name));
+    const FileLayout& layout = impl_->layout = readFileLayout(path);
+    try {
+      impl_->file = openForReading(path);
+      impl_->info = readInfo(impl_->file);
+      std::vector<std::pair<long, std::string>> found;
+      for (const std::string& name : listLinks(impl_->file))
+        if (const long index = parseTrajectoryIndex(name); index >= 0) found.emplace_back(index, name);
+      std::sort(found.begin(), found.end());
+      for (auto& [index, name] : found) impl_->names.push_back(std::move(name));
+    } catch (const std::exception& e) {
+      // A file cut before its first trajectory was complete: say where the
+      // cut fell (HDF5's own reason is a checksum or a read past the end).
+      if (layout.bytes < 12 || (layout.superblock_end != 0 && layout.bytes < layout.superblock_end))
+        throw DemoError("cut short inside its HDF5 superblock (" + std::to_string(layout.bytes) +
+                        " bytes): nothing in it can be read (" + e.what() + ")");
+      if (!layout.isCutShort()) throw;
+      const bool in_root = layout.root_header_end == 0 || layout.bytes < layout.root_header_end;
+      if (in_root)
+        throw DemoError(describeCut(layout) + ", inside the root group's header (from byte " +
+                        std::to_string(layout.root_header) +
+                        "), which lists the trajectories and precedes them all: no trajectory was "
+                        "complete before the cut (" + e.what() + ")");
+      throw DemoError(describeCut(layout) + ": " + e.what());
+    }
   });
 }
 
@@ -385,11 +451,26 @@ DemoReader::~DemoReader() = default;
 const std::string& DemoReader::getPath() const { return impl_->path; }
 const DemoFileInfo& DemoReader::getInfo() const { return impl_->info; }
 const std::vector<std::string>& DemoReader::getTrajectoryNames() const { return impl_->names; }
+uint64_t DemoReader::getFileBytes() const { return impl_->layout.bytes; }
+uint64_t DemoReader::getRecordedBytes() const { return impl_->layout.recorded_bytes; }
 
 Trajectory DemoReader::read(const std::string& name, bool with_env_states) const {
   return withContext("'" + impl_->path + "', trajectory " + name, [&] {
     if (!hasLink(impl_->file, name)) throw DemoError("no such trajectory");
     const Handle group = openGroup(impl_->file, name);
+    if (impl_->layout.isCutShort()) {
+      // A file written before trajectory groups kept their links in their
+      // header: the links' heap, which HDF5 does not checksum, lies
+      // wholly before the next trajectory's group (HDF5 allocates only at
+      // the file's end), so that group's header reading whole vouches
+      // for it. Without that, listing the links could crash HDF5.
+      const std::string next = getTrajectoryName(std::size_t(parseTrajectoryIndex(name)) + 1);
+      if (hasDenseLinks(group) && !canOpenGroup(impl_->file, next))
+        throw DemoError("may lie past the cut: its links are in HDF5's dense storage (a file written "
+                        "before manibench kept them in the group's header), which cannot be checked (" +
+                        describeCut(impl_->layout) + ")");
+      expectWithinFile(group, impl_->info.observation_mode, impl_->layout, with_env_states);
+    }
     Trajectory t;
     readTrajectory(group, impl_->info, with_env_states, t);
     return t;
@@ -410,18 +491,11 @@ uint64_t DemoReader::calcStorageBytes(const std::string& name) const {
   return withContext("'" + impl_->path + "', trajectory " + name, [&] {
     const Handle group = openGroup(impl_->file, name);
     uint64_t bytes = 0;
-    auto add = [&](const Handle& parent, const std::string& dataset) {
-      const Handle d(check(H5Dopen2(parent.get(), dataset.c_str(), H5P_DEFAULT), dataset));
-      bytes += H5Dget_storage_size(d.get());
-    };
-    for (const std::string& link : listLinks(group)) {
-      if (link == "obs" && impl_->info.observation_mode != ObservationMode::State) {
-        const Handle obs = openGroup(group, "obs");
-        for (const std::string& inner : listLinks(obs)) add(obs, inner);
-      } else {
-        add(group, link);
-      }
-    }
+    forEachDataset(group, impl_->info.observation_mode,
+                   [&](const Handle& parent, const std::string& dataset, const std::string&) {
+                     const Handle d(check(H5Dopen2(parent.get(), dataset.c_str(), H5P_DEFAULT), dataset));
+                     bytes += H5Dget_storage_size(d.get());
+                   });
     return bytes;
   });
 }

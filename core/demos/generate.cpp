@@ -183,7 +183,8 @@ GenerationResult generateDemonstrations(const PluginRegistry& registry,
         const std::vector<std::string> objects =
             options.evaluation.objects.empty() ? task.split_objects : options.evaluation.objects;
         complete.generation = formatGeneration(options, objects, max_attempts);
-        writer = std::make_unique<DemoWriter>(path, complete);
+        // At most per_object of each: the root's header is sized for them.
+        writer = std::make_unique<DemoWriter>(path, complete, objects.size() * options.per_object);
         for (const std::string& id : own_list ? own : objects) result.objects.push_back({id, 0, 0, 0});
         for (GenerationObjectResult& o : result.objects) by_id[o.object_id] = &o;
       }

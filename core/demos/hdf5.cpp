@@ -1,6 +1,7 @@
 #include "hdf5.hpp"
 
 #include <algorithm>
+#include <fstream>
 #include <mutex>
 
 namespace manibench::demos_detail {
@@ -79,26 +80,34 @@ void check(herr_t status, const std::string& what) {
   if (status < 0) throw Hdf5Error(what + ": " + takeErrorStack());
 }
 
-Handle createFile(const std::string& path) {
+Handle createFile(const std::string& path, unsigned root_links) {
   silenceHdf5();
   const Handle fcpl = createTypedProperties(H5P_FILE_CREATE);
   // A file cut short (a full disk, a copy that stopped) keeps every
-  // trajectory written entirely before the cut, once the cut is past the
-  // root group's first header chunk (~40 KB):
-  // - the root's links stay in that chunk, presized for 1024 (later ones go
-  //   to continuation chunks allocated as they come), compact up to 60000
-  //   (dense storage, HDF5's default above 8 links, keeps its index at the
-  //   file's end);
+  // trajectory written entirely before the cut (everything else lies
+  // after the root group's first header chunk, ~36 KB for 1024 links):
+  // - the root's links stay in that chunk, presized for `root_links` (the
+  //   trajectories the run will write, at least 1024): a link past it goes
+  //   to a continuation chunk further on, and a cut before that chunk makes
+  //   the whole root unreadable (HDF5 checks every chunk of a header), so
+  //   with 4000 groups in a header sized for 1024 a cut at 60 % of the file
+  //   lost all of them; presized for 4000, it kept every group before the
+  //   cut. Growing the header is also slow: 3000 groups took 12.4 s of CPU
+  //   with 1024 presized, 0.8 s with 3000 (HDF5 1.10.8, one 800-byte
+  //   dataset each). Links stay compact up to 60000 (dense storage, HDF5's
+  //   default above 8 links, keeps its index at the file's end);
   // - nothing is ever allocated but at the end of the file (no free-space
   //   reuse), so a trajectory's objects all precede the next one's;
   // - the root's attributes stay in its header (compact), the set's
   //   description in group meta (see demo_file.cpp).
   check(H5Pset_link_phase_change(fcpl.get(), 60000, 50000), "H5Pset_link_phase_change");
-  check(H5Pset_est_link_info(fcpl.get(), 1024, 12), "H5Pset_est_link_info");
+  check(H5Pset_est_link_info(fcpl.get(), std::clamp(root_links, 1024u, 60000u), 12),
+        "H5Pset_est_link_info");
   check(H5Pset_link_creation_order(fcpl.get(), H5P_CRT_ORDER_TRACKED), "H5Pset_link_creation_order");
   check(H5Pset_attr_phase_change(fcpl.get(), 64, 0), "H5Pset_attr_phase_change");
   check(H5Pset_file_space_strategy(fcpl.get(), H5F_FSPACE_STRATEGY_NONE, 0, 0),
-        "H5Pset_file_space_strategy");  const Handle fapl = createTypedProperties(H5P_FILE_ACCESS);
+        "H5Pset_file_space_strategy");
+  const Handle fapl = createTypedProperties(H5P_FILE_ACCESS);
   check(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_LATEST, H5F_LIBVER_LATEST),
         "H5Pset_libver_bounds");
   return Handle(check(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()),
@@ -124,11 +133,96 @@ Handle openForReading(const std::string& path) {
                       "cannot open '" + path + "' as an HDF5 file"));
 }
 
+namespace {
+uint64_t readLittleEndian(const unsigned char* bytes, std::size_t size) {
+  uint64_t value = 0;
+  for (std::size_t k = size; k-- > 0;) value = (value << 8) | bytes[k];
+  return value;
+}
+}  // namespace
+
+FileLayout readFileLayout(const std::string& path) {
+  FileLayout layout;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return layout;
+  in.seekg(0, std::ios::end);
+  layout.bytes = uint64_t(in.tellg());
+  in.seekg(0);
+  // Superblock version 2 and 3 (HDF5 file format specification, II.A):
+  // signature, version, size of offsets (O) and of lengths, flags, then
+  // base address, extension address, end-of-file address, root group
+  // object header address (O bytes each) and a checksum.
+  unsigned char head[12] = {};
+  if (!in.read(reinterpret_cast<char*>(head), sizeof head)) return layout;
+  if (std::string(reinterpret_cast<char*>(head), 8) != "\x89HDF\r\n\x1a\n" || (head[8] != 2 && head[8] != 3))
+    return layout;
+  const std::size_t offset_size = head[9];
+  if (offset_size != 4 && offset_size != 8) return layout;
+  layout.superblock_end = 12 + 4 * offset_size + 4;
+  unsigned char fields[32] = {};
+  if (!in.read(reinterpret_cast<char*>(fields), std::streamsize(4 * offset_size))) return layout;
+  layout.recorded_bytes = readLittleEndian(fields + 2 * offset_size, offset_size);
+  layout.root_header = readLittleEndian(fields + 3 * offset_size, offset_size);
+  // The root's version 2 object header (IV.A.1.b): "OHDR", version, flags,
+  // optional times (flags bit 5) and phase change values (bit 4), the size
+  // of chunk 0 in 1 << (flags & 3) bytes, the chunk, a checksum.
+  in.seekg(std::streamoff(layout.root_header));
+  unsigned char prefix[6 + 16 + 4 + 8] = {};
+  if (!in.read(reinterpret_cast<char*>(prefix), 6)) return layout;
+  if (std::string(reinterpret_cast<char*>(prefix), 4) != "OHDR") return layout;
+  const unsigned flags = prefix[5];
+  const std::size_t optional = ((flags & 0x20) ? 16 : 0) + ((flags & 0x10) ? 4 : 0);
+  const std::size_t size_bytes = std::size_t(1) << (flags & 3);
+  if (!in.read(reinterpret_cast<char*>(prefix + 6), std::streamsize(optional + size_bytes))) return layout;
+  const uint64_t chunk = readLittleEndian(prefix + 6 + optional, size_bytes);
+  layout.root_header_end = layout.root_header + 6 + optional + size_bytes + chunk + 4;
+  return layout;
+}
+
+uint64_t calcDataEnd(const Handle& parent, const std::string& name) {
+  const Handle dataset(check(H5Dopen2(parent.get(), name.c_str(), H5P_DEFAULT), "dataset '" + name + "'"));
+  const Handle plist(check(H5Dget_create_plist(dataset.get()), "dataset '" + name + "': its properties"));
+  uint64_t end = 0;
+  switch (H5Pget_layout(plist.get())) {
+    case H5D_CHUNKED: {
+      // The dataset's own space (1.10.8 takes no H5S_ALL here).
+      const Handle space(check(H5Dget_space(dataset.get()), "dataset '" + name + "': its space"));
+      hsize_t chunks = 0;
+      check(H5Dget_num_chunks(dataset.get(), space.get(), &chunks), "dataset '" + name + "': its chunks");
+      for (hsize_t k = 0; k < chunks; ++k) {
+        hsize_t offset[H5S_MAX_RANK] = {};
+        unsigned filters = 0;
+        haddr_t address = HADDR_UNDEF;
+        hsize_t size = 0;
+        check(H5Dget_chunk_info(dataset.get(), space.get(), k, offset, &filters, &address, &size),
+              "dataset '" + name + "': chunk " + std::to_string(k));
+        if (address != HADDR_UNDEF) end = std::max<uint64_t>(end, address + size);
+      }
+      break;
+    }
+    case H5D_CONTIGUOUS:
+      if (const haddr_t address = H5Dget_offset(dataset.get()); address != HADDR_UNDEF)
+        end = address + H5Dget_storage_size(dataset.get());
+      break;
+    default: break;
+  }
+  H5Eclear2(H5E_DEFAULT);  // H5Dget_offset's "no storage" of an empty dataset
+  return end;
+}
+
 void flushFile(const Handle& file) { check(H5Fflush(file.get(), H5F_SCOPE_GLOBAL), "H5Fflush"); }
 
 Handle createGroup(const Handle& parent, const std::string& name, unsigned links) {
   const Handle gcpl = createTypedProperties(H5P_GROUP_CREATE);
   check(H5Pset_est_link_info(gcpl.get(), links, 16), "H5Pset_est_link_info");
+  // Links stay in the group's header (compact) up to `links`, not in HDF5's
+  // dense storage (above 8 by default): a header carries a checksum, the
+  // fractal heap holding dense links does not, and HDF5 1.10.8 crashed
+  // (SIGSEGV in H5G__dense_iterate) listing a trajectory group whose heap
+  // lay past the end of a file cut short.
+  check(H5Pset_link_phase_change(gcpl.get(), std::max(links, 8u), 6), "H5Pset_link_phase_change");
+  // Attributes too (group meta has 11; dense above 8), as the root's.
+  check(H5Pset_attr_phase_change(gcpl.get(), 64, 0), "H5Pset_attr_phase_change");
   check(H5Pset_link_creation_order(gcpl.get(), H5P_CRT_ORDER_TRACKED), "H5Pset_link_creation_order");
   return Handle(check(H5Gcreate2(parent.get(), name.c_str(), H5P_DEFAULT, gcpl.get(), H5P_DEFAULT),
                       "creating group '" + name + "'"));
@@ -136,6 +230,12 @@ Handle createGroup(const Handle& parent, const std::string& name, unsigned links
 
 Handle openGroup(const Handle& parent, const std::string& name) {
   return Handle(check(H5Gopen2(parent.get(), name.c_str(), H5P_DEFAULT), "group '" + name + "'"));
+}
+
+bool hasDenseLinks(const Handle& group) {
+  H5G_info_t info{};
+  check(H5Gget_info(group.get(), &info), "the group's link storage");
+  return info.storage_type == H5G_STORAGE_TYPE_DENSE;
 }
 
 bool hasLink(const Handle& parent, const std::string& name) {

@@ -52,16 +52,40 @@ void check(herr_t status, const std::string& what);
 
 // Files. create: new (truncating) with the latest format and a root group
 // index laid out so that a file cut short keeps the trajectories written
-// before the cut (demo_file.cpp says why). openForReading skips HDF5's
-// end-of-file check, so that such a file still opens.
-Handle createFile(const std::string& path);
+// before the cut (demo_file.cpp says why), its header sized for
+// `root_links` links. openForReading skips HDF5's end-of-file check, so
+// that such a file still opens.
+Handle createFile(const std::string& path, unsigned root_links);
 Handle openForReading(const std::string& path);
 void flushFile(const Handle& file);
+
+// What a file's superblock (format version 2 or 3, as createFile writes)
+// and its root group's first header chunk say about where things lie, read
+// with plain file reads, so that a file HDF5 refuses can still be
+// described. Fields are 0 where the file is too short or of another format.
+struct FileLayout {
+  uint64_t bytes = 0;            // the file's size on disk
+  uint64_t superblock_end = 0;   // the superblock's size (48 with 8-byte offsets)
+  uint64_t recorded_bytes = 0;   // the end of file the superblock records
+  uint64_t root_header = 0;      // the root group's object header
+  uint64_t root_header_end = 0;  // the end of its first chunk
+  // Shorter than the superblock records: cut short (or still being written).
+  bool isCutShort() const { return recorded_bytes > bytes; }
+};
+FileLayout readFileLayout(const std::string& path);
+
+// The end (byte offset) of the last byte of a dataset's data in the file:
+// every chunk of a chunked dataset, the block of a contiguous one; 0 when
+// it has none (empty, or compact: inside its header).
+uint64_t calcDataEnd(const Handle& parent, const std::string& name);
 
 // Groups: created with room for `links` links in their header.
 Handle createGroup(const Handle& parent, const std::string& name, unsigned links);
 Handle openGroup(const Handle& parent, const std::string& name);
 bool hasLink(const Handle& parent, const std::string& name);
+// Whether the group keeps its links in HDF5's dense storage (a fractal heap
+// and a B-tree outside its header), as files before 2026-11-26 did.
+bool hasDenseLinks(const Handle& group);
 // The names of a group's links, in creation order where tracked, else by name.
 std::vector<std::string> listLinks(const Handle& group);
 

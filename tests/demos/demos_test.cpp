@@ -131,29 +131,132 @@ TEST_F(ReachDemos, AStateOfAnotherTaskIsRefusedNamingBoth) {
   expectMentions(message, {"Reach-v0", "OpenCabinetDrawer-v0"});
 }
 
-TEST_F(ReachDemos, AFileCutShortKeepsTheTrajectoriesBeforeTheCut) {
-  const std::string cut = (dir_ / "cut.h5").string();
-  std::filesystem::copy_file(path_, cut, std::filesystem::copy_options::overwrite_existing);
-  const auto size = std::filesystem::file_size(cut);
-  std::filesystem::resize_file(cut, size / 2);
-  const DemoReader reader(cut);
-  const auto env = makeDemoEnvironment(getBuildTreeRegistry(), reader.getInfo());
-  std::size_t readable = 0, unreadable = 0;
-  bool cut_seen = false;
-  for (const std::string& name : reader.getTrajectoryNames()) {
-    try {
-      const Trajectory t = reader.read(name);
-      EXPECT_FALSE(cut_seen) << name << " reads after an unreadable one";
-      EXPECT_TRUE(replayTrajectory(*env, t, true).matches) << name;
-      ++readable;
-    } catch (const DemoError& e) {
-      cut_seen = true;
-      ++unreadable;
-      expectMentions(e.what(), {cut, name});
-    }
+// Two trajectories are the same, field by field, bit for bit (state mode).
+void expectSameTrajectory(const Trajectory& a, const Trajectory& b, const std::string& name) {
+  SCOPED_TRACE(name);
+  EXPECT_EQ(a.object_id, b.object_id);
+  EXPECT_EQ(a.level, b.level);
+  EXPECT_EQ(a.seed, b.seed);
+  EXPECT_EQ(a.steps, b.steps);
+  EXPECT_EQ(a.success, b.success);
+  EXPECT_TRUE(sameBits(std::vector<double>{a.total_reward}, {b.total_reward}));
+  EXPECT_TRUE(sameBits(a.actions, b.actions));
+  EXPECT_TRUE(sameBits(a.rewards, b.rewards));
+  EXPECT_TRUE(sameBits(a.terminated, b.terminated));
+  EXPECT_TRUE(sameBits(a.truncated, b.truncated));
+  EXPECT_TRUE(sameBits(a.success_flags, b.success_flags));
+  EXPECT_TRUE(sameBits(a.conditions, b.conditions));
+  EXPECT_TRUE(sameBits(a.state, b.state));
+  EXPECT_TRUE(sameBits(a.env_states, b.env_states));
+  EXPECT_TRUE(sameBits(a.env_state_offsets, b.env_state_offsets));
+}
+
+// Where a trajectory's objects lie in the file: from its group's header to
+// the end of the last of its headers and data chunks.
+struct Extent {
+  uint64_t begin = UINT64_MAX, end = 0;
+};
+Extent findTrajectoryExtent(const std::string& path, const std::string& name) {
+  using namespace demos_detail;
+  const Handle file = openForReading(path);
+  Extent extent;
+  auto add_header = [&](const Handle& object) {
+    H5O_info_t info{};
+    EXPECT_GE(H5Oget_info2(object.get(), &info, H5O_INFO_BASIC | H5O_INFO_HDR), 0);
+    EXPECT_EQ(info.hdr.nchunks, 1u) << "a header in one piece: " << info.addr;
+    extent.begin = std::min<uint64_t>(extent.begin, info.addr);
+    extent.end = std::max<uint64_t>(extent.end, info.addr + info.hdr.space.total);
+  };
+  const Handle group = openGroup(file, name);
+  add_header(group);
+  for (const std::string& link : listLinks(group)) {
+    add_header(Handle(H5Oopen(group.get(), link.c_str(), H5P_DEFAULT)));
+    extent.end = std::max(extent.end, calcDataEnd(group, link));
   }
-  EXPECT_GE(readable, 2u);
-  EXPECT_GE(unreadable, 1u);
+  return extent;
+}
+
+// A file cut anywhere (a full disk, a copy that stopped) keeps exactly the
+// trajectories flushed before the cut, equal to the originals; a cut before
+// any was complete is an error saying where it fell.
+TEST_F(ReachDemos, AFileCutAnywhereKeepsTheTrajectoriesFlushedBeforeTheCut) {
+  const DemoReader source(path_);
+  std::vector<Trajectory> originals;
+  for (const std::string& name : source.getTrajectoryNames()) originals.push_back(source.read(name));
+  ASSERT_EQ(originals.size(), 10u);
+  // The set written again, noting the file's size once each trajectory is
+  // flushed: trajectory k lies entirely before flushed[k].
+  const std::string whole = (dir_ / "whole.h5").string();
+  std::vector<uint64_t> flushed;
+  {
+    DemoWriter writer(whole, source.getInfo(), originals.size());
+    for (const Trajectory& t : originals) {
+      writer.append(t);
+      flushed.push_back(std::filesystem::file_size(whole));
+    }
+    writer.close();
+  }
+  const uint64_t size = std::filesystem::file_size(whole);
+  const uint64_t root_end = demos_detail::readFileLayout(whole).root_header_end;
+  ASSERT_GT(root_end, 1000u);
+  // Each trajectory lies whole on disk once flushed, after the one before.
+  std::vector<Extent> extents;
+  for (std::size_t k = 0; k < originals.size(); ++k) {
+    extents.push_back(findTrajectoryExtent(whole, "traj_" + std::to_string(k)));
+    EXPECT_LE(extents[k].end, flushed[k]) << k;
+    EXPECT_GT(extents[k].begin, k ? extents[k - 1].begin : root_end) << k;
+  }
+  struct Cut {
+    std::string where;
+    uint64_t bytes;
+    long readable;                       // -1: the file does not open
+    std::vector<std::string> message;  // what the error says
+  };
+  const std::vector<Cut> cuts = {
+      {"inside the superblock", 20, -1, {"cut short inside its HDF5 superblock", "20 bytes"}},
+      {"inside the root group's header", 2000, -1,
+       {"cut short: 2000 of the", "inside the root group's header", "no trajectory was complete"}},
+      {"inside the set's description", root_end + 100, -1, {"cut short", "meta"}},
+      {"at the end of trajectory 0, less a byte", extents[0].end - 1, 0, {}},
+      {"after trajectory 1", extents[1].end, 2, {}},
+      {"after trajectory 1 was flushed", flushed[1], 2, {}},
+      {"in the middle of trajectory 3", (extents[3].begin + extents[3].end) / 2, 3, {}},
+      {"one byte short of the end", size - 1,
+       long(std::count_if(extents.begin(), extents.end(), [&](const Extent& e) { return e.end < size; })),
+       {}},
+  };
+  for (const Cut& c : cuts) {
+    SCOPED_TRACE(c.where);
+    const std::string cut = (dir_ / "cut.h5").string();
+    std::filesystem::copy_file(whole, cut, std::filesystem::copy_options::overwrite_existing);
+    std::filesystem::resize_file(cut, c.bytes);
+    if (c.readable < 0) {
+      const std::string message = catchMessage<DemoError>([&] { DemoReader reader(cut); });
+      expectMentions(message, c.message);
+      expectMentions(message, {cut});
+      continue;
+    }
+    const DemoReader reader(cut);
+    EXPECT_EQ(reader.getFileBytes(), c.bytes);
+    EXPECT_EQ(reader.getRecordedBytes(), size);
+    ASSERT_EQ(reader.getTrajectoryNames().size(), originals.size());
+    long readable = 0;
+    for (std::size_t k = 0; k < originals.size(); ++k) {
+      const std::string name = reader.getTrajectoryNames()[k];
+      if (long(k) < c.readable) {
+        expectSameTrajectory(reader.read(name), originals[k], name);
+        ++readable;
+      } else {
+        expectMentions(catchMessage<DemoError>([&] { reader.read(name); }), {cut, name});
+      }
+    }
+    EXPECT_EQ(readable, c.readable);
+  }
+  // What is kept replays bit for bit.
+  std::filesystem::resize_file((dir_ / "cut.h5"), flushed[1]);
+  const DemoReader reader((dir_ / "cut.h5").string());
+  const auto env = makeDemoEnvironment(getBuildTreeRegistry(), reader.getInfo());
+  EXPECT_TRUE(replayTrajectory(*env, reader.read("traj_1"), true).matches);
 }
 
 TEST_F(ReachDemos, AStoppedGenerationKeepsEveryFinishedTrajectory) {
@@ -184,7 +287,7 @@ TEST_F(ReachDemos, BadFilesAreClearErrors) {
 
   const std::string foreign = (dir_ / "foreign.h5").string();
   {
-    Handle file = createFile(foreign);
+    Handle file = createFile(foreign, 0);
     writeAttribute(file, "title", std::string("someone else's data"));
   }
   expectMentions(catchMessage<DemoError>([&] { DemoReader r(foreign); }), {foreign, "not a manibench demonstration file"});

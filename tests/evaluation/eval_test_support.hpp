@@ -5,6 +5,7 @@
 #include <stdlib.h>
 
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <sstream>
 #include <stdexcept>
@@ -89,10 +90,11 @@ inline std::string withoutTiming(const std::string& json) {
 }
 
 inline testing::CommandResult runEval(const TempDir& out, std::vector<std::string> arguments,
-                               const std::vector<std::string>& environment = {}) {
+                               const std::vector<std::string>& environment = {},
+                               const std::function<void()>& in_child = {}) {
   arguments.insert(arguments.begin(), "eval");
   arguments.insert(arguments.end(), {"--out", out.path().string(), "--no-progress"});
-  return testing::runCli(arguments, environment);
+  return testing::runCli(arguments, environment, in_child);
 }
 
 

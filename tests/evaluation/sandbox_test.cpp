@@ -9,6 +9,7 @@
 #include <dirent.h>
 #include <gtest/gtest.h>
 #include <linux/landlock.h>
+#include <seccomp.h>
 #include <sys/syscall.h>
 #include <unistd.h>
 
@@ -65,7 +66,7 @@ struct FixtureRun {
 // timeout long enough for the spinning one to reach its CPU limit on a
 // loaded machine (it did not within 10 s under ctest -j2 at a load of 12).
 FixtureRun runFixture(const TempDir& out, const std::string& policy, const std::vector<std::string>& env,
-               std::vector<std::string> extra = {}) {
+               std::vector<std::string> extra = {}, const std::function<void()>& in_child = {}) {
   std::vector<std::string> args = {"Reach-v0",         "--policy",   policy,  "--objects",
                                    "8,10",             "--levels",   "0-3",   "--workers",
                                    "2",                "--policy-cpu-limit", "1",
@@ -75,7 +76,7 @@ FixtureRun runFixture(const TempDir& out, const std::string& policy, const std::
   std::vector<std::string> environment = env;
   environment.push_back(kFixturePath);
   FixtureRun run;
-  run.result = runEval(out, args, environment);
+  run.result = runEval(out, args, environment, in_child);
   run.episodes = readCsv(out / "episodes.csv");
   run.summary = readFile(out / "summary.csv");
   return run;
@@ -111,7 +112,11 @@ TEST(Sandbox, EachAttackFailsOnlyItsOwnEpisodes) {
       {"fixture_read_file", failure::kPolicyError, "reading " + secret + ": Permission denied", true},
       {"fixture_write_file", failure::kPolicyError, "writing " + escape + ": Permission denied",
        true},
-      {"fixture_allocate", failure::kSandbox, "ran out of its memory limit, 256 MiB"},
+      // Under AddressSanitizer a `new` that fails reports "out of memory"
+      // and aborts (it cannot throw std::bad_alloc): still only its episodes.
+      testing::kAddressSanitized
+          ? Attack{"fixture_allocate", failure::kCrash, "the policy process was killed by signal 6 (SIGABRT"}
+          : Attack{"fixture_allocate", failure::kSandbox, "ran out of its memory limit, 256 MiB"},
       {"fixture_spin", failure::kSandbox, "CPU time limit (1 s in this episode)"},
       {"fixture_flood_stdout", failure::kSandbox, "more than its output limit (1048576 bytes"},
       {"fixture_exit", failure::kCrash, "the policy process exited with status 0"},
@@ -149,6 +154,58 @@ TEST(Sandbox, EachAttackFailsOnlyItsOwnEpisodes) {
     }
     EXPECT_FALSE(fs::exists(escape));
     EXPECT_EQ(findTaggedProcesses(tag), std::vector<std::string>());
+  }
+}
+
+// What a kernel without Landlock gives (before 5.13, Landlock left out of
+// `lsm=`, or a container whose filter refuses its calls), made here on any
+// kernel by a seccomp filter, inherited by the run's every process, that
+// answers the Landlock calls ENOSYS as such a kernel does: the run says
+// "no file rules" on its first line and in summary.json, a policy reads a
+// file outside its allowance (there is nothing to stop it), and the rest
+// of the sandbox holds (a signal to the parent is still refused).
+void withoutLandlock() {
+  scmp_filter_ctx ctx = seccomp_init(SCMP_ACT_ALLOW);
+  for (int call : {SYS_landlock_create_ruleset, SYS_landlock_add_rule, SYS_landlock_restrict_self})
+    seccomp_rule_add(ctx, SCMP_ACT_ERRNO(ENOSYS), call, 0);
+  if (seccomp_load(ctx) != 0) _exit(126);
+  seccomp_release(ctx);
+}
+
+TEST(Sandbox, WithoutLandlockTheRunSaysSoAndTheRestHolds) {
+  TempDir reference_dir;
+  const FixtureRun reference = runFixture(reference_dir, "fixture_flaky_throw", {});
+  ASSERT_EQ(reference.result.exit_code, 0) << reference.result.err;
+  TempDir files;
+  const std::string secret = (files / "secret.txt").string();
+  std::ofstream(secret) << "the test split's answers\n";
+  const std::vector<std::string> env = {"MANIBENCH_FIXTURE_SECRET=" + secret};
+  const std::string no_rules = "seccomp, rlimits; no file rules (this kernel has no Landlock)";
+
+  TempDir read_dir;
+  const FixtureRun read = runFixture(read_dir, "fixture_read_file", env, {}, withoutLandlock);
+  ASSERT_EQ(read.result.exit_code, 0) << read.result.err;
+  EXPECT_TRUE(contains(read.result.out + read.result.err, "the policy sandboxed (" + no_rules + ")"))
+      << read.result.out << read.result.err;
+  EXPECT_TRUE(contains(readFile(read_dir / "summary.json"), no_rules));
+  ASSERT_EQ(read.episodes.size(), reference.episodes.size());
+  for (const auto& e : read.episodes) EXPECT_EQ(e.at("failure"), "") << e.at("message");
+
+  TempDir kill_dir;
+  const FixtureRun kill = runFixture(kill_dir, "fixture_kill_parent", {}, {}, withoutLandlock);
+  EXPECT_EQ(kill.result.exit_code, reference.result.exit_code) << kill.result.err;
+  EXPECT_EQ(kill.summary, reference.summary);
+  EXPECT_TRUE(contains(readFile(kill_dir / "summary.json"), no_rules));
+  std::size_t refused = 0;
+  for (const auto& e : kill.episodes) refused += contains(e.at("message"), "refused by the sandbox: kill") ? 1 : 0;
+  EXPECT_GT(refused, 0u);
+
+  // And with the kernel's Landlock, where it has one, the run names it.
+  if (hasLandlock()) {
+    TempDir with_dir;
+    const FixtureRun with = runFixture(with_dir, "fixture_read_file", env);
+    EXPECT_TRUE(contains(readFile(with_dir / "summary.json"), "seccomp, Landlock ABI "));
+    EXPECT_EQ(with.summary, reference.summary);
   }
 }
 

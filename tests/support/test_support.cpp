@@ -55,12 +55,13 @@ void FixtureCopy::replace(const std::string& name, const std::string& from, cons
 }
 
 CommandResult runCli(const std::vector<std::string>& arguments,
-                     const std::vector<std::string>& environment) {
-  return runProgram(MANIBENCH_TEST_CLI, arguments, environment);
+                     const std::vector<std::string>& environment,
+                     const std::function<void()>& in_child) {
+  return runProgram(MANIBENCH_TEST_CLI, arguments, environment, in_child);
 }
 
 CommandResult runProgram(const std::string& program, const std::vector<std::string>& arguments,
-                         const std::vector<std::string>& environment) {
+                         const std::vector<std::string>& environment, const std::function<void()>& in_child) {
   char out_template[] = "/tmp/manibench_cli_out_XXXXXX";
   char err_template[] = "/tmp/manibench_cli_err_XXXXXX";
   const int out_fd = mkstemp(out_template);
@@ -78,6 +79,7 @@ CommandResult runProgram(const std::string& program, const std::vector<std::stri
     std::vector<std::string> copies = arguments;
     for (std::string& a : copies) argv.push_back(a.data());
     argv.push_back(nullptr);
+    if (in_child) in_child();
     execvp(name.c_str(), argv.data());
     _exit(127);
   }

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -70,11 +71,15 @@ struct CommandResult {
 };
 
 // Runs the built `manibench` CLI with `arguments` (each passed as one word),
-// with extra environment assignments "NAME=value" in `environment`.
+// with extra environment assignments "NAME=value" in `environment`;
+// `in_child` (may be empty) runs in the forked child just before the exec
+// (e.g. to install a seccomp filter that the CLI and its children inherit).
 CommandResult runCli(const std::vector<std::string>& arguments,
-                     const std::vector<std::string>& environment = {});
+                     const std::vector<std::string>& environment = {},
+                     const std::function<void()>& in_child = {});
 // The same for another program (found in PATH when `program` has no slash).
 CommandResult runProgram(const std::string& program, const std::vector<std::string>& arguments,
-                         const std::vector<std::string>& environment = {});
+                         const std::vector<std::string>& environment = {},
+                         const std::function<void()>& in_child = {});
 
 }  // namespace manibench::testing

@@ -44,12 +44,14 @@ struct DemoFileInfo {
 };
 
 // Writes a demonstration file: root attributes, then one group per
-// trajectory, each flushed as it is appended (a run killed keeps every
-// trajectory appended before). close() also writes the JSON sidecar
-// (<file without .h5>.json).
+// trajectory, each flushed as it is appended (a run killed, or a file cut
+// anywhere, keeps every trajectory appended before). close() also writes
+// the JSON sidecar (<file without .h5>.json). `expected_trajectories` sizes
+// the root group's header: a file with more (or more than 60000) still
+// reads whole, but a cut may then lose them all (docs/demonstrations.md).
 class DemoWriter {
  public:
-  DemoWriter(const std::string& path, const DemoFileInfo& info);
+  DemoWriter(const std::string& path, const DemoFileInfo& info, std::size_t expected_trajectories = 0);
   ~DemoWriter();
   DemoWriter(const DemoWriter&) = delete;
   DemoWriter& operator=(const DemoWriter&) = delete;
@@ -66,7 +68,9 @@ class DemoWriter {
 };
 
 // Reads one. A file cut short opens: the trajectories written before the
-// cut read, those after fail with a DemoError naming them.
+// cut read, those after fail with a DemoError naming them and the cut; a
+// file cut before its first trajectory was complete is a DemoError saying
+// where the cut fell.
 class DemoReader {
  public:
   explicit DemoReader(const std::string& path);
@@ -84,6 +88,10 @@ class DemoReader {
   Trajectory readSummary(const std::string& name) const;
   // Bytes the trajectory's datasets take in the file.
   uint64_t calcStorageBytes(const std::string& name) const;
+  // The file's size, and the size its HDF5 superblock records (larger
+  // when the file was cut short or is still being written; 0 if unknown).
+  uint64_t getFileBytes() const;
+  uint64_t getRecordedBytes() const;
 
  private:
   struct Impl;
