@@ -50,6 +50,7 @@ void SacOptions::writeYaml(YAML::Node& node) const {
   node["device"] = device;
   node["checkpoint_every"] = checkpoint_every;
   node["log_every"] = log_every;
+  node["worker_timeout"] = worker_timeout;
   node["command"] = command;
 }
 
@@ -76,6 +77,7 @@ SacOptions SacOptions::readYaml(const YAML::Node& node) {
   o.device = node["device"].as<std::string>();
   o.checkpoint_every = node["checkpoint_every"].as<int64_t>();
   o.log_every = node["log_every"].as<int64_t>();
+  o.worker_timeout = node["worker_timeout"].as<double>(o.worker_timeout);  // absent before it existed
   o.command = node["command"].as<std::string>("");
   return o;
 }
@@ -212,6 +214,7 @@ class SacTrainer {
     workers_ = std::make_unique<EnvironmentWorkers>(
         [&registry, id, env_options] { return std::make_unique<Environment>(registry, id, env_options); },
         options_.workers);
+    workers_->setReplyTimeout(options_.worker_timeout);
     setComputeThreads(options_.threads);
     setFlushDenormals();
     say(describeCompute(calcComputeInfo(), device_));
@@ -278,6 +281,7 @@ class SacTrainer {
     if (o.steps <= 0 || o.replay_size <= 0 || o.checkpoint_every <= 0 || o.log_every <= 0)
       throw LearningError("--steps, --replay-size, --checkpoint-every and --log-every must be positive");
     if (o.workers == 0) throw LearningError("--workers must be at least 1");
+    if (!(o.worker_timeout >= 0)) throw LearningError("--worker-timeout must be at least 0 (0: none)");
     if (o.network.kind != NetKind::Mlp) throw LearningError("SAC trains in the state mode: --net mlp");
   }
 

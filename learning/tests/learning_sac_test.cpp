@@ -1,7 +1,7 @@
 // SAC online (sac_trainer.hpp) on Reach-v0 with real environment workers:
 // the same seed gives the same learning curve, a resumed run continues
 // exactly (the workers' environments restored mid-episode), a worker that
-// dies is reported and replaced, the checkpoint runs in the torch_policy
+// dies or hangs is reported and replaced, the checkpoint runs in the torch_policy
 // plugin through `manibench eval`, and a small agent learns Reach.
 #include <manibench/learning/sac_trainer.hpp>
 
@@ -146,6 +146,41 @@ TEST_F(Sac, ADyingWorkerIsReportedAndReplaced) {
   for (const auto& entry : fs::directory_iterator(path("dying/checkpoints")))
     checkpoints += entry.path().filename().string().rfind("iter_", 0) == 0 ? 1 : 0;
   EXPECT_EQ(checkpoints, 2);  // at 250 (or 251: a dropped step shifts the count) and at the end
+}
+
+// A worker that stops answering (SIGSTOP: as a task stuck in a loop or a
+// system call) is killed after the reply timeout and replaced; the run
+// goes on to its end.
+TEST_F(Sac, AHangingWorkerIsKilledAndReplaced) {
+  SacOptions o = makeOptions("hanging", 300);
+  o.workers = 2;
+  o.worker_timeout = 3;
+  std::vector<std::string> messages;
+  pid_t stopped = 0;
+  std::vector<pid_t> last_pids;
+  SacHooks hooks;
+  hooks.on_message = [&](const std::string& line) { messages.push_back(line); };
+  hooks.on_progress = [&](const SacProgress& p) {
+    last_pids = p.worker_pids;
+    if (stopped == 0 && p.env_steps >= 100) {
+      stopped = p.worker_pids.at(1);
+      ::kill(stopped, SIGSTOP);
+    }
+  };
+  const SacResult r = trainSac(getBuildTreeRegistry(), o, hooks);
+  EXPECT_GE(r.env_steps, 300);
+  ASSERT_NE(stopped, 0);
+  const auto hung = std::find_if(messages.begin(), messages.end(), [&](const std::string& m) {
+    return contains(m, "environment worker 1 (pid " + std::to_string(stopped) + ") did not answer within 3 s; killed it");
+  });
+  ASSERT_NE(hung, messages.end());
+  EXPECT_TRUE(contains(*hung, "is dropped")) << *hung;
+  ASSERT_EQ(last_pids.size(), 2u);
+  EXPECT_NE(last_pids[1], stopped);
+  // Killed, not left stopped: the pid is gone (or, reaped and reused, no longer stopped).
+  std::ifstream stat("/proc/" + std::to_string(stopped) + "/stat");
+  std::string line;
+  if (std::getline(stat, line)) EXPECT_FALSE(contains(line, ") T ")) << line;
 }
 
 TEST_F(Sac, TheTorchPolicyPluginRunsTheAgent) {

@@ -60,6 +60,8 @@ Training:
   --learning-starts N     transitions before the first gradient step (default 1024)
   --seed S                networks, exploration, episodes' seeds (default 0)
   --threads N             libtorch and OpenBLAS threads (default 1)
+  --worker-timeout S      kill and replace a worker silent S seconds on one
+                          request, dropping its episode (default 120; 0: none)
   --device cpu|cuda
 Output:
   --out DIR               the training's directory (must not hold one)
@@ -93,7 +95,7 @@ const std::vector<std::string> kValued = {
     "split", "objects", "config", "set", "controller", "steps", "workers", "replay-size", "batch-size", "lr",
     "gamma", "tau", "target-update-every", "updates-per-step", "hidden", "init-temperature", "target-entropy",
     "random-steps", "learning-starts", "seed", "threads", "device", "out", "checkpoint-every", "log-every",
-    "resume"};
+    "worker-timeout", "resume"};
 const std::vector<std::string> kFlags = {"early-done", "no-early-done", "fixed-temperature", "no-progress"};
 
 SacOptions parseSacOptions(const mb::cli::Arguments& args, const char* usage) {
@@ -138,6 +140,7 @@ SacOptions parseSacOptions(const mb::cli::Arguments& args, const char* usage) {
   if (has("device")) o.device = value("device");
   if (has("checkpoint-every")) o.checkpoint_every = integer("checkpoint-every", 1);
   if (has("log-every")) o.log_every = integer("log-every", 1);
+  if (has("worker-timeout")) o.worker_timeout = number("worker-timeout");
   return o;
 }
 

@@ -62,6 +62,11 @@ struct SacOptions {
   std::string device = "cpu";
   int64_t checkpoint_every = 50000;  // env steps
   int64_t log_every = 2000;          // env steps per log.csv row
+  // A worker silent this long on one request (a task stuck in a loop or a
+  // system call) is killed and replaced, its episode dropped; 0: wait for
+  // ever. A drawer's reset or step takes milliseconds even on the loaded
+  // 2-core machine; the margin is for a machine swapping.
+  double worker_timeout = 120;
   std::string command;
 
   void writeYaml(YAML::Node& node) const;
