@@ -35,7 +35,7 @@ std::size_t calcMinimumDescriptorSize(uint32_t kind) {
   switch (kind) {
     case MB_KIND_TASK: return offsetof(mb_task_descriptor, get_state);
     case MB_KIND_CONTROLLER: return offsetof(mb_controller_descriptor, get_state);
-    case MB_KIND_POLICY: return sizeof(mb_policy_descriptor);
+    case MB_KIND_POLICY: return offsetof(mb_policy_descriptor, reset_episode);
     default: return 0;
   }
 }
