@@ -87,7 +87,7 @@ TEST_F(SacLong, APopulationOfTwoReachObjectsMakesDemonstrationsThatReplayBitForB
   const manibench::testing::CommandResult replay = runCli({"demos", "replay", both, "--check"});
   EXPECT_EQ(replay.exit_code, 0) << replay.out << replay.err;
   const manibench::testing::CommandResult info = runCli({"demos", "info", both});
-  EXPECT_TRUE(contains(info.out, "trajectories   6 of 2 objects")) << info.out;
+  EXPECT_TRUE(contains(info.out, "trajectories   6 of 2 object(s)")) << info.out;
 }
 
 }  // namespace
