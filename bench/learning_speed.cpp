@@ -4,6 +4,10 @@
 // OpenCabinetDrawer-v0's (state 80, agent 51, 1200 points, 3 masks, action
 // 11). bench/learning_speed.py runs it beside the same networks written in
 // python3-torch on the same libtorch (docs/learning.md has the numbers).
+// `--algorithm sac|td3bc|bcq` times those algorithms' gradient steps instead
+// (MLP only), and `--pairs N` alternates N times between the actor step
+// that freezes the critics and the reference that does not, printing each
+// pair (the VM is noisy: only pairs measured side by side compare).
 #include <manibench/learning/algorithms.hpp>
 #include <manibench/learning/compute.hpp>
 
@@ -24,6 +28,8 @@ struct Options {
   int threads = 2;
   double seconds = 20;
   bool definition = false;
+  std::string algorithm = "bc";
+  int pairs = 0;
 };
 
 ml::ObservationSpec makeSpec(bool cloud) {
@@ -54,7 +60,69 @@ ml::ObservationBatch makeBatch(const ml::ObservationSpec& spec, int64_t batch) {
   return b;
 }
 
+ml::TransitionBatch makeTransitions(const ml::ObservationSpec& spec, int64_t batch) {
+  ml::TransitionBatch b;
+  b.obs = makeBatch(spec, batch);
+  b.next_obs = makeBatch(spec, batch);
+  b.actions = torch::rand({batch, int64_t(spec.action_dim)}) * 2 - 1;
+  b.rewards = torch::randn({batch});
+  b.dones = (torch::rand({batch}) < 0.01).to(torch::kFloat32);
+  return b;
+}
+
+// Gradient steps per second of `algorithm` for `seconds` (after two untimed).
+double timeUpdates(ml::Algorithm& algorithm, const ml::TransitionBatch& batch, double seconds) {
+  using clock = std::chrono::steady_clock;
+  for (int i = 0; i < 2; ++i) algorithm.update(batch, i);
+  int64_t iterations = 0;
+  const auto start = clock::now();
+  double elapsed = 0;
+  while (elapsed < seconds || iterations < 3) {
+    algorithm.update(batch, iterations++);
+    elapsed = std::chrono::duration<double>(clock::now() - start).count();
+  }
+  return double(iterations) / elapsed;
+}
+
+// The online and actor-critic algorithms: frozen critics against the reference, in pairs.
+int runActorCritic(const Options& o) {
+  ml::setComputeThreads(o.threads);
+  ml::setFlushDenormals();
+  torch::manual_seed(0);
+  ml::NetOptions net;
+  const ml::ObservationSpec spec = makeSpec(false);
+  ml::AlgorithmOptions options = ml::AlgorithmOptions::makeDefaults(o.algorithm);
+  options.batch_size = o.batch;
+  auto frozen = ml::makeAlgorithm(options, net, spec, torch::kCPU);
+  auto reference = ml::makeAlgorithm(options, net, spec, torch::kCPU);
+  const ml::TransitionBatch batch = makeTransitions(spec, o.batch);
+  double sum_frozen = 0, sum_reference = 0;
+  for (int pair = 0; pair < std::max(o.pairs, 1); ++pair) {
+    ml::setActorStepFreezesCritics(true);
+    const double a = timeUpdates(*frozen, batch, o.seconds);
+    double b = 0;
+    if (o.pairs > 0) {
+      ml::setActorStepFreezesCritics(false);
+      b = timeUpdates(*reference, batch, o.seconds);
+    }
+    sum_frozen += a;
+    sum_reference += b;
+    if (o.pairs > 0)
+      std::printf("pair %d: frozen critics %.3f updates/s, reference %.3f updates/s (x%.3f)\n", pair, a, b, a / b);
+    else
+      std::printf("%s batch %lld threads %d: %.3f updates/s\n", o.algorithm.c_str(), (long long)o.batch, o.threads,
+                  a);
+  }
+  if (o.pairs > 1)
+    std::printf("%s batch %lld threads %d, mean of %d pairs: frozen %.3f, reference %.3f updates/s (x%.3f)\n",
+                o.algorithm.c_str(), (long long)o.batch, o.threads, o.pairs, sum_frozen / o.pairs,
+                sum_reference / o.pairs, sum_frozen / sum_reference);
+  std::fprintf(stderr, "%s\n", ml::describeCompute(ml::calcComputeInfo(), torch::kCPU).c_str());
+  return 0;
+}
+
 int run(const Options& o) {
+  if (o.algorithm != "bc") return runActorCritic(o);
   ml::setComputeThreads(o.threads);
   ml::setPointNetDefinitionMode(o.definition);
   torch::manual_seed(0);
@@ -108,9 +176,13 @@ int main(int argc, char** argv) {
     else if (a == "--threads") o.threads = std::stoi(next());
     else if (a == "--seconds") o.seconds = std::stod(next());
     else if (a == "--definition") o.definition = true;
+    else if (a == "--algorithm") o.algorithm = next();
+    else if (a == "--pairs") o.pairs = std::stoi(next());
     else {
       std::cerr << "usage: manibench_learning_bench [--net mlp|pointnet|pn_transformer] [--batch N] "
-                   "[--threads N] [--seconds S] [--definition]\n";
+                   "[--threads N] [--seconds S] [--definition]\n"
+                   "       manibench_learning_bench --algorithm sac|td3bc|bcq [--batch N] [--threads N] "
+                   "[--seconds S] [--pairs N]\n";
       return 2;
     }
   }

@@ -41,6 +41,8 @@ struct alignas(64) PolicyBlockHeader {
   uint32_t command = 0;
   uint32_t step = 0;
   uint64_t seed = 0;
+  // A reset's task name and object id, one after the other at the data area.
+  uint32_t task_name_size = 0, object_id_size = 0;
   uint32_t mode = 0, mask_count = 0, camera_count = 0, height = 0, width = 0;
   uint64_t counts[kArrays] = {};
   // Written by the policy process (another cache line).
@@ -190,7 +192,12 @@ void assignFrom(std::vector<T>& out, const std::byte* data, uint64_t count) {
     seen = seq;
     try {
       if (header.command == kCommandReset) {
-        policy->reset(header.seed);
+        const std::size_t room = block_bytes - getDataOffset(action_dim);
+        const std::size_t task_size = std::min<std::size_t>(header.task_name_size, room);
+        const std::size_t object_size = std::min<std::size_t>(header.object_id_size, room - task_size);
+        const char* names = reinterpret_cast<const char*>(data);
+        policy->reset(PolicyEpisode{std::string(names, task_size), std::string(names + task_size, object_size),
+                                    header.seed});
       } else {
         // The observation, rebuilt from the block as the worker wrote it.
         std::size_t offset = 0;
@@ -422,12 +429,20 @@ void SandboxedPolicy::call(uint32_t command, double timeout) {
   }
 }
 
-void SandboxedPolicy::reset(uint64_t seed) {
+void SandboxedPolicy::reset(const PolicyEpisode& episode) {
   timespec cpu{};
   clockid_t cpu_clock{};
   if (pid_ > 0 && clock_getcpuclockid(pid_, &cpu_clock) == 0 && clock_gettime(cpu_clock, &cpu) == 0)
     episode_cpu_start_ns_ = int64_t(cpu.tv_sec) * 1000000000LL + cpu.tv_nsec;
-  header_->seed = seed;
+  header_->seed = episode.seed;
+  const std::size_t room = block_bytes_ - getDataOffset(settings_.layout.action_dim);
+  if (episode.task_name.size() + episode.object_id.size() > room)
+    throw EvaluationError("the episode's task name and object id do not fit the policy's block");
+  char* names = reinterpret_cast<char*>(block_ + getDataOffset(settings_.layout.action_dim));
+  std::memcpy(names, episode.task_name.data(), episode.task_name.size());
+  std::memcpy(names + episode.task_name.size(), episode.object_id.data(), episode.object_id.size());
+  header_->task_name_size = uint32_t(episode.task_name.size());
+  header_->object_id_size = uint32_t(episode.object_id.size());
   call(kCommandReset, settings_.call_timeout);
 }
 

@@ -69,7 +69,7 @@ class SandboxedPolicy : public ActingPolicy {
   SandboxedPolicy(const SandboxedPolicy&) = delete;
   SandboxedPolicy& operator=(const SandboxedPolicy&) = delete;
 
-  void reset(uint64_t seed) override;
+  void reset(const PolicyEpisode& episode) override;
   void act(const Eigen::VectorXd& observation, uint32_t step, Eigen::VectorXd& action,
            const VisualObservation& visual) override;
   // Copies what the policy wrote to its stdout and stderr since the last

@@ -11,7 +11,7 @@ EpisodeResult runEpisode(Environment& env, ActingPolicy& policy, const std::stri
   env.reset(object_id, seed);
   if (hooks.on_reset) hooks.on_reset();
   enter(EpisodePhase::PolicyReset, 0);
-  policy.reset(seed);
+  policy.reset(PolicyEpisode{env.getTaskDescription().name, object_id, seed});
   EpisodeResult result;
   result.object_id = object_id;
   result.seed = seed;

@@ -299,8 +299,19 @@ PolicyInstance::~PolicyInstance() {
   if (handle_) descriptor_->destroy(handle_);
 }
 
-void PolicyInstance::reset(uint64_t seed) {
-  callPlugin("policy", name_, "reset", descriptor_->reset, handle_, seed);
+void PolicyInstance::reset(const PolicyEpisode& episode) {
+  // A policy built against ABI 1.0-1.4 ends before reset_episode.
+  if (MB_HAS_FIELD(mb_policy_descriptor, reset_episode, descriptor_->header.struct_size) &&
+      descriptor_->reset_episode) {
+    mb_episode_info info{};
+    info.struct_size = sizeof(info);
+    info.task_name = episode.task_name.c_str();
+    info.object_id = episode.object_id.c_str();
+    info.seed = episode.seed;
+    callPlugin("policy", name_, "reset_episode", descriptor_->reset_episode, handle_, &info);
+    return;
+  }
+  callPlugin("policy", name_, "reset", descriptor_->reset, handle_, episode.seed);
 }
 
 void PolicyInstance::act(const Eigen::VectorXd& observation, uint32_t step,

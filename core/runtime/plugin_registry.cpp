@@ -36,7 +36,7 @@ std::string abiString(unsigned major, unsigned minor) {
 
 // The smallest struct a plugin may hand us for each kind: the size the
 // oldest accepted minor version (kRequiredAbiMinor) defined. ABI 1.2's
-// state functions and 1.4's policy controller are optional: an older
+// state functions, 1.4's policy controller and 1.5's reset_episode are optional: an older
 // plugin ends before them.
 std::size_t calcMinimumDescriptorSize(uint32_t kind) {
   static_assert(kRequiredAbiMinor < 2, "raise the minimum sizes with kRequiredAbiMinor");

@@ -6,6 +6,7 @@
 #include <manibench/sdk.hpp>
 
 #include <cstring>
+#include <map>
 
 namespace manibench::learning {
 
@@ -48,19 +49,46 @@ ObservationBatch makeBatch(const sdk::Observation& o) {
   return b;
 }
 
+InferenceOptions readInferenceOptions(const sdk::Config& config) {
+  InferenceOptions options;
+  options.checkpoint = config.get<std::string>("checkpoint", "");
+  options.torchscript = config.get<std::string>("torchscript", "");
+  options.device = config.get<std::string>("device", "cpu");
+  options.threads = config.get<int>("threads", 1);
+  return options;
+}
+
+// One agent, or a population's (train sac-population's population.yaml:
+// `objects: {ID: {policy_config: ID's policy.yaml, ...}}`), each episode
+// acted by its object's agent, loaded on its object's first episode.
 class TorchPolicy : public sdk::Policy {
  public:
-  TorchPolicy(const sdk::Config& config, const sdk::PolicyContext& context) {
-    config.requireKnownKeys({"checkpoint", "torchscript", "device", "threads"}, "torch_policy");
-    InferenceOptions options;
-    options.checkpoint = config.get<std::string>("checkpoint", "");
-    options.torchscript = config.get<std::string>("torchscript", "");
-    options.device = config.get<std::string>("device", "cpu");
-    options.threads = config.get<int>("threads", 1);
-    policy_ = loadInferencePolicy(options, makeHostSpec(context));
-    action_dim_ = context.action.dim;
+  TorchPolicy(const sdk::Config& config, const sdk::PolicyContext& context) : host_(makeHostSpec(context)) {
+    if (!config.has("objects")) {
+      config.requireKnownKeys({"checkpoint", "torchscript", "device", "threads"}, "torch_policy");
+      own_ = loadInferencePolicy(readInferenceOptions(config), host_);
+      policy_ = own_.get();
+      return;
+    }
+    const YAML::Node objects = config.node()["objects"];
+    if (!objects.IsMap()) throw sdk::Error("torch_policy: the population's objects are not a map", MB_INVALID_ARGUMENT);
+    for (const auto& entry : objects) {
+      const std::string id = entry.first.as<std::string>();
+      const YAML::Node policy_config = entry.second["policy_config"];
+      agent_configs_[id] = policy_config ? policy_config.as<std::string>() : "";
+    }
   }
-  void reset(uint64_t seed) override { policy_->reset(seed); }
+  void reset(uint64_t seed) override {
+    if (!policy_ || !agent_configs_.empty())
+      throw sdk::Error("torch_policy: a population needs each episode's object, which this host does not pass "
+                       "(ABI 1.5's reset_episode)",
+                       MB_UNSUPPORTED);
+    policy_->reset(seed);
+  }
+  void resetEpisode(const sdk::EpisodeInfo& episode) override {
+    if (!agent_configs_.empty()) policy_ = &findAgent(episode.object_id);
+    policy_->reset(episode.seed);
+  }
   Eigen::VectorXd act(const sdk::Observation& o) override {
     const torch::Tensor action = policy_->act(makeBatch(o)).contiguous();
     Eigen::VectorXd out(action.size(0));
@@ -70,8 +98,32 @@ class TorchPolicy : public sdk::Policy {
   }
 
  private:
-  std::unique_ptr<InferencePolicy> policy_;
-  uint32_t action_dim_ = 0;
+  InferencePolicy& findAgent(const std::string& object) {
+    const auto loaded = agents_.find(object);
+    if (loaded != agents_.end()) return *loaded->second;
+    const auto config = agent_configs_.find(object);
+    if (config == agent_configs_.end())
+      throw sdk::Error("torch_policy: object '" + object + "' is not in the population", MB_INVALID_ARGUMENT);
+    if (config->second.empty())
+      throw sdk::Error("torch_policy: object '" + object + "' has no agent yet (its training is pending)",
+                       MB_INVALID_ARGUMENT);
+    YAML::Node node;
+    try {
+      node = YAML::LoadFile(config->second);
+    } catch (const YAML::Exception& e) {
+      throw sdk::Error("torch_policy: object '" + object + "': cannot read " + config->second + ": " + e.what(),
+                       MB_INVALID_ARGUMENT);
+    }
+    const sdk::Config agent(node);
+    agent.requireKnownKeys({"checkpoint", "torchscript", "device", "threads"}, config->second);
+    return *(agents_[object] = loadInferencePolicy(readInferenceOptions(agent), host_));
+  }
+
+  ObservationSpec host_;
+  std::unique_ptr<InferencePolicy> own_;
+  std::map<std::string, std::string> agent_configs_;                     // a population's: object -> policy.yaml
+  std::map<std::string, std::unique_ptr<InferencePolicy>> agents_;  // those loaded
+  InferencePolicy* policy_ = nullptr;                                    // this episode's
 };
 
 }  // namespace

@@ -3,7 +3,8 @@
 //   manibench eval TASK --policy torch_policy --policy-config run/policy.yaml
 // with policy.yaml holding `checkpoint: PATH` or `torchscript: PATH`, and
 // optionally `device: cpu|cuda` and `threads: N` (default 1: the
-// evaluation kit runs one worker per core).
+// evaluation kit runs one worker per core); or a population's
+// population.yaml (train sac-population): each episode's object's agent.
 //
 // Why two libraries: every manibench command loads every plugin of the
 // search path, and loading libtorch takes about a second (1.8 s measured on
@@ -59,6 +60,7 @@ class TorchPolicy : public sdk::Policy {
     if (!impl_) throw sdk::Error(std::string("torch_policy: ") + error, MB_INVALID_ARGUMENT);
   }
   void reset(uint64_t seed) override { impl_->reset(seed); }
+  void resetEpisode(const sdk::EpisodeInfo& episode) override { impl_->resetEpisode(episode); }
   Eigen::VectorXd act(const sdk::Observation& observation) override { return impl_->act(observation); }
 
  private:

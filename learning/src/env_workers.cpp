@@ -5,12 +5,17 @@
 #include <manibench/stopwatch.hpp>
 
 #include <errno.h>
+#include <poll.h>
 #include <signal.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <cstring>
+#include <sstream>
 
 namespace manibench::learning {
 
@@ -73,6 +78,12 @@ class Reader {
   std::size_t position_ = 0;
 };
 
+std::string formatSeconds(double seconds) {
+  std::ostringstream out;
+  out << seconds;
+  return out.str();
+}
+
 bool writeAll(int fd, const void* data, std::size_t size) {
   const auto* p = static_cast<const uint8_t*>(data);
   while (size > 0) {
@@ -83,6 +94,37 @@ bool writeAll(int fd, const void* data, std::size_t size) {
     size -= std::size_t(n);
   }
   return true;
+}
+
+enum class ReadResult { kOk, kClosed, kTimedOut };
+
+// Waits until `fd` is readable or `deadline` (none: Clock's max) passes.
+bool waitReadable(int fd, Clock::time_point deadline) {
+  for (;;) {
+    int timeout_ms = -1;
+    if (deadline != Clock::time_point::max()) {
+      const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
+      if (left <= 0) return false;
+      timeout_ms = int(std::min(std::ceil(left * 1e3), 1e9));
+    }
+    pollfd p{fd, POLLIN, 0};
+    const int n = ::poll(&p, 1, timeout_ms);
+    if (n > 0) return true;  // readable, or closed / failed: read() says which
+    if (n < 0 && errno != EINTR) return true;
+  }
+}
+
+ReadResult readAll(int fd, void* data, std::size_t size, Clock::time_point deadline) {
+  auto* p = static_cast<uint8_t*>(data);
+  while (size > 0) {
+    if (!waitReadable(fd, deadline)) return ReadResult::kTimedOut;
+    const ssize_t n = ::read(fd, p, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return ReadResult::kClosed;
+    p += n;
+    size -= std::size_t(n);
+  }
+  return ReadResult::kOk;
 }
 
 bool readAll(int fd, void* data, std::size_t size) {
@@ -107,6 +149,14 @@ bool readMessage(int fd, std::vector<uint8_t>& message) {
   if (!readAll(fd, &size, sizeof size)) return false;
   message.resize(size);
   return readAll(fd, message.data(), size);
+}
+
+ReadResult readMessage(int fd, std::vector<uint8_t>& message, Clock::time_point deadline) {
+  uint64_t size = 0;
+  const ReadResult r = readAll(fd, &size, sizeof size, deadline);
+  if (r != ReadResult::kOk) return r;
+  message.resize(size);
+  return readAll(fd, message.data(), size, deadline);
 }
 
 // --- the worker process -------------------------------------------------------------------
@@ -305,15 +355,32 @@ void EnvironmentWorkers::sendRestoreState(unsigned worker, const std::vector<uin
   send(worker, w.bytes);
 }
 
+void EnvironmentWorkers::setReplyTimeout(double seconds) {
+  if (!(seconds >= 0)) throw LearningError("the workers' reply timeout must be at least 0 s (0: none)");
+  reply_timeout_ = seconds;
+}
+
 WorkerReply EnvironmentWorkers::receive(unsigned worker) {
   Worker& w = workers_.at(worker);
   std::vector<uint8_t> message;
-  if (w.lost || !readMessage(w.fd, message)) {
+  const Clock::time_point deadline =
+      reply_timeout_ > 0 ? Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                              std::chrono::duration<double>(reply_timeout_))
+                         : Clock::time_point::max();
+  const ReadResult read = w.lost ? ReadResult::kClosed : readMessage(w.fd, message, deadline);
+  if (read != ReadResult::kOk) {
     const pid_t pid = w.pid;
+    // A worker that hangs (a task stuck in a loop or a system call) is
+    // killed: it is alive, so the pid is still its own. One that died is
+    // gone already (the zygote's children are reaped by the kernel).
+    if (read == ReadResult::kTimedOut) ::kill(pid, SIGKILL);
     close(w.fd);
     w = spawn();
-    throw WorkerDied(worker, "environment worker " + std::to_string(worker) + " (pid " + std::to_string(pid) +
-                                 ") died; started pid " + std::to_string(w.pid) + " in its place");
+    const std::string what = read == ReadResult::kTimedOut
+                                 ? ") did not answer within " + formatSeconds(reply_timeout_) + " s; killed it"
+                                 : ") died";
+    throw WorkerDied(worker, "environment worker " + std::to_string(worker) + " (pid " + std::to_string(pid) + what +
+                                 "; started pid " + std::to_string(w.pid) + " in its place");
   }
   Reader r(message);
   WorkerReply reply;

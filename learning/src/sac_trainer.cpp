@@ -50,6 +50,10 @@ void SacOptions::writeYaml(YAML::Node& node) const {
   node["device"] = device;
   node["checkpoint_every"] = checkpoint_every;
   node["log_every"] = log_every;
+  node["worker_timeout"] = worker_timeout;
+  node["eval_every"] = eval_every;
+  node["eval_episodes"] = eval_episodes;
+  node["eval_seed"] = eval_seed;
   node["command"] = command;
 }
 
@@ -76,6 +80,10 @@ SacOptions SacOptions::readYaml(const YAML::Node& node) {
   o.device = node["device"].as<std::string>();
   o.checkpoint_every = node["checkpoint_every"].as<int64_t>();
   o.log_every = node["log_every"].as<int64_t>();
+  o.worker_timeout = node["worker_timeout"].as<double>(o.worker_timeout);  // absent before it existed
+  o.eval_every = node["eval_every"].as<int64_t>(o.eval_every);                // (as these)
+  o.eval_episodes = node["eval_episodes"].as<uint32_t>(o.eval_episodes);
+  o.eval_seed = node["eval_seed"].as<uint64_t>(o.eval_seed);
   o.command = node["command"].as<std::string>("");
   return o;
 }
@@ -212,6 +220,7 @@ class SacTrainer {
     workers_ = std::make_unique<EnvironmentWorkers>(
         [&registry, id, env_options] { return std::make_unique<Environment>(registry, id, env_options); },
         options_.workers);
+    workers_->setReplyTimeout(options_.worker_timeout);
     setComputeThreads(options_.threads);
     setFlushDenormals();
     say(describeCompute(calcComputeInfo(), device_));
@@ -263,6 +272,7 @@ class SacTrainer {
     replay_->load(dir_ / "checkpoints" / replayName(env_steps_));
     restoreWorkers(loaded);
     truncateCsv(dir_ / "log.csv", env_steps_);
+    if (fs::exists(dir_ / "eval.csv")) truncateCsv(dir_ / "eval.csv", env_steps_);
     say("resuming from " + newest + " (" + std::to_string(env_steps_) + " env steps)");
     return run();
   }
@@ -278,7 +288,11 @@ class SacTrainer {
     if (o.steps <= 0 || o.replay_size <= 0 || o.checkpoint_every <= 0 || o.log_every <= 0)
       throw LearningError("--steps, --replay-size, --checkpoint-every and --log-every must be positive");
     if (o.workers == 0) throw LearningError("--workers must be at least 1");
+    if (!(o.worker_timeout >= 0)) throw LearningError("--worker-timeout must be at least 0 (0: none)");
     if (o.network.kind != NetKind::Mlp) throw LearningError("SAC trains in the state mode: --net mlp");
+    if (o.eval_every < 0 || (o.eval_every > 0 && o.eval_episodes == 0))
+      throw LearningError("--eval-every must be at least 0 and --eval-episodes at least 1");
+    if (o.eval_every > 0 && !hooks_.evaluate) throw LearningError("--eval-every: this program cannot evaluate");
   }
 
   EnvironmentOptions makeEnvironmentOptions(const PluginRegistry& registry) const {
@@ -563,6 +577,19 @@ class SacTrainer {
     last_checkpoint_ = path.string();
   }
 
+  // The newest checkpoint's deterministic actor (the workers wait meanwhile).
+  void evaluateNewest() {
+    const fs::path out = dir_ / "eval" / fs::path(checkpointName(env_steps_)).stem();
+    const EvaluationOutcome outcome = hooks_.evaluate(options_, (dir_ / "policy.yaml").string(), out.string());
+    const bool fresh = !fs::exists(dir_ / "eval.csv");
+    std::ofstream csv(dir_ / "eval.csv", std::ios::app);
+    if (fresh) csv << "env_steps,episodes,successes,success_rate\n";
+    csv << env_steps_ << "," << outcome.episodes << "," << outcome.successes << ","
+        << formatNumber(outcome.success_rate) << "\n";
+    say("evaluation at " + std::to_string(env_steps_) + " env steps: success " + formatNumber(outcome.success_rate) +
+        " (" + std::to_string(outcome.successes) + "/" + std::to_string(outcome.episodes) + ")");
+  }
+
   void restoreWorkers(const LoadedCheckpoint& loaded) {
     const torch::Tensor slots = loaded.extras.at("slots");
     if (slots.size(0) != int64_t(workers_->size()))
@@ -606,7 +633,12 @@ class SacTrainer {
       if (hooks_.on_progress) hooks_.on_progress(makeProgress(elapsed, first_steps, first_updates));
       const bool last = env_steps_ >= options_.steps;
       if (env_steps_ / options_.log_every > before / options_.log_every || last) writeLogRow(elapsed);
-      if (env_steps_ / options_.checkpoint_every > before / options_.checkpoint_every || last) saveAll();
+      const bool saved = env_steps_ / options_.checkpoint_every > before / options_.checkpoint_every || last;
+      if (saved) saveAll();
+      if (options_.eval_every > 0 && (env_steps_ / options_.eval_every > before / options_.eval_every || last)) {
+        if (!saved) saveAll();
+        evaluateNewest();
+      }
     }
     if (result.interrupted && env_steps_ > first_steps &&
         !fs::exists(dir_ / "checkpoints" / checkpointName(env_steps_)))

@@ -231,6 +231,37 @@ TEST(LearningAlgorithms, BcFitsAFixedBatch) {
   EXPECT_LT(last, first / 100) << first << " -> " << last;
 }
 
+// Freezing the critics in the actor's step skips work, not math: the same
+// weights, bit for bit, as the step that computes and discards the critics'
+// parameter gradients.
+TEST(LearningAlgorithms, FreezingTheCriticsInTheActorStepChangesNoWeight) {
+  for (const char* name : {"sac", "td3bc", "bcq"}) {
+    SCOPED_TRACE(name);
+    const ObservationSpec spec = makeStateSpec();
+    AlgorithmOptions options = AlgorithmOptions::makeDefaults(name);
+    options.batch_size = 8;
+    options.policy_delay = 1;
+    std::vector<std::vector<torch::Tensor>> weights;
+    for (bool freeze : {true, false}) {
+      setActorStepFreezesCritics(freeze);
+      torch::manual_seed(0);
+      auto algorithm = makeAlgorithm(options, makeNet(NetKind::Mlp), spec, torch::kCPU);
+      const TransitionBatch batch = makeTransitions(8, spec);
+      for (int64_t i = 0; i < 5; ++i) algorithm->update(batch, i);
+      std::vector<torch::Tensor> all;
+      for (const auto& [network_name, network] : algorithm->getNetworks())
+        for (const torch::Tensor& p : network->parameters()) {
+          EXPECT_TRUE(p.requires_grad()) << network_name << " left frozen";
+          all.push_back(p.detach().clone());
+        }
+      weights.push_back(all);
+    }
+    setActorStepFreezesCritics(true);
+    ASSERT_EQ(weights[0].size(), weights[1].size());
+    for (std::size_t i = 0; i < weights[0].size(); ++i) EXPECT_TRUE(torch::equal(weights[0][i], weights[1][i])) << i;
+  }
+}
+
 TEST(LearningCheckpoints, ACheckpointRestoresTheSameActions) {
   const std::string path = (std::filesystem::temp_directory_path() / "manibench_checkpoint_test.pt").string();
   torch::manual_seed(0);

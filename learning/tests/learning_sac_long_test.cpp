@@ -62,7 +62,7 @@ TEST_F(SacLong, SacLearnsReachWithinThirtyFiveThousandSteps) {
 }
 
 // Two Reach objects, one agent each, demonstrations from each object's
-// own agent, replayed bit for bit.
+// own agent (one file per object, and one over both), replayed bit for bit.
 TEST_F(SacLong, APopulationOfTwoReachObjectsMakesDemonstrationsThatReplayBitForBit) {
   std::vector<std::string> command = {"train", "sac-population", "Reach-v0", "--objects", "0,1",
                                       "--out", path("population"), "--demos", "3", "--eval-episodes", "10"};
@@ -77,6 +77,17 @@ TEST_F(SacLong, APopulationOfTwoReachObjectsMakesDemonstrationsThatReplayBitForB
     const manibench::testing::CommandResult info = runCli({"demos", "info", demos});
     EXPECT_TRUE(contains(info.out, "trajectories   3 of 1 object")) << info.out;
   }
+  // One file over both objects, each episode acted by its object's agent
+  // (torch_policy on population.yaml, through ABI 1.5's reset_episode).
+  const std::string both = path("population/both.h5");
+  const manibench::testing::CommandResult generate =
+      runCli({"demos", "generate", "Reach-v0", "--objects", "0,1", "--policy", "torch_policy", "--policy-config",
+              path("population/population.yaml"), "--per-object", "3", "--no-progress", "--out", both});
+  ASSERT_EQ(generate.exit_code, 0) << generate.out << generate.err;
+  const manibench::testing::CommandResult replay = runCli({"demos", "replay", both, "--check"});
+  EXPECT_EQ(replay.exit_code, 0) << replay.out << replay.err;
+  const manibench::testing::CommandResult info = runCli({"demos", "info", both});
+  EXPECT_TRUE(contains(info.out, "trajectories   6 of 2 object(s)")) << info.out;
 }
 
 }  // namespace

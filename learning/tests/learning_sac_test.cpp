@@ -1,7 +1,7 @@
 // SAC online (sac_trainer.hpp) on Reach-v0 with real environment workers:
 // the same seed gives the same learning curve, a resumed run continues
 // exactly (the workers' environments restored mid-episode), a worker that
-// dies is reported and replaced, the checkpoint runs in the torch_policy
+// dies or hangs is reported and replaced, the checkpoint runs in the torch_policy
 // plugin through `manibench eval`, and a small agent learns Reach.
 #include <manibench/learning/sac_trainer.hpp>
 
@@ -69,6 +69,21 @@ std::vector<std::string> readCurve(const std::string& file) {
     for (std::size_t i = 0; i + 6 < cells.size(); ++i)
       if (i != 2) kept += cells[i] + ",";
     rows.push_back(kept);
+  }
+  return rows;
+}
+
+// episodes.csv's rows as object, seed, steps and return, in the file's order.
+std::vector<std::string> readEpisodes(const std::string& file) {
+  std::ifstream in(file);
+  std::vector<std::string> rows;
+  std::string line;
+  std::getline(in, line);  // index,object,level,seed,steps,return,...
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::stringstream s(line);
+    for (std::string cell; std::getline(s, cell, ',');) cells.push_back(cell);
+    if (cells.size() > 5) rows.push_back(cells[1] + "," + cells[3] + "," + cells[4] + "," + cells[5]);
   }
   return rows;
 }
@@ -148,6 +163,43 @@ TEST_F(Sac, ADyingWorkerIsReportedAndReplaced) {
   EXPECT_EQ(checkpoints, 2);  // at 250 (or 251: a dropped step shifts the count) and at the end
 }
 
+// A worker that stops answering (SIGSTOP: as a task stuck in a loop or a
+// system call) is killed after the reply timeout and replaced; the run
+// goes on to its end.
+TEST_F(Sac, AHangingWorkerIsKilledAndReplaced) {
+  SacOptions o = makeOptions("hanging", 300);
+  o.workers = 2;
+  o.worker_timeout = 3;
+  std::vector<std::string> messages;
+  pid_t stopped = 0;
+  std::vector<pid_t> last_pids;
+  SacHooks hooks;
+  hooks.on_message = [&](const std::string& line) { messages.push_back(line); };
+  hooks.on_progress = [&](const SacProgress& p) {
+    last_pids = p.worker_pids;
+    if (stopped == 0 && p.env_steps >= 100) {
+      stopped = p.worker_pids.at(1);
+      ::kill(stopped, SIGSTOP);
+    }
+  };
+  const SacResult r = trainSac(getBuildTreeRegistry(), o, hooks);
+  EXPECT_GE(r.env_steps, 300);
+  ASSERT_NE(stopped, 0);
+  const auto hung = std::find_if(messages.begin(), messages.end(), [&](const std::string& m) {
+    return contains(m, "environment worker 1 (pid " + std::to_string(stopped) + ") did not answer within 3 s; killed it");
+  });
+  ASSERT_NE(hung, messages.end());
+  EXPECT_TRUE(contains(*hung, "is dropped")) << *hung;
+  ASSERT_EQ(last_pids.size(), 2u);
+  EXPECT_NE(last_pids[1], stopped);
+  // Killed, not left stopped: the pid is gone (or, reaped and reused, no longer stopped).
+  std::ifstream stat("/proc/" + std::to_string(stopped) + "/stat");
+  std::string line;
+  if (std::getline(stat, line)) {
+    EXPECT_FALSE(contains(line, ") T ")) << line;
+  }
+}
+
 TEST_F(Sac, TheTorchPolicyPluginRunsTheAgent) {
   const SacResult r = trainSac(getBuildTreeRegistry(), makeOptions("plugin", 200), {});
   const manibench::testing::CommandResult eval =
@@ -156,6 +208,26 @@ TEST_F(Sac, TheTorchPolicyPluginRunsTheAgent) {
   ASSERT_EQ(eval.exit_code, 0) << eval.err;
   EXPECT_TRUE(fs::exists(path("plugin/eval/summary.json")));
   EXPECT_TRUE(contains(r.checkpoint, "iter_0000200.pt"));
+}
+
+// --eval-every: the deterministic actor through `manibench eval` at 100
+// and 200 env steps, one row each in eval.csv.
+TEST_F(Sac, PeriodicEvaluationsGoToEvalCsv) {
+  const manibench::testing::CommandResult r =
+      runCli({"train", "sac", "Reach-v0", "--objects", "0", "--out", path("evaluated"), "--steps", "200",
+              "--workers", "1", "--batch-size", "32", "--hidden", "16", "--random-steps", "100", "--learning-starts",
+              "64", "--eval-every", "100", "--eval-episodes", "2", "--no-progress"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream csv(path("evaluated/eval.csv"));
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(csv, line);) lines.push_back(line);
+  ASSERT_EQ(lines.size(), 3u);
+  EXPECT_EQ(lines[0], "env_steps,episodes,successes,success_rate");
+  EXPECT_EQ(lines[1].rfind("100,2,", 0), 0u) << lines[1];
+  EXPECT_EQ(lines[2].rfind("200,2,", 0), 0u) << lines[2];
+  EXPECT_TRUE(fs::exists(path("evaluated/eval/iter_0000100/summary.json")));
+  EXPECT_TRUE(fs::exists(path("evaluated/checkpoints/iter_0000100.pt")));
+  EXPECT_TRUE(contains(r.err, "evaluation at 200 env steps: success")) << r.err;
 }
 
 // Two Reach objects at a budget no agent succeeds in: each is retrained
@@ -192,6 +264,28 @@ TEST_F(Sac, APopulationTrainsOneAgentPerObjectAndRetrainsThoseBelowTheThreshold)
   ASSERT_EQ(again.exit_code, 0) << again.err;
   EXPECT_TRUE(contains(again.err, "object 0: done before")) << again.err;
   EXPECT_FALSE(contains(again.err, "training (seed")) << again.err;
+
+  // population.yaml as torch_policy's configuration: each episode is acted
+  // by its object's agent (ABI 1.5's reset_episode), so every episode is
+  // the one that object's agent makes alone, not the other agent's.
+  auto evaluate = [&](const std::string& environment, const std::string& objects, const std::string& config,
+                      const std::string& out) {
+    const manibench::testing::CommandResult eval =
+        runCli({"eval", environment, "--split", "train", "--objects", objects, "--policy", "torch_policy",
+                "--policy-config", config,
+                "--episodes-per-object", "2", "--no-progress", "--out", path(out)});
+    EXPECT_EQ(eval.exit_code, 0) << eval.err;
+    return readEpisodes(path(out + "/episodes.csv"));
+  };
+  const auto both = evaluate("Reach-v0", "0,1", path("population/population.yaml"), "population_eval");
+  const auto own0 = evaluate("Reach_0-v0", "0", path("population/objects/0/policy.yaml"), "own0_eval");
+  const auto own1 = evaluate("Reach_1-v0", "1", path("population/objects/1/policy.yaml"), "own1_eval");
+  const auto other0 = evaluate("Reach_0-v0", "0", path("population/objects/1/policy.yaml"), "other0_eval");
+  ASSERT_EQ(both.size(), 4u);
+  std::vector<std::string> expected = own0;
+  expected.insert(expected.end(), own1.begin(), own1.end());
+  EXPECT_EQ(both, expected);
+  EXPECT_NE(own0, other0);
 }
 
 TEST_F(Sac, BadOptionsAreErrorsThatNameThem) {

@@ -60,11 +60,17 @@ Training:
   --learning-starts N     transitions before the first gradient step (default 1024)
   --seed S                networks, exploration, episodes' seeds (default 0)
   --threads N             libtorch and OpenBLAS threads (default 1)
+  --worker-timeout S      kill and replace a worker silent S seconds on one
+                          request, dropping its episode (default 120; 0: none)
   --device cpu|cuda
 Output:
   --out DIR               the training's directory (must not hold one)
   --checkpoint-every N    env steps between checkpoints (default 50000)
   --log-every N           env steps per log.csv row (default 2000)
+  --eval-every N          evaluate the deterministic actor every N env steps
+                          and at the end with `manibench eval` (DIR/eval.csv)
+  --eval-episodes N       per object (default 10)
+  --eval-seed S           the evaluation's base seed (default 1000)
   --no-progress           no progress line (shown only on a terminal)
   --resume DIR            continue the training in DIR from its newest checkpoint
 )";
@@ -97,7 +103,7 @@ const std::vector<std::string> kValued = {
     "split", "objects", "config", "set", "controller", "steps", "workers", "replay-size", "batch-size", "lr",
     "gamma", "tau", "target-update-every", "updates-per-step", "hidden", "init-temperature", "target-entropy",
     "random-steps", "learning-starts", "seed", "threads", "device", "out", "checkpoint-every", "log-every",
-    "resume"};
+    "worker-timeout", "eval-every", "eval-episodes", "eval-seed", "resume"};
 const std::vector<std::string> kFlags = {"early-done", "no-early-done", "fixed-temperature", "no-progress"};
 
 SacOptions parseSacOptions(const mb::cli::Arguments& args, const char* usage) {
@@ -142,6 +148,10 @@ SacOptions parseSacOptions(const mb::cli::Arguments& args, const char* usage) {
   if (has("device")) o.device = value("device");
   if (has("checkpoint-every")) o.checkpoint_every = integer("checkpoint-every", 1);
   if (has("log-every")) o.log_every = integer("log-every", 1);
+  if (has("worker-timeout")) o.worker_timeout = number("worker-timeout");
+  if (has("eval-every")) o.eval_every = integer("eval-every", 0);
+  if (has("eval-episodes")) o.eval_episodes = uint32_t(integer("eval-episodes", 1));
+  if (has("eval-seed")) o.eval_seed = uint64_t(integer("eval-seed", 0));
   return o;
 }
 
@@ -173,6 +183,19 @@ SacHooks makeHooks(bool progress) {
     std::cerr << line << "\n";
   };
   hooks.should_stop = [] { return mb::cli::StopSignals::isRequested(); };
+  // `manibench eval` in its own process, on the training's environment.
+  hooks.evaluate = [](const SacOptions& o, const std::string& policy_config, const std::string& out_dir) {
+    std::vector<std::string> extra = {"--split", o.split, "--episodes-per-object", std::to_string(o.eval_episodes),
+                                      "--seed", std::to_string(o.eval_seed)};
+    if (!o.objects.empty()) {
+      std::string ids;
+      for (const std::string& id : o.objects) ids += (ids.empty() ? "" : ",") + id;
+      extra.insert(extra.end(), {"--objects", ids});
+    }
+    for (const std::string& file : o.config_files) extra.insert(extra.end(), {"--config", file});
+    for (const std::string& set : o.config_sets) extra.insert(extra.end(), {"--set", set});
+    return runPolicyEvaluation(o.environment_id, policy_config, extra, out_dir);
+  };
   auto last_draw = std::make_shared<std::chrono::steady_clock::time_point>(std::chrono::steady_clock::now() -
                                                                          std::chrono::seconds(1));
   hooks.on_progress = [progress, last_draw](const SacProgress& p) {

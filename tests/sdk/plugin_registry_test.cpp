@@ -3,6 +3,7 @@
 // plugins. Every refusal must name the file and the precise values, leave
 // the registry usable, and never let an exception cross the C ABI.
 #include <manibench/abi.h>
+#include <manibench/plugin_instances.hpp>
 #include <manibench/plugin_registry.hpp>
 
 #include <gtest/gtest.h>
@@ -29,6 +30,9 @@ using manibench::PluginEntry;
 using manibench::PluginError;
 using manibench::PluginKind;
 using manibench::PluginRegistry;
+using manibench::PolicyEpisode;
+using manibench::PolicyInstance;
+using manibench::PolicyLayout;
 
 const std::string kFixtureDir = MANIBENCH_TEST_FIXTURE_DIR;
 const std::string kBuildPluginDir = MANIBENCH_TEST_BUILD_PLUGIN_DIR;
@@ -359,6 +363,31 @@ TEST(PluginRegistry, UnreadableDirectoryIsRecordedNotThrown) {
   ASSERT_EQ(registry.getFailures().size(), 1u);
   EXPECT_TRUE(contains(registry.getFailures()[0].message, missing));
   expectStillUsable(registry);
+}
+
+// ABI 1.5: a policy with reset_episode learns its episode's task, object
+// and seed; one built against 1.4 (its descriptor ends before the field)
+// still loads and gets reset with the seed.
+TEST(PluginRegistry, APolicyLearnsItsEpisodeAndAnOlderPolicyGetsReset) {
+  PluginRegistry registry;
+  ASSERT_NO_THROW(registry.loadLibrary(kFixtureDir + "/episode/" + fixtureFile("fixture_episode_policies")));
+  EXPECT_EQ(registry.getLibraries().at(0).abi_minor, MB_ABI_MINOR);
+  EXPECT_EQ(registry.getEntry(PluginKind::Policy, "pre_episode_echo").descriptor->struct_size,
+            offsetof(mb_policy_descriptor, reset_episode));
+  PolicyLayout layout;
+  layout.task_name = "Test-v0";
+  layout.observation_dim = 1;
+  layout.action_dim = 3;
+  const Eigen::VectorXd observation = Eigen::VectorXd::Zero(1);
+  Eigen::VectorXd action;
+  PolicyInstance current(registry, "episode_echo", "", layout);
+  current.reset(PolicyEpisode{"Test-v0", "42", 1007});
+  current.act(observation, 0, action);
+  EXPECT_EQ(action, Eigen::Vector3d(1, 7, 42));
+  PolicyInstance older(registry, "pre_episode_echo", "", layout);
+  older.reset(PolicyEpisode{"Test-v0", "42", 1007});
+  older.act(observation, 0, action);
+  EXPECT_EQ(action, Eigen::Vector3d(0, 7, -1));
 }
 
 TEST(PluginRegistry, NewerMinorIsAcceptedWithItsVersionRecorded) {

@@ -150,7 +150,7 @@ void Session::startEpisode() {
   try {
     env_->reset(object, options_.seed);
     if (recording_) recording_->onReset(object, options_.seed);
-    if (policy_) policy_->reset(options_.seed);
+    if (policy_) policy_->reset(PolicyEpisode{env_->getTaskDescription().name, object, options_.seed});
   } catch (const EpisodeFailure& e) {
     status_ = EpisodeStatus::Failed;
     failure_ = e.what();

@@ -26,8 +26,9 @@
  *  - T build_scene once per scene, before anything else on that scene; the
  *    scene API's add_* and add_to_mask work only then.
  *  - An episode starts with T reset, then C reset, then T observe (the
- *    first observation); then P reset. The scene API's setters work only
- *    in the two resets.
+ *    first observation); then P reset (ABI 1.5: P reset_episode instead,
+ *    where the policy has it). The scene API's setters work only in the
+ *    two resets.
  *  - Each environment step: P act on the last observation; frame_skip times
  *    C compute followed by one control tick of physics; T compute_reward;
  *    T evaluate_success exactly once; T observe. A step never comes before
@@ -57,7 +58,7 @@ extern "C" {
 #endif
 
 #define MB_ABI_MAJOR 1
-#define MB_ABI_MINOR 4
+#define MB_ABI_MINOR 5
 #define MB_ENTRY_POINT_NAME "manibench_plugin_entry"
 
 /* True when `field` of struct type `type` lies within `size` bytes. */
@@ -441,6 +442,17 @@ typedef struct mb_observation {
   const uint8_t* image_masks;
 } mb_observation;
 
+/* ABI 1.5: the episode a policy starts, for reset_episode. A policy made
+ * of one agent per object (supplement C.2's demonstration agents) picks its
+ * agent by object_id. Strings are empty where the host does not know
+ * them; they stay valid during the call only. */
+typedef struct mb_episode_info {
+  uint32_t struct_size;
+  const char* task_name; /* the registered task's, also for a fixed-object id */
+  const char* object_id;
+  uint64_t seed; /* as reset's */
+} mb_episode_info;
+
 typedef struct mb_policy_descriptor {
   mb_descriptor header;
   mb_status (*create)(const char* config_yaml,
@@ -458,6 +470,12 @@ typedef struct mb_policy_descriptor {
    * the policy on it when the user names no controller, and refuses a
    * different one the user names. */
   const char* controller;
+
+  /* ---- ABI 1.5: optional (NULL, or beyond struct_size in an older
+   * plugin: the host calls reset). When set, the host calls it instead of
+   * reset at each episode's start. */
+  mb_status (*reset_episode)(mb_policy* policy, const mb_episode_info* episode,
+                             mb_error* err);
 } mb_policy_descriptor;
 
 #ifdef __cplusplus

@@ -127,13 +127,22 @@ struct PolicyLayout {
   std::vector<sdk::Segment> action_segments;
 };
 
+// The episode a policy starts: ABI 1.5's mb_episode_info (strings empty
+// where the caller does not know them).
+struct PolicyEpisode {
+  std::string task_name;  // the registered task's, also for a fixed-object id
+  std::string object_id;
+  uint64_t seed = 0;
+};
+
 // What runEpisode asks of a policy: a plugin's policy in this process
 // (PolicyInstance), or one run in a sandboxed process of its own (the
 // evaluation kit's, evaluation/policy_process.hpp).
 class ActingPolicy {
  public:
   virtual ~ActingPolicy() = default;
-  virtual void reset(uint64_t seed) = 0;
+  // The policy's reset_episode where it has one (ABI 1.5), else its reset.
+  virtual void reset(const PolicyEpisode& episode) = 0;
   // Writes the raw action; validation is the environment's job.
   virtual void act(const Eigen::VectorXd& observation, uint32_t step, Eigen::VectorXd& action,
                    const VisualObservation& visual) = 0;
@@ -149,7 +158,9 @@ class PolicyInstance : public ActingPolicy {
 
   const std::string& getName() const { return name_; }
   const std::string& getLibraryPath() const { return library_path_; }
-  void reset(uint64_t seed) override;
+  void reset(const PolicyEpisode& episode) override;
+  // An episode of which only the seed is known.
+  void reset(uint64_t seed) { reset(PolicyEpisode{"", "", seed}); }
   // Writes the raw action; validation is the environment's job. `visual`
   // fills the ABI 1.1 fields of its mode (none in State); rgb as bytes
   // reaches the policy as the float32 layout's floats (makeObservationView).

@@ -130,4 +130,10 @@ std::unique_ptr<Algorithm> makeAlgorithm(const AlgorithmOptions& options, const 
 // target <- (1 - tau) target + tau source, parameter by parameter.
 void softUpdate(torch::nn::Module& target, const torch::nn::Module& source, double tau);
 
+// Whether the actor's gradient step freezes the critics it differentiates
+// through (on by default: the critics' parameter gradients were computed
+// and thrown away). Off is the reference the benchmark and the tests compare
+// against; the weights are the same bit for bit either way.
+void setActorStepFreezesCritics(bool on);
+
 }  // namespace manibench::learning

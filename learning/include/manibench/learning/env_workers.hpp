@@ -78,8 +78,11 @@ class EnvironmentWorkers {
   void sendSaveState(unsigned worker);
   void sendRestoreState(unsigned worker, const std::vector<uint8_t>& state);
   // The answer to the oldest request not yet received. Throws WorkerDied
-  // (after starting a replacement) when the worker's process has ended.
+  // (after starting a replacement) when the worker's process has ended, or
+  // when it has not answered within the reply timeout (it is killed first).
   WorkerReply receive(unsigned worker);
+  // How long receive() waits for one answer; 0 (the default): for ever.
+  void setReplyTimeout(double seconds);
 
  private:
   struct Worker {
@@ -90,6 +93,7 @@ class EnvironmentWorkers {
   Worker spawn();
   void send(unsigned worker, const std::vector<uint8_t>& message);
 
+  double reply_timeout_ = 0;
   int zygote_fd_ = -1;
   pid_t zygote_pid_ = 0;
   std::vector<Worker> workers_;

@@ -12,6 +12,8 @@
 //                                  counters and each worker's environment state
 //   DIR/checkpoints/replay_N.pt    the replay buffer of the newest checkpoint only
 //   DIR/policy.yaml                `checkpoint: <the newest>` (--policy-config takes it)
+//   DIR/eval.csv, DIR/eval/iter_N/ with eval_every: env_steps, episodes,
+//                                  successes, success_rate; each evaluation's results
 //
 // The learner acts for all workers at once, sends the actions, takes its
 // gradient steps while they step (from the buffer as it was before their
@@ -24,6 +26,7 @@
 
 #include <manibench/learning/algorithms.hpp>
 #include <manibench/learning/networks.hpp>
+#include <manibench/learning/trainer.hpp>
 
 #include <functional>
 #include <string>
@@ -62,6 +65,17 @@ struct SacOptions {
   std::string device = "cpu";
   int64_t checkpoint_every = 50000;  // env steps
   int64_t log_every = 2000;          // env steps per log.csv row
+  // A worker silent this long on one request (a task stuck in a loop or a
+  // system call) is killed and replaced, its episode dropped; 0: wait for
+  // ever. A drawer's reset or step takes milliseconds even on the loaded
+  // 2-core machine; the margin is for a machine swapping.
+  double worker_timeout = 120;
+  // The deterministic actor's success every eval_every env steps (0: never)
+  // and at the end, through SacHooks::evaluate: eval_episodes per object of
+  // the training, from base seed eval_seed (not demos generate's 0).
+  int64_t eval_every = 0;
+  uint32_t eval_episodes = 10;
+  uint64_t eval_seed = 1000;
   std::string command;
 
   void writeYaml(YAML::Node& node) const;
@@ -79,6 +93,10 @@ struct SacHooks {
   std::function<void(const std::string&)> on_message;     // lines for the user (may be empty)
   std::function<void(const SacProgress&)> on_progress;    // after each round of steps (may be empty)
   std::function<bool()> should_stop;                      // polled every round (may be empty)
+  // Evaluates the policy configuration (DIR/policy.yaml, the newest
+  // checkpoint) into the folder; needed for eval_every (may be empty).
+  std::function<EvaluationOutcome(const SacOptions&, const std::string& policy_config, const std::string& out_dir)>
+      evaluate;
 };
 
 struct SacResult {

@@ -119,10 +119,21 @@ struct Observation {
   }
 };
 
+// The episode a policy starts (ABI 1.5's mb_episode_info); strings empty
+// where the host does not know them.
+struct EpisodeInfo {
+  std::string task_name;
+  std::string object_id;
+  uint64_t seed = 0;
+};
+
 class Policy {
  public:
   virtual ~Policy() = default;
   virtual void reset(uint64_t seed) {}
+  // Called at each episode's start by a 1.5 host instead of reset(seed);
+  // override it to learn the episode's object (one agent per object).
+  virtual void resetEpisode(const EpisodeInfo& episode) { reset(episode.seed); }
   // Returns the action (the controller's action size, see PolicyContext).
   // Values outside [-1, 1] are clipped by the host; NaN, infinity or a wrong
   // size fail the episode with the step and index.
@@ -168,6 +179,18 @@ struct PolicyTrampolines {
   static mb_status reset(mb_policy* p, uint64_t seed, mb_error* err) {
     return guard(err, [&] { asPolicy(p)->reset(seed); });
   }
+  static mb_status resetEpisode(mb_policy* p, const mb_episode_info* episode, mb_error* err) {
+    return guard(err, [&] {
+      if (episode == nullptr) throw Error("no episode", MB_INVALID_ARGUMENT);
+      EpisodeInfo info;
+      if (MB_HAS_FIELD(mb_episode_info, seed, episode->struct_size)) {
+        info.task_name = episode->task_name ? episode->task_name : "";
+        info.object_id = episode->object_id ? episode->object_id : "";
+        info.seed = episode->seed;
+      }
+      asPolicy(p)->resetEpisode(info);
+    });
+  }
   static mb_status act(mb_policy* p, const mb_observation* obs, double* out_action,
                        uint32_t action_dim, mb_error* err) {
     return guard(err, [&] {
@@ -192,6 +215,7 @@ bool registerPolicy(const char* name, const char* summary, const char* controlle
   d->destroy = &PolicyTrampolines<T>::destroy;
   d->reset = &PolicyTrampolines<T>::reset;
   d->act = &PolicyTrampolines<T>::act;
+  d->reset_episode = &PolicyTrampolines<T>::resetEpisode;
   return true;
 }
 
