@@ -68,10 +68,12 @@ echo "installed checks: out-of-tree turntable_family OK"
 
 # 4. The Python package from Debian's interpreter: a cabinet environment
 # resets and steps (its plugins and robot found from the module's place).
+# Under make sanitize the interpreter preloads the ASan runtime
+# (MANIBENCH_PYTHON_PRELOAD, set by tests/CMakeLists.txt; empty otherwise).
 site=$(find "$prefix/lib" -maxdepth 3 -type d -name dist-packages | head -n 1)
 [[ -n "$site" && -f "$site/manibench/__init__.py" ]] || fail "no dist-packages/manibench under $prefix/lib"
 env -u MANIBENCH_PLUGIN_PATH -u MANIBENCH_DATA_DIR HOME="$work" PYTHONPATH="$site" PYTHONDONTWRITEBYTECODE=1 \
-  /usr/bin/python3 - "$prefix" <<'PY' || fail "import manibench from /usr/bin/python3"
+  LD_PRELOAD="${MANIBENCH_PYTHON_PRELOAD:-}" /usr/bin/python3 - "$prefix" <<'PY' || fail "import manibench from /usr/bin/python3"
 import os, sys
 import manibench
 prefix = os.path.realpath(sys.argv[1])
