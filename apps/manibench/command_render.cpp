@@ -26,8 +26,9 @@ namespace {
 
 const char* kRenderUsage = R"(usage: manibench render TASK --out DIR [options]
 
-Resets TASK, renders its cameras (the configuration's `cameras`) and writes
-into DIR, per camera:
+Resets TASK, renders its cameras (the configuration's `cameras`), each at
+its own size (they may differ, in either --obs mode), and writes into DIR,
+per camera:
   CAMERA_color.png        8-bit RGB
   CAMERA_depth.png        16-bit gray: millimetres along the optical axis,
                           0 where nothing was hit
@@ -38,14 +39,16 @@ mask_MASK property per mask):
   pointcloud.ply          the supplement D.1 sample (with --obs pointcloud,
                           exactly the observation the policy gets)
 With --video, also runs one episode of --policy and records it from a
-third-person camera to an MP4 file (needs the `ffmpeg` program).
+third-person camera to an MP4 file (needs the `ffmpeg` program); the policy
+observes the --obs mode, so with rgbd its cameras must be of one size.
 
 Options:
   --out DIR               output folder (created if missing)
   --seed S                episode seed (default 0)
   --object ID             object id (default: drawn from the split by the seed)
   --split train|test      split to draw the object from (default train)
-  --obs pointcloud|rgbd   observation mode of the environment (default rgbd)
+  --obs pointcloud|rgbd   what the --video policy observes; pointcloud also
+                          makes pointcloud.ply that observation (default rgbd)
   --video FILE.mp4        record an episode (needs --policy)
   --policy NAME|PATH.so   policy acting in the recorded episode
   --video-size WxH        video frame size (default 640x480)
@@ -120,9 +123,19 @@ int commandRender(int argc, char** argv) {
     throw UsageError("--video needs --policy NAME", kRenderUsage);
   const auto [video_width, video_height] = parseVideoSize(args, kRenderUsage);
 
+  // The environment's own observation mode: the files come from
+  // renderCameras() (each camera at its own size) and fusePointCloud(), so
+  // only pointcloud.ply of --obs pointcloud (the observation itself) and a
+  // --video episode (its policy sees MODE) need MODE's observation. Else
+  // the environment observes the state: rgbd's stacking, which needs
+  // cameras of one size, is not built for images it would not give out,
+  // and nothing is rendered twice.
+  const ObservationMode env_mode =
+      mode == ObservationMode::PointCloud || !video.empty() ? mode : ObservationMode::State;
+
   PluginRegistry registry;
   loadPlugins(registry);
-  const ConfigSources sources = getConfigSources(args, mode);
+  const ConfigSources sources = getConfigSources(args, env_mode);
   const std::unique_ptr<Environment> env =
       makeEnvironment(registry, args.positional[0], sources, /*stop_on_success=*/true);
   const std::string object = args.options.count("object")
@@ -134,8 +147,8 @@ int commandRender(int argc, char** argv) {
   std::error_code error;
   std::filesystem::create_directories(dir, error);
   if (error) throw std::runtime_error("cannot create " + dir.string() + ": " + error.message());
-  // The observation already rendered every camera; this renders them again
-  // at the same state (same images) and hands them out.
+  // Renders every camera at the reset state (in pointcloud mode the
+  // observation already did, with the same images) and hands them out.
   VisualObserver& observer = env->updObserver();
   const std::vector<CameraImages>& images = observer.renderCameras();
   for (const CameraImages& image : images) writeCamera(dir, image, *env);

@@ -4,9 +4,13 @@
 //   MANIBENCH_LONG_TESTS=1 ctest -R SacLong --output-on-failure
 //
 // Budget (docs/learning.md): on Reach arm 0 a 2 x 64 SAC with batch 256
-// and one worker measured 0.70 / 0.65 / 0.80 / 0.85 / 0.95 / 0.90 success
-// (deterministic actor, 20 episodes) at 15k / 20k / 25k / 30k / 35k / 40k
-// env steps; the test asks >= 0.9 at 35k (3-4 minutes on the loaded VM).
+// and one worker measured, with Reach's former std::mt19937_64 resets,
+// 0.70 / 0.65 / 0.80 / 0.85 / 0.95 / 0.90 success (deterministic actor, 20
+// episodes) at 15k / 20k / 25k / 30k / 35k / 40k env steps. With
+// sdk::Random's resets, at 35k: 0.75 / 0.95 / 0.70 for training seeds
+// 0 / 1 / 2; the random policy scores 0. So the test asks >= 0.6 at 35k
+// (seed 0): learning, with room for the seeds' spread, not one lucky draw
+// (3-4 minutes on the loaded VM).
 #include <test_support.hpp>
 
 #include <gtest/gtest.h>
@@ -58,7 +62,7 @@ TEST_F(SacLong, SacLearnsReachWithinThirtyFiveThousandSteps) {
       runCli({"eval", "Reach_0-v0", "--policy", "torch_policy", "--policy-config", path("reach/policy.yaml"),
               "--episodes-per-object", "20", "--workers", "2", "--no-progress", "--out", path("reach/eval")});
   ASSERT_EQ(eval.exit_code, 0) << eval.err;
-  EXPECT_GE(readSuccessRate(path("reach/eval/summary.json")), 0.9);
+  EXPECT_GE(readSuccessRate(path("reach/eval/summary.json")), 0.6);
 }
 
 // Two Reach objects, one agent each, demonstrations from each object's

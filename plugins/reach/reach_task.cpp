@@ -1,7 +1,6 @@
 #include "reach.hpp"
 
 #include <cmath>
-#include <random>
 #include <sstream>
 
 namespace reach {
@@ -122,15 +121,19 @@ void ReachTask::buildScene(SceneView& scene, const std::string& object_id) {
 }
 
 void ReachTask::reset(SceneView& scene, uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  // sdk::Random, not std::mt19937_64 with a std::uniform_real_distribution
+  // (whose output the standard leaves to the library): the same seed gives
+  // the same episode with libstdc++ and libc++.
+  sdk::Random rng(seed);
   const double l1 = geometry_.upper_length, l2 = geometry_.fore_length;
   // A target the arm can reach without touching its joint limits.
-  const double radius = std::abs(l1 - l2) + 0.2 + unit(rng) * (l1 + l2 - 0.05 - std::abs(l1 - l2) - 0.2);
-  const double angle = -0.5 + unit(rng) * 2.0;  // below and in front of the shoulder
+  const double radius = rng.uniform(std::abs(l1 - l2) + 0.2, l1 + l2 - 0.05);
+  const double angle = rng.uniform(-0.5, 1.5);  // below and in front of the shoulder
   target_ = kShoulder + Eigen::Vector3d(radius * std::cos(angle), 0.0, -radius * std::sin(angle));
+  const double shoulder = rng.uniform(-0.3, 0.3);
+  const double elbow = rng.uniform(-0.3, 0.3);
   Eigen::VectorXd q(2);
-  q << -0.3 + 0.6 * unit(rng), -0.3 + 0.6 * unit(rng);
+  q << shoulder, elbow;
   scene.setJointPositions(robot_, q);
   scene.setJointVelocities(robot_, Eigen::VectorXd::Zero(2));
 }
