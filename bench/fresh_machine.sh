@@ -4,12 +4,14 @@
 # cores, so the apt part is measured too (issue 29's target: 4 min 30 s).
 # The clone is from REPO's committed HEAD; ccache is not installed there.
 # Needs root and debootstrap (`apt install debootstrap`; a measuring tool,
-# not a dependency of the project). The root is kept: a second run reuses
-# the base system but starts from a new clone and a new package state only
-# if you delete ROOT first, so delete it for a fresh measurement.
-#   bench/fresh_machine.sh ROOT [REPO]      (REPO: default this checkout)
+# not a dependency of the project). The root is kept, packages included:
+# delete ROOT before a run for a fresh measurement. With --and-test, then
+# times `make test` in the same clone (the README's second command).
+#   bench/fresh_machine.sh [--and-test] ROOT [REPO]   (REPO: this checkout)
 set -euo pipefail
-root=${1:?usage: bench/fresh_machine.sh ROOT [REPO]}
+and_test=0
+if [[ ${1:-} == --and-test ]]; then and_test=1; shift; fi
+root=${1:?usage: bench/fresh_machine.sh [--and-test] ROOT [REPO]}
 repo=$(realpath "${2:-$(dirname "$0")/..}")
 mirror=${MIRROR:-http://deb.debian.org/debian}
 
@@ -23,8 +25,8 @@ git clone -q --no-local "$repo" "$root/root/manibench"
 
 # A private mount namespace whose root IS the new root (pivot_root, not
 # chroot), so that nothing mounted here outlives the run.
-unshare --mount --fork bash -euo pipefail -s "$root" <<'EOF'
-root=$1
+unshare --mount --fork bash -euo pipefail -s "$root" "$and_test" <<'EOF'
+root=$1 and_test=$2
 mount --make-rprivate /
 mount --bind "$root" "$root"
 mount -t proc proc "$root/proc"
@@ -47,5 +49,14 @@ tail -4 /root/make-demo.log
 echo "make demo on a fresh Debian 12 root: $((t2 - t0)) s in all:" \
      "$((t1 - t0)) s of apt (scripts/install-deps --demo, which make demo runs first)," \
      "$((t2 - t1)) s of configure, build and demo"
+if ((and_test)); then
+  scripts/install-deps >/root/install-deps-test.log 2>&1 || { tail -30 /root/install-deps-test.log; exit 1; }
+  t3=$(date +%s)
+  make test >/root/make-test.log 2>&1 || { tail -60 /root/make-test.log; exit 1; }
+  t4=$(date +%s)
+  grep -E "tests passed|Total Test time" /root/make-test.log
+  echo "then make test: $((t4 - t2)) s in all: $((t3 - t2)) s of apt (scripts/install-deps)," \
+       "$((t4 - t3)) s of configure, build and ctest"
+fi
 echo "load after: $(cut -d' ' -f1-3 /proc/loadavg)"
 EOF
