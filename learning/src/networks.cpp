@@ -118,6 +118,20 @@ void initLinear(torch::nn::Linear& linear) {
   torch::nn::init::zeros_(linear->bias);
 }
 
+// at::linear, not torch::nn::Linear::forward: libtorch 1.13's C++ module
+// (torch/nn/functional/linear.h) runs an input of 3 or more dimensions as a
+// matmul and then a separate bias add (and backward as mm plus a reduction),
+// where at::linear folds it into one addmm, as python3-torch's nn.Linear
+// does. A 2-D input gives the same addmm either way, so the state MLPs are
+// unchanged bit for bit. PointNet training at batch 128 on 2 threads (the
+// per-point layers take [B, N, F]) went from 0.94x python3-torch to
+// 0.98-1.00x, PointNet + Transformer from 1.97x to 2.12x
+// (bench/learning_speed.py, quiet VM, 2026-11-27; profiled: mm + add where
+// python3-torch ran addmm).
+torch::Tensor applyLinear(const torch::nn::Linear& linear, const torch::Tensor& x) {
+  return torch::linear(x, linear->weight, linear->bias);
+}
+
 std::vector<int64_t> append(std::vector<int64_t> layers, int64_t last) {
   layers.push_back(last);
   return layers;
@@ -138,7 +152,7 @@ MlpImpl::MlpImpl(int64_t input, const std::vector<int64_t>& layers, bool activat
 
 torch::Tensor MlpImpl::forward(torch::Tensor x) {
   for (std::size_t i = 0; i < linears_.size(); ++i) {
-    x = linears_[i]->forward(x);
+    x = applyLinear(linears_[i], x);
     if (i + 1 < linears_.size() || activate_last_) x = torch::relu(x);
   }
   return x;
@@ -148,11 +162,11 @@ torch::Tensor MlpImpl::forwardSplitFirst(const torch::Tensor& a, const torch::Te
   const torch::nn::Linear& first = linears_.front();
   const int64_t width_a = a.size(-1);
   const torch::Tensor& w = first->weight;  // [H, A + B]
-  torch::Tensor x = torch::nn::functional::linear(a, w.slice(1, 0, width_a), first->bias) +
+  torch::Tensor x = torch::linear(a, w.slice(1, 0, width_a), first->bias) +
                     torch::matmul(b, w.slice(1, width_a).t());
   if (linears_.size() > 1 || activate_last_) x = torch::relu(x);
   for (std::size_t i = 1; i < linears_.size(); ++i) {
-    x = linears_[i]->forward(x);
+    x = applyLinear(linears_[i], x);
     if (i + 1 < linears_.size() || activate_last_) x = torch::relu(x);
   }
   return x;
@@ -312,12 +326,12 @@ class SelfAttentionImpl : public torch::nn::Module {
   torch::Tensor forward(const torch::Tensor& x, const torch::Tensor& mask) {
     const int64_t b = x.size(0), t = x.size(1);
     auto split = [&](const torch::Tensor& y) { return y.view({b, t, heads_, head_dim_}).transpose(1, 2); };
-    const torch::Tensor q = split(q_->forward(x)), k = split(k_->forward(x)), v = split(v_->forward(x));
+    const torch::Tensor q = split(applyLinear(q_, x)), k = split(applyLinear(k_, x)), v = split(applyLinear(v_, x));
     torch::Tensor scores = torch::matmul(q, k.transpose(-2, -1)) / std::sqrt(double(head_dim_));
     scores = scores.masked_fill(mask.unsqueeze(1) == 0, -std::numeric_limits<float>::infinity());
     const torch::Tensor attention = dropout_->forward(torch::softmax(scores, -1));
     const torch::Tensor o = torch::matmul(attention, v).transpose(1, 2).reshape({b, t, heads_ * head_dim_});
-    return out_->forward(o);
+    return applyLinear(out_, o);
   }
 
  private:
@@ -366,12 +380,12 @@ class AttentionPoolingImpl : public torch::nn::Module {
   }
   torch::Tensor forward(const torch::Tensor& x, const torch::Tensor& mask) {
     const int64_t b = x.size(0), t = x.size(1);
-    const torch::Tensor k = k_->forward(x).view({b, t, heads_, head_dim_});
-    const torch::Tensor v = v_->forward(x).view({b, t, heads_, head_dim_});
+    const torch::Tensor k = applyLinear(k_, x).view({b, t, heads_, head_dim_});
+    const torch::Tensor v = applyLinear(v_, x).view({b, t, heads_, head_dim_});
     torch::Tensor scores = (k * query_).sum(-1) / std::sqrt(double(head_dim_));  // [B, T, H]
     scores = scores.masked_fill(mask.unsqueeze(-1) == 0, -std::numeric_limits<float>::infinity());
     const torch::Tensor weights = torch::softmax(scores, 1).unsqueeze(-1);  // [B, T, H, 1]
-    return out_->forward((weights * v).sum(1).reshape({b, heads_ * head_dim_}));
+    return applyLinear(out_, (weights * v).sum(1).reshape({b, heads_ * head_dim_}));
   }
 
  private:
