@@ -172,6 +172,17 @@ void applyPolicyController(const mb::PluginRegistry& registry, const std::string
   }
   for (const std::string& set : sources.overrides)
     if (set.rfind("control.controller=", 0) == 0) return;  // the user's --set decides
+  // The policy's controller goes in as an override, above every --config
+  // file: a file naming another one would be overridden without a word.
+  for (const std::string& file : sources.files) {
+    const mb::ConfigNode layer = mb::loadConfigFile(file);
+    const mb::ConfigNode* named = layer.findPath("control.controller");
+    if (named != nullptr && named->isScalar() && named->scalar != wanted)
+      throw UsageError(named->origin.describe() + ": control.controller is " + named->scalar + ", but --policy " +
+                           policy + " drives the " + wanted + " controller (remove the key, or set it to " + wanted +
+                           ")",
+                       usage);
+  }
   sources.overrides.insert(sources.overrides.begin(), "control.controller=" + wanted);
 }
 

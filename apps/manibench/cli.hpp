@@ -97,8 +97,9 @@ void printSegments(const std::vector<mb::sdk::Segment>& segments);
 std::string readPolicyConfig(const Arguments& args);
 // The controller `policy` names (ABI 1.4's mb_policy_descriptor.controller)
 // becomes the first --set control.controller=NAME, unless --controller or a
-// --set of that key is given; a --controller other than the policy's is a
-// UsageError naming both. Nothing for a policy that names none.
+// --set of that key is given; a --controller, or a --config file's
+// control.controller, other than the policy's is a UsageError naming both
+// (and the file:line). Nothing for a policy that names none.
 void applyPolicyController(const mb::PluginRegistry& registry, const std::string& policy, const Arguments& args,
                            mb::ConfigSources& sources, const char* usage);
 // --video-size WxH (even, 16 to 8192), default 640x480; a UsageError with

@@ -58,5 +58,22 @@ TEST(RunVideo, ConflictingControllerIsRefusedNamingBoth) {
       << r.err;
 }
 
+TEST(RunVideo, AConfigFileNamingAnotherControllerIsRefusedNamingTheFileLine) {
+  const std::filesystem::path dir = std::filesystem::path(MANIBENCH_TEST_BINARY_DIR) / "run_controller_file_test";
+  std::filesystem::create_directories(dir);
+  const std::string config = (dir / "other_controller.yaml").string();
+  std::FILE* file = std::fopen(config.c_str(), "w");
+  ASSERT_NE(file, nullptr);
+  std::fputs("control:\n  frequency: 20\n  controller: mobile_panda\n", file);
+  std::fclose(file);
+  const testing::CommandResult r =
+      testing::runCli({"run", "PushChair-v0", "--policy", "push_chair_expert", "--config", config});
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find(config + ":3: control.controller is mobile_panda, but --policy push_chair_expert drives the "
+                                "mobile_panda_ee controller"),
+            std::string::npos)
+      << r.err;
+}
+
 }  // namespace
 }  // namespace manibench
