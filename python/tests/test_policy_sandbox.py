@@ -119,6 +119,13 @@ def has_landlock():
     return libc.syscall(444, None, 0, 1) > 0  # landlock_create_ruleset(VERSION)
 
 
+# Allocating and zeroing 1 GiB costs the policy 0.42 s of CPU time here idle
+# (0.48 s with ASan preloaded), and more than 1 s on CI's loaded 2-core
+# machine under make sanitize (session 14): the allocating policy gets a CPU
+# limit it cannot reach first, so that its memory limit is what stops it.
+CPU_LIMIT_S = {"allocate": 60}
+
+
 def evaluate(folder, behavior, secret, escape, tag):
     (folder / "policy").mkdir(parents=True)
     policy = folder / "policy" / "solution.py"
@@ -127,7 +134,7 @@ def evaluate(folder, behavior, secret, escape, tag):
     env = dict(os.environ, MANIBENCH_SANDBOX_TEST_TAG=tag)
     run = subprocess.run([BINARY, "eval", "Reach-v0", "--policy", str(policy), "--objects", "8,10",
                           "--levels", "0-3", "--workers", "2", "--no-progress", "--out", str(out),
-                          "--policy-cpu-limit", "1", "--policy-memory-limit", "1024",
+                          "--policy-cpu-limit", str(CPU_LIMIT_S.get(behavior, 1)), "--policy-memory-limit", "1024",
                           "--policy-output-limit", "1", "--step-timeout", "120"],
                          capture_output=True, text=True, env=env)
     with open(out / "episodes.csv", newline="") as f:
