@@ -10,7 +10,14 @@ way, as ManiSkill-Learn writes them (every PointNet sees every point, the
 state concatenated to each point): the same parameters, the same outputs
 up to rounding. `--definition` runs the C++ side that way too.
 
+`sac:BATCH` in --nets times SAC's gradient step instead (learning/src/
+algorithms.cpp, class Sac, on Table 6's 3 x 256 MLPs and a state of 80):
+the C++ side is `manibench_learning_bench --algorithm sac`, the twin the
+same update written the usual PyTorch way (critics frozen while the actor
+steps, as the C++ does).
+
   python3 bench/learning_speed.py --cxx build/bin/manibench_learning_bench
+  python3 bench/learning_speed.py --nets sac:1024 --threads 1
 """
 import argparse
 import os
@@ -32,6 +39,17 @@ def parse():
     p.add_argument("--net", help=argparse.SUPPRESS)
     p.add_argument("--batch", type=int, help=argparse.SUPPRESS)
     return p.parse_args()
+
+
+def time_calls(update, seconds):
+    """(calls, seconds) of `update` for `seconds`, at least 3, after two untimed."""
+    for _ in range(2):
+        update()
+    iterations, start = 0, time.perf_counter()
+    while time.perf_counter() - start < seconds or iterations < 3:
+        update()
+        iterations += 1
+    return iterations, time.perf_counter() - start
 
 
 def run_python(net, batch, threads, seconds):
@@ -204,13 +222,7 @@ def run_python(net, batch, threads, seconds):
         optimizer.step()
         return loss.item()
 
-    for _ in range(2):
-        update()
-    iterations, start = 0, time.perf_counter()
-    while time.perf_counter() - start < seconds or iterations < 3:
-        update()
-        iterations += 1
-    elapsed = time.perf_counter() - start
+    iterations, elapsed = time_calls(update, seconds)
     one = make_batch(cloud, 1)
     model.eval()
     with torch.no_grad():
@@ -227,22 +239,117 @@ def run_python(net, batch, threads, seconds):
           f"{parameters} parameters")
 
 
+def run_python_sac(batch, threads, seconds):
+    """SAC's update (learning/src/algorithms.cpp, Sac::update) in PyTorch."""
+    import math
+    import torch
+    from torch import nn
+    torch.set_num_threads(threads)
+    torch.manual_seed(0)
+    state_dim, action_dim = 80, 11
+
+    def mlp(i, out):
+        layers = []
+        for o in (256, 256, 256):
+            layer = nn.Linear(i, o)
+            nn.init.xavier_uniform_(layer.weight)
+            nn.init.zeros_(layer.bias)
+            layers += [layer, nn.ReLU()]
+            i = o
+        last = nn.Linear(i, out)
+        nn.init.xavier_uniform_(last.weight)
+        nn.init.zeros_(last.bias)
+        return nn.Sequential(*layers, last)
+
+    class Net(nn.Module):
+        # The C++ networks normalize the state with stored buffers first.
+        def __init__(self, extra, out):
+            super().__init__()
+            self.register_buffer("mean", torch.zeros(state_dim))
+            self.register_buffer("scale", torch.ones(state_dim))
+            self.mlp = mlp(state_dim + extra, out)
+
+        def forward(self, state, extra=None):
+            s = (state - self.mean) * self.scale
+            return self.mlp(s if extra is None else torch.cat([s, extra], 1))
+
+    actor = Net(0, 2 * action_dim)
+    critics = [Net(action_dim, 1), Net(action_dim, 1)]
+    targets = [Net(action_dim, 1), Net(action_dim, 1)]
+    for t, c in zip(targets, critics):
+        t.load_state_dict(c.state_dict())
+    actor_opt = torch.optim.Adam(actor.parameters(), lr=3e-4)
+    critic_opt = torch.optim.Adam([p for c in critics for p in c.parameters()], lr=3e-4)
+    log_temperature = torch.full((1,), math.log(0.2), requires_grad=True)
+    temperature_opt = torch.optim.Adam([log_temperature], lr=3e-4)
+    target_entropy = -1.0 * action_dim
+
+    obs, next_obs = torch.randn(batch, state_dim), torch.randn(batch, state_dim)
+    actions = torch.rand(batch, action_dim) * 2 - 1
+    rewards, dones = torch.randn(batch), (torch.rand(batch) < 0.01).float()
+
+    def sample(state):
+        out = actor(state)
+        mean, log_std = out[:, :action_dim], out[:, action_dim:].clamp(-20, 2)
+        noise = torch.randn_like(mean)
+        u = mean + log_std.exp() * noise
+        log_prob = (-0.5 * noise.pow(2) - log_std - 0.5 * math.log(2 * math.pi)).sum(1) - \
+            (2 * (math.log(2.0) - u - nn.functional.softplus(-2 * u))).sum(1)
+        return torch.tanh(u), log_prob
+
+    def step(optimizer, loss):
+        optimizer.zero_grad()
+        loss.backward()
+        optimizer.step()
+
+    def update():
+        for net in [actor] + critics + targets:
+            net.train()
+        temperature = log_temperature.exp().detach()
+        with torch.no_grad():
+            next_action, next_log_prob = sample(next_obs)
+            q_next = torch.min(targets[0](next_obs, next_action), targets[1](next_obs, next_action)).squeeze(1)
+            target = rewards + 0.95 * (1 - dones) * (q_next - temperature * next_log_prob)
+        critic_loss = sum(nn.functional.mse_loss(c(obs, actions).squeeze(1), target) for c in critics)
+        step(critic_opt, critic_loss)
+        for c in critics:
+            c.requires_grad_(False)
+        action, log_prob = sample(obs)
+        q = torch.min(critics[0](obs, action), critics[1](obs, action)).squeeze(1)
+        actor_loss = (temperature * log_prob - q).mean()
+        step(actor_opt, actor_loss)
+        for c in critics:
+            c.requires_grad_(True)
+        step(temperature_opt, -(log_temperature * (log_prob.detach() + target_entropy)).mean())
+        with torch.no_grad():
+            for t, c in zip(targets, critics):
+                for pt, pc in zip(t.parameters(), c.parameters()):
+                    pt.mul_(1 - 0.005).add_(pc, alpha=0.005)
+        return [critic_loss.item(), actor_loss.item(), temperature.item(), -log_prob.mean().item(), q.mean().item()]
+
+    iterations, elapsed = time_calls(update, seconds)
+    print(f"python3-torch sac batch {batch} threads {threads}: {iterations / elapsed:.3f} updates/s")
+
+
 def measure(command, env):
     done = subprocess.run(command, env=env, capture_output=True, text=True)
     if done.returncode != 0:
         # A failed side names itself and its own error (e.g. a python3 without
         # torch: Debian's python3-torch is /usr/bin/python3's).
         sys.exit(f"learning_speed.py: {' '.join(command)} failed ({done.returncode}):\n{done.stderr.strip()}")
-    out = done.stdout.strip()
-    rate = float(out.split(": ")[1].split(" it/s")[0])
-    act = float(out.split("act ")[1].split(" ms")[0])
+    out = done.stdout.strip().splitlines()[-1]
+    rate = float(out.split(": ")[1].split(" ")[0])
+    act = float(out.split("act ")[1].split(" ms")[0]) if "act " in out else float("nan")
     return rate, act, out
 
 
 def main():
     args = parse()
     if args.python_only:
-        run_python(args.net, args.batch, args.threads, args.seconds)
+        if args.net == "sac":
+            run_python_sac(args.batch, args.threads, args.seconds)
+        else:
+            run_python(args.net, args.batch, args.threads, args.seconds)
         return
     env = dict(os.environ, OPENBLAS_NUM_THREADS=str(args.threads), OMP_NUM_THREADS=str(args.threads))
     rows = []
@@ -250,6 +357,9 @@ def main():
         net, batch = spec.split(":")
         cxx = [args.cxx, "--net", net, "--batch", batch, "--threads", str(args.threads),
                "--seconds", str(args.seconds)] + (["--definition"] if args.definition else [])
+        if net == "sac":
+            cxx = [args.cxx, "--algorithm", "sac", "--batch", batch, "--threads", str(args.threads),
+                   "--seconds", str(args.seconds), "--pairs", "0"]
         py = [sys.executable, __file__, "--python-only", "--net", net, "--batch", batch,
               "--threads", str(args.threads), "--seconds", str(args.seconds)]
         results = {"manibench": [], "python3-torch": []}
