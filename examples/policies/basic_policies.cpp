@@ -1,8 +1,9 @@
 // Baseline policies for any task: `random` (uniform actions in [-1, 1],
 // reproducible from the episode seed) and `zero` (always the zero action).
+// The random actions come from sdk::Random, not a std:: distribution, whose
+// output the standard leaves to each library: the same seed gives the same
+// actions with every compiler.
 #include <manibench/sdk.hpp>
-
-#include <random>
 
 namespace {
 
@@ -12,17 +13,16 @@ using manibench::sdk::PolicyContext;
 class RandomPolicy : public manibench::sdk::Policy {
  public:
   explicit RandomPolicy(const PolicyContext& context) : action_dim_(context.action.dim) {}
-  void reset(uint64_t seed) override { rng_.seed(seed); }
+  void reset(uint64_t seed) override { random_ = manibench::sdk::Random(seed); }
   Eigen::VectorXd act(const Observation&) override {
-    std::uniform_real_distribution<double> uniform(-1.0, 1.0);
     Eigen::VectorXd action(action_dim_);
-    for (Eigen::Index i = 0; i < action.size(); ++i) action[i] = uniform(rng_);
+    for (Eigen::Index i = 0; i < action.size(); ++i) action[i] = random_.uniform(-1.0, 1.0);
     return action;
   }
 
  private:
   Eigen::Index action_dim_;
-  std::mt19937_64 rng_{0};
+  manibench::sdk::Random random_{0};
 };
 
 class ZeroPolicy : public manibench::sdk::Policy {
