@@ -52,12 +52,13 @@ def time_calls(update, seconds):
     return iterations, time.perf_counter() - start
 
 
-def run_python(net, batch, threads, seconds):
-    """One measurement in this process (called in a child, see main)."""
+def make_layers():
+    """The twins' layers, as learning/src/networks.cpp initializes them:
+    linear(i, o) (Xavier-uniform weights, zero bias) and Mlp(i, layers,
+    activate_last) (ReLU between layers). Imported here, not at the top:
+    the parent process runs without torch."""
     import torch
     from torch import nn
-    torch.set_num_threads(threads)
-    torch.manual_seed(0)
 
     def linear(i, o):
         layer = nn.Linear(i, o)
@@ -80,6 +81,18 @@ def run_python(net, batch, threads, seconds):
                 if k + 1 < len(self.layers) or self.activate_last:
                     x = torch.relu(x)
             return x
+
+    return linear, Mlp
+
+
+def run_python(net, batch, threads, seconds):
+    """One measurement in this process (called in a child, see main)."""
+    import torch
+    from torch import nn
+    torch.set_num_threads(threads)
+    torch.manual_seed(0)
+
+    linear, Mlp = make_layers()
 
     def pool(f, mask):
         half = f.shape[-1] // 2
@@ -248,18 +261,7 @@ def run_python_sac(batch, threads, seconds):
     torch.manual_seed(0)
     state_dim, action_dim = 80, 11
 
-    def mlp(i, out):
-        layers = []
-        for o in (256, 256, 256):
-            layer = nn.Linear(i, o)
-            nn.init.xavier_uniform_(layer.weight)
-            nn.init.zeros_(layer.bias)
-            layers += [layer, nn.ReLU()]
-            i = o
-        last = nn.Linear(i, out)
-        nn.init.xavier_uniform_(last.weight)
-        nn.init.zeros_(last.bias)
-        return nn.Sequential(*layers, last)
+    _, Mlp = make_layers()
 
     class Net(nn.Module):
         # The C++ networks normalize the state with stored buffers first.
@@ -267,7 +269,7 @@ def run_python_sac(batch, threads, seconds):
             super().__init__()
             self.register_buffer("mean", torch.zeros(state_dim))
             self.register_buffer("scale", torch.ones(state_dim))
-            self.mlp = mlp(state_dim + extra, out)
+            self.mlp = Mlp(state_dim + extra, [256, 256, 256, out], False)
 
         def forward(self, state, extra=None):
             s = (state - self.mean) * self.scale
