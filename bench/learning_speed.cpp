@@ -88,6 +88,7 @@ double timeUpdates(ml::Algorithm& algorithm, const ml::TransitionBatch& batch, d
 int runActorCritic(const Options& o) {
   ml::setComputeThreads(o.threads);
   ml::setFlushDenormals();
+  ml::setKeepFreedMemory();
   torch::manual_seed(0);
   ml::NetOptions net;
   const ml::ObservationSpec spec = makeSpec(false);

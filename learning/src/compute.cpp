@@ -2,6 +2,7 @@
 #include <manibench/learning/spec.hpp>
 
 #include <dlfcn.h>
+#include <malloc.h>
 
 #include <climits>
 #include <cstdlib>
@@ -35,6 +36,15 @@ void setComputeThreads(int threads) {
 void setFlushDenormals() {
   // False on a CPU without DAZ: nothing to set there; training only runs slower.
   at::globalContext().setFlushDenormal(true);
+}
+
+void setKeepFreedMemory() {
+  mallopt(M_MMAP_MAX, 0);
+  // -1: never trim (mallopt(3)). The largest threshold an int names, 2 GiB,
+  // was not enough: BCQ's target pass over 10 sampled actions per transition
+  // (640 clouds at batch 64) frees more than that at once, and its process
+  // still spent 40 % of its CPU time in the kernel.
+  mallopt(M_TRIM_THRESHOLD, -1);
 }
 
 ComputeInfo calcComputeInfo() {

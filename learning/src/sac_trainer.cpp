@@ -76,6 +76,7 @@ class SacTrainer {
     workers_->setReplyTimeout(options_.worker_timeout);
     setComputeThreads(options_.threads);
     setFlushDenormals();
+    setKeepFreedMemory();
     say(describeCompute(calcComputeInfo(), device_));
     say(spec_.describe() + "; " + std::to_string(objects_.size()) + " object(s), " +
         std::to_string(options_.workers) + " worker(s), " + (options_.early_done ? "early" : "no early") +

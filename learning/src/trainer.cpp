@@ -93,6 +93,7 @@ class Trainer {
       : options_(options), hooks_(hooks), dir_(options.out_dir), device_(parseDevice(options.device)) {
     setComputeThreads(options.threads);
     setFlushDenormals();
+    setKeepFreedMemory();
     say(describeCompute(calcComputeInfo(), device_));
     dataset_ = std::make_unique<DemoDataset>(options.data);
     spec_ = calcDemoSpec(registry, *dataset_);

@@ -4,6 +4,7 @@
 // checkpoint's actions and a TorchScript module written by python3-torch),
 // and the errors a user meets.
 #include <manibench/learning/checkpoint.hpp>
+#include <manibench/learning/compute.hpp>
 #include <manibench/learning/dataset.hpp>
 #include <manibench/learning/trainer.hpp>
 
@@ -16,6 +17,8 @@
 #include <test_support.hpp>
 
 #include <gtest/gtest.h>
+
+#include <malloc.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -394,6 +397,36 @@ TEST_F(LearningTraining, NoisyDemonstrationsTeachThePolicysOwnActions) {
       ASSERT_EQ(chunk.actions.view({-1})[int64_t(i)].item<float>(), float(std::clamp(expected[i], -1.0, 1.0)))
           << (executed ? "executed " : "policy ") << i;
   }
+}
+
+// A block as large as a point-cloud batch's activations: glibc mmaps it
+// afresh on every allocation by default (mallinfo2's hblks counts mmapped
+// blocks); in a training process it comes from the heap, which keeps it
+// after it is freed (arena: the heap's bytes).
+TEST(LearningCompute, TrainingKeepsFreedMemoryForTheNextAllocation) {
+  if (manibench::testing::kAddressSanitized) GTEST_SKIP() << "AddressSanitizer's allocator is not glibc's";
+  const std::size_t bytes = std::size_t(256) << 20;
+  struct Seen {
+    std::size_t mapped_while_held, heap_after_free;
+  };
+  auto allocateAndFree = [&] {
+    char* volatile block = static_cast<char*>(std::malloc(bytes));
+    block[0] = 1;
+    const std::size_t mapped = mallinfo2().hblks;
+    std::free(block);
+    return Seen{mapped, mallinfo2().arena};
+  };
+  // glibc's defaults, as another test in this process may have trained.
+  mallopt(M_MMAP_MAX, 65536);
+  mallopt(M_TRIM_THRESHOLD, 128 * 1024);
+  malloc_trim(0);
+  const std::size_t mapped_before = mallinfo2().hblks;
+  EXPECT_EQ(allocateAndFree().mapped_while_held, mapped_before + 1);
+  setKeepFreedMemory();
+  const std::size_t heap_before = mallinfo2().arena;
+  const Seen kept = allocateAndFree();
+  EXPECT_EQ(kept.mapped_while_held, mapped_before);
+  EXPECT_GE(kept.heap_after_free, heap_before + bytes);
 }
 
 TEST_F(LearningTraining, AStreamedSetVisitsEveryTransitionOncePerEpoch) {

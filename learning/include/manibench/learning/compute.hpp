@@ -35,6 +35,17 @@ void setComputeThreads(int threads);
 // training only: the policy plugin runs inside the environment's process,
 // whose physics must not change with the policy.
 void setFlushDenormals();
+// Keeps freed memory in the process for the next allocation instead of
+// handing it back to the kernel (glibc: no mmap for large blocks, no trim of
+// the heap's top). Why: a point-cloud batch's activations are
+// hundreds of MB per tensor (128 clouds x 1200 points x 512 floats: 315 MB),
+// which glibc mmaps and unmaps on every allocation, so every iteration
+// page-faulted them in afresh. PointNet + Transformer BC on one thread,
+// 2026-11-27, loaded machine: 22 s of its 61 s of CPU went to the kernel;
+// kept, 1.9 of 44 s, and 0.128 -> 0.189 iterations/s, the same losses. The
+// cost: the process keeps its peak (2.6 -> 3.5 GB resident there). For
+// training processes only: it is process-wide.
+void setKeepFreedMemory();
 ComputeInfo calcComputeInfo();
 // "BLAS: OpenBLAS 0.3.21 (…/openblas-pthread/libblas.so.3), 1 thread; libtorch 1.13.1: 1 intra-op thread; device cpu"
 std::string describeCompute(const ComputeInfo& info, const torch::Device& device);
