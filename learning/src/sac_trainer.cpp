@@ -441,7 +441,8 @@ class SacTrainer {
     csv << env_steps_ << "," << outcome.episodes << "," << outcome.successes << ","
         << formatNumber(outcome.success_rate) << "\n";
     say("evaluation at " + std::to_string(env_steps_) + " env steps: success " + formatNumber(outcome.success_rate) +
-        " (" + std::to_string(outcome.successes) + "/" + std::to_string(outcome.episodes) + ")");
+        " (" + std::to_string(outcome.successes) + "/" + std::to_string(outcome.episodes) + ")" +
+        describeFailures(outcome, out.string()));
   }
 
   void restoreWorkers(const LoadedCheckpoint& loaded) {

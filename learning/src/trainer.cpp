@@ -227,7 +227,8 @@ class Trainer {
     eval << iteration << "," << options_.eval_split << "," << outcome.episodes << "," << outcome.successes << ","
          << formatNumber(outcome.success_rate) << "\n";
     say("iteration " + std::to_string(iteration) + ": success " + std::to_string(outcome.successes) + "/" +
-        std::to_string(outcome.episodes) + " on the " + options_.eval_split + " objects");
+        std::to_string(outcome.episodes) + " on the " + options_.eval_split + " objects" +
+        describeFailures(outcome, request.out_dir));
   }
 
   TrainResult run(int64_t first) {
@@ -299,6 +300,12 @@ class Trainer {
 };
 
 }  // namespace
+
+std::string describeFailures(const EvaluationOutcome& outcome, const std::string& out_dir) {
+  if (outcome.failures == 0) return "";
+  return "; " + std::to_string(outcome.failures) + " of them failed (why: " +
+         (fs::path(out_dir) / "episodes.csv").string() + ")";
+}
 
 std::string findNewestCheckpoint(const std::string& dir) {
   const fs::path folder = fs::path(dir) / "checkpoints";

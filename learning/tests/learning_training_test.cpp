@@ -307,6 +307,10 @@ TEST_F(LearningTraining, TrainEvaluatesThroughTheCommandLine) {
   const std::string eval = readFile(file("cli_run/eval.csv"));
   EXPECT_TRUE(contains(eval, "\n30,train,1,")) << eval;
   EXPECT_TRUE(contains(eval, "\n60,train,1,")) << eval;
+  // The training's own checkpoint runs trusted: sandboxed, a policy as slow as
+  // BCQ on point clouds ran out of the sandbox's CPU time in every episode.
+  const std::string summary = readFile(file("cli_run/eval/iter_30/summary.json"));
+  EXPECT_TRUE(contains(summary, "\"sandbox\": false")) << summary;
   EXPECT_TRUE(fs::exists(file("cli_run/checkpoints/iter_0000060.pt")));
   EXPECT_TRUE(contains(readFile(file("cli_run/policy.yaml")), "iter_0000060.pt"));
   // Starting again into the same directory is refused; --resume to more iterations is not.
@@ -397,6 +401,16 @@ TEST_F(LearningTraining, NoisyDemonstrationsTeachThePolicysOwnActions) {
       ASSERT_EQ(chunk.actions.view({-1})[int64_t(i)].item<float>(), float(std::clamp(expected[i], -1.0, 1.0)))
           << (executed ? "executed " : "policy ") << i;
   }
+}
+
+// A training that evaluates says how many episodes the kit failed and where
+// their reasons are, not only a success count that counts them as 0.
+TEST(EvaluationOutcome, FailedEpisodesAreNamedWithWhereTheirReasonsAre) {
+  EvaluationOutcome outcome;
+  outcome.episodes = 25;
+  EXPECT_EQ(describeFailures(outcome, "run/eval/iter_300"), "");
+  outcome.failures = 3;
+  EXPECT_EQ(describeFailures(outcome, "run/eval/iter_300"), "; 3 of them failed (why: run/eval/iter_300/episodes.csv)");
 }
 
 // A block as large as a point-cloud batch's activations: glibc mmaps it

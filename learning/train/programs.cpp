@@ -94,7 +94,15 @@ int runManibench(const std::vector<std::string>& arguments, const std::string& l
 
 EvaluationOutcome runPolicyEvaluation(const std::string& environment, const std::string& policy_config,
                                       const std::vector<std::string>& extra, const std::string& out_dir) {
-  std::vector<std::string> args = {"eval", environment, "--policy", "torch_policy", "--policy-config", policy_config};
+  // Trusted: the policy is this training's own checkpoint run by manibench's
+  // torch_policy plugin, not a submission; the sandbox's default 60 s of CPU
+  // per episode is sized for submissions. BCQ with PointNet + Transformer
+  // chooses each action among 100 samples through the decoder and a critic
+  // (Table 7): about 1.8 s of CPU per step here (2026-11-27), so sandboxed
+  // every episode was killed at step 33 and the training logged 0 success
+  // for a policy that had not run.
+  std::vector<std::string> args = {"eval", environment, "--policy", "torch_policy", "--policy-config", policy_config,
+                                   "--trusted-policy"};
   args.insert(args.end(), extra.begin(), extra.end());
   args.insert(args.end(), {"--no-progress", "--out", out_dir});
   fs::create_directories(out_dir);
@@ -106,6 +114,7 @@ EvaluationOutcome runPolicyEvaluation(const std::string& environment, const std:
   EvaluationOutcome outcome;
   outcome.episodes = summary["overall"]["episodes"].get<uint32_t>();
   outcome.successes = summary["overall"]["successes"].get<uint32_t>();
+  outcome.failures = summary["overall"]["failures"].get<uint32_t>();
   outcome.success_rate = summary["overall"]["success_rate"].get<double>();
   return outcome;
 }

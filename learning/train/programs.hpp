@@ -21,6 +21,8 @@ std::vector<int64_t> parseLayers(const std::string& text, const std::string& opt
 // ARGS... --no-progress --out OUT_DIR` in a child process (posix_spawn:
 // nothing of this process's libtorch crosses into the evaluation's
 // workers), its output in OUT_DIR/eval.log; the summary's overall numbers.
+// The policy runs trusted (in the evaluation's workers, not sandboxed): it
+// is the caller's own checkpoint.
 // Throws LearningError (naming the log) when it fails.
 EvaluationOutcome runPolicyEvaluation(const std::string& environment, const std::string& policy_config,
                                       const std::vector<std::string>& args, const std::string& out_dir);

@@ -113,7 +113,8 @@ class Population {
                                std::to_string(o_.eval_seed)},
                               (attempt / "eval").string());
       std::cerr << "object " << object << ", attempt " << k << ": success " << formatRate(outcome.success_rate)
-                << " (" << outcome.successes << "/" << outcome.episodes << ")\n";
+                << " (" << outcome.successes << "/" << outcome.episodes << ")"
+                << describeFailures(outcome, (attempt / "eval").string()) << "\n";
       result.attempts = k + 1;
       if (outcome.success_rate > best) {
         best = outcome.success_rate;

@@ -71,9 +71,16 @@ struct TrainProgress {
 };
 
 struct EvaluationOutcome {
-  uint32_t episodes = 0, successes = 0;
+  // failures: episodes the kit failed (the policy threw, timed out or gave a
+  // NaN action), counted as unsuccessful; their reasons are in the run's
+  // episodes.csv.
+  uint32_t episodes = 0, successes = 0, failures = 0;
   double success_rate = 0;
 };
+
+// "" when no episode failed, else "; N of them failed (why: OUT_DIR/episodes.csv)",
+// for the line a training prints after an evaluation.
+std::string describeFailures(const EvaluationOutcome& outcome, const std::string& out_dir);
 
 // What to evaluate: the newest checkpoint's policy configuration, on the
 // demonstrations' environment (their configuration file, written into the
