@@ -86,9 +86,7 @@ double timeUpdates(ml::Algorithm& algorithm, const ml::TransitionBatch& batch, d
 
 // The online and actor-critic algorithms: frozen critics against the reference, in pairs.
 int runActorCritic(const Options& o) {
-  ml::setComputeThreads(o.threads);
-  ml::setFlushDenormals();
-  ml::setKeepFreedMemory();
+  ml::setUpTrainingCompute(o.threads);
   torch::manual_seed(0);
   ml::NetOptions net;
   const ml::ObservationSpec spec = makeSpec(false);
@@ -124,9 +122,7 @@ int runActorCritic(const Options& o) {
 
 int run(const Options& o) {
   if (o.algorithm != "bc") return runActorCritic(o);
-  ml::setComputeThreads(o.threads);
-  ml::setFlushDenormals();
-  ml::setKeepFreedMemory();  // as the trainer: without it PN+T ran 0.31 it/s here, with it 0.46 (one thread)
+  ml::setUpTrainingCompute(o.threads);  // as the trainer: without kept memory PN+T ran 0.31 it/s here, with it 0.46 (one thread)
   ml::setPointNetDefinitionMode(o.definition);
   torch::manual_seed(0);
   ml::NetOptions net;

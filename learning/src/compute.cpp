@@ -47,6 +47,12 @@ void setKeepFreedMemory() {
   mallopt(M_TRIM_THRESHOLD, -1);
 }
 
+void setUpTrainingCompute(int threads) {
+  setComputeThreads(threads);
+  setFlushDenormals();
+  setKeepFreedMemory();
+}
+
 ComputeInfo calcComputeInfo() {
   ComputeInfo info;
   info.torch_threads = torch::get_num_threads();

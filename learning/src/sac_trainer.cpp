@@ -74,9 +74,7 @@ class SacTrainer {
         [&registry, id, env_options] { return std::make_unique<Environment>(registry, id, env_options); },
         options_.workers);
     workers_->setReplyTimeout(options_.worker_timeout);
-    setComputeThreads(options_.threads);
-    setFlushDenormals();
-    setKeepFreedMemory();
+    setUpTrainingCompute(options_.threads);
     say(describeCompute(calcComputeInfo(), device_));
     say(spec_.describe() + "; " + std::to_string(objects_.size()) + " object(s), " +
         std::to_string(options_.workers) + " worker(s), " + (options_.early_done ? "early" : "no early") +

@@ -91,9 +91,7 @@ class Trainer {
  public:
   Trainer(const PluginRegistry& registry, const TrainOptions& options, const TrainHooks& hooks)
       : options_(options), hooks_(hooks), dir_(options.out_dir), device_(parseDevice(options.device)) {
-    setComputeThreads(options.threads);
-    setFlushDenormals();
-    setKeepFreedMemory();
+    setUpTrainingCompute(options.threads);
     say(describeCompute(calcComputeInfo(), device_));
     dataset_ = std::make_unique<DemoDataset>(options.data);
     spec_ = calcDemoSpec(registry, *dataset_);

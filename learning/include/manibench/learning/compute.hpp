@@ -46,6 +46,10 @@ void setFlushDenormals();
 // cost: the process keeps its peak (2.6 -> 3.5 GB resident there). For
 // training processes only: it is process-wide.
 void setKeepFreedMemory();
+// What a training process (the trainers and the learning bench, which must
+// time what they run) sets before it builds a network: the threads, flushed
+// denormals and kept freed memory, above.
+void setUpTrainingCompute(int threads);
 ComputeInfo calcComputeInfo();
 // "BLAS: OpenBLAS 0.3.21 (…/openblas-pthread/libblas.so.3), 1 thread; libtorch 1.13.1: 1 intra-op thread; device cpu"
 std::string describeCompute(const ComputeInfo& info, const torch::Device& device);
