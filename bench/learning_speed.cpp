@@ -3,7 +3,7 @@
 // latency of one action, on synthetic batches shaped like
 // OpenCabinetDrawer-v0's (state 80, agent 51, 1200 points, 3 masks, action
 // 11). bench/learning_speed.py runs it beside the same networks written in
-// python3-torch on the same libtorch (docs/learning.md has the numbers).
+// python3-torch on the same libtorch (docs/learning-results.md has the numbers).
 // `--algorithm sac|td3bc|bcq` times those algorithms' gradient steps instead
 // (MLP only), and `--pairs N` alternates N times between the actor step
 // that freezes the critics and the reference that does not, printing each

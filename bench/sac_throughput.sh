@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Throughput of `manibench train sac` (docs/learning.md, "SAC"): Table 6's
+# Throughput of `manibench train sac` (docs/learning-results.md, "SAC"): Table 6's
 # settings (3 x 256, batch 1024, one gradient step per env step) on one
 # drawer with 1, 2 and 4 environment workers, in alternated rounds (the
 # shared VM's load moves speeds 2-5x). Each run: WARMUP random steps, then
