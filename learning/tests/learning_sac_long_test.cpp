@@ -3,14 +3,13 @@
 // MANIBENCH_LONG_TESTS=1 (skipped otherwise, and saying so):
 //   MANIBENCH_LONG_TESTS=1 ctest -R SacLong --output-on-failure
 //
-// Budget (docs/learning.md): on Reach arm 0 a 2 x 64 SAC with batch 256
-// and one worker measured, with Reach's former std::mt19937_64 resets,
-// 0.70 / 0.65 / 0.80 / 0.85 / 0.95 / 0.90 success (deterministic actor, 20
-// episodes) at 15k / 20k / 25k / 30k / 35k / 40k env steps. With
-// sdk::Random's resets, at 35k: 0.75 / 0.95 / 0.70 for training seeds
-// 0 / 1 / 2; the random policy scores 0. So the test asks >= 0.6 at 35k
-// (seed 0): learning, with room for the seeds' spread, not one lucky draw
-// (3-4 minutes on the loaded VM).
+// Budget (docs/learning-results.md): on Reach arm 0 a 2 x 64 SAC with batch
+// 256 and one worker, success of the deterministic actor over 20 episodes
+// every 5k env steps, training seeds 0-4 (2026-11-27, OpenBLAS's Haswell
+// kernels): at 35k 0.85 / 0.95 / 0.40 / 0.75 / 0.60, at 60k 0.95 / 1.0 /
+// 0.90 / 0.90 / 0.90; seed 0 stays at 0.9-1.0 from 45k on. So the test
+// trains seed 0 for 60k steps and asks the 0.9 (2-3 minutes on the
+// loaded VM). The population keeps 35k: it needs only C.2's 0.3 per agent.
 #include <test_support.hpp>
 
 #include <gtest/gtest.h>
@@ -50,11 +49,11 @@ double readSuccessRate(const std::string& summary) {
   return nlohmann::json::parse(in)["overall"]["success_rate"].get<double>();
 }
 
-const std::vector<std::string> kReachAgent = {"--steps", "35000", "--workers", "1", "--batch-size", "256",
-                                              "--hidden", "64,64", "--random-steps", "1000", "--no-progress"};
+const std::vector<std::string> kReachAgent = {"--workers", "1", "--batch-size", "256", "--hidden", "64,64",
+                                              "--random-steps", "1000", "--no-progress"};
 
-TEST_F(SacLong, SacLearnsReachWithinThirtyFiveThousandSteps) {
-  std::vector<std::string> train = {"train", "sac", "Reach_0-v0", "--out", path("reach")};
+TEST_F(SacLong, SacReachesNinetyPercentOnReachWithinSixtyThousandSteps) {
+  std::vector<std::string> train = {"train", "sac", "Reach_0-v0", "--steps", "60000", "--out", path("reach")};
   train.insert(train.end(), kReachAgent.begin(), kReachAgent.end());
   const manibench::testing::CommandResult r = runCli(train);
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -62,14 +61,15 @@ TEST_F(SacLong, SacLearnsReachWithinThirtyFiveThousandSteps) {
       runCli({"eval", "Reach_0-v0", "--policy", "torch_policy", "--policy-config", path("reach/policy.yaml"),
               "--episodes-per-object", "20", "--workers", "2", "--no-progress", "--out", path("reach/eval")});
   ASSERT_EQ(eval.exit_code, 0) << eval.err;
-  EXPECT_GE(readSuccessRate(path("reach/eval/summary.json")), 0.6);
+  EXPECT_GE(readSuccessRate(path("reach/eval/summary.json")), 0.9);
 }
 
 // Two Reach objects, one agent each, demonstrations from each object's
 // own agent (one file per object, and one over both), replayed bit for bit.
 TEST_F(SacLong, APopulationOfTwoReachObjectsMakesDemonstrationsThatReplayBitForBit) {
   std::vector<std::string> command = {"train", "sac-population", "Reach-v0", "--objects", "0,1",
-                                      "--out", path("population"), "--demos", "3", "--eval-episodes", "10"};
+                                      "--steps", "35000", "--out", path("population"), "--demos", "3",
+                                      "--eval-episodes", "10"};
   command.insert(command.end(), kReachAgent.begin(), kReachAgent.end());
   const manibench::testing::CommandResult r = runCli(command);
   ASSERT_EQ(r.exit_code, 0) << r.err;
