@@ -62,14 +62,16 @@ struct FixtureRun {
 };
 
 // Reach-v0 on two objects, four levels each (odd and even seeds), two
-// workers, tight limits so that the limit fixtures fail fast; a step
+// workers, tight limits so that the limit fixtures fail fast (the CPU
+// limit 1 s unless the attack needs room, below); a step
 // timeout long enough for the spinning one to reach its CPU limit on a
 // loaded machine (it did not within 10 s under ctest -j2 at a load of 12).
 FixtureRun runFixture(const TempDir& out, const std::string& policy, const std::vector<std::string>& env,
-               std::vector<std::string> extra = {}, const std::function<void()>& in_child = {}) {
+               std::vector<std::string> extra = {}, const std::function<void()>& in_child = {},
+               const std::string& cpu_limit_s = "1") {
   std::vector<std::string> args = {"Reach-v0",         "--policy",   policy,  "--objects",
                                    "8,10",             "--levels",   "0-3",   "--workers",
-                                   "2",                "--policy-cpu-limit", "1",
+                                   "2",                "--policy-cpu-limit", cpu_limit_s,
                                    "--policy-memory-limit", "256", "--policy-output-limit", "1",
                                    "--step-timeout",   "120"};
   args.insert(args.end(), extra.begin(), extra.end());
@@ -87,7 +89,15 @@ struct Attack {
   std::string failure;
   std::string message_part;
   bool needs_landlock = false;
+  std::string cpu_limit_s = "1";
 };
+
+// Filling its 256 MiB costs the allocating policy 0.64 s of CPU time per
+// episode on the idle development VM (0.55 s under ASan, its abort's report
+// included), and more than 1 s on CI's slower machine under make sanitize
+// (2026-11-27): it gets a CPU limit it cannot reach first, so that its
+// memory limit is what stops it (as python/tests/test_policy_sandbox.py).
+const std::string kAllocatingCpuLimitS = "30";
 
 TEST(Sandbox, EachAttackFailsOnlyItsOwnEpisodes) {
   TempDir reference_dir;
@@ -115,8 +125,10 @@ TEST(Sandbox, EachAttackFailsOnlyItsOwnEpisodes) {
       // Under AddressSanitizer a `new` that fails reports "out of memory"
       // and aborts (it cannot throw std::bad_alloc): still only its episodes.
       testing::kAddressSanitized
-          ? Attack{"fixture_allocate", failure::kCrash, "the policy process was killed by signal 6 (SIGABRT"}
-          : Attack{"fixture_allocate", failure::kSandbox, "ran out of its memory limit, 256 MiB"},
+          ? Attack{"fixture_allocate", failure::kCrash, "the policy process was killed by signal 6 (SIGABRT",
+                   false, kAllocatingCpuLimitS}
+          : Attack{"fixture_allocate", failure::kSandbox, "ran out of its memory limit, 256 MiB", false,
+                   kAllocatingCpuLimitS},
       {"fixture_spin", failure::kSandbox, "CPU time limit (1 s in this episode)"},
       {"fixture_flood_stdout", failure::kSandbox, "more than its output limit (1048576 bytes"},
       {"fixture_exit", failure::kCrash, "the policy process exited with status 0"},
@@ -133,7 +145,8 @@ TEST(Sandbox, EachAttackFailsOnlyItsOwnEpisodes) {
     TempDir out;
     const FixtureRun run = runFixture(out, attack.policy,
                                {tag, "MANIBENCH_FIXTURE_SECRET=" + secret,
-                                "MANIBENCH_FIXTURE_ESCAPE=" + escape});
+                                "MANIBENCH_FIXTURE_ESCAPE=" + escape},
+                               {}, {}, attack.cpu_limit_s);
     EXPECT_EQ(run.result.exit_code, reference.result.exit_code) << run.result.err;
     EXPECT_EQ(run.summary, reference.summary);
     ASSERT_EQ(run.episodes.size(), reference.episodes.size());
