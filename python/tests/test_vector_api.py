@@ -2,6 +2,8 @@
 runs with or without gymnasium: make_vec for every task in every
 observation mode, then each part of the interface on Reach-v0."""
 import multiprocessing
+import os
+import signal
 
 import numpy as np
 import pytest
@@ -189,10 +191,21 @@ def test_disabled_autoreset_wants_a_masked_reset():
 
 
 def test_step_wait_timeout_keeps_the_step_pending():
+    # Worker 1 is stopped (SIGSTOP) until the timeouts have been seen: a
+    # pointcloud step takes milliseconds, and on a busy machine the workers
+    # finished it before step_wait(timeout=0) was called (a clean clone's
+    # make test beside a training, 2026-11-27).
     with manibench.make_vec("Reach-v0", num_envs=2, obs_mode="pointcloud") as venv:
         venv.reset(seed=0)
-        venv.step_async(np.zeros((2, 2)))
-        with pytest.raises(multiprocessing.TimeoutError):
-            venv.step_wait(timeout=0)  # a pointcloud step takes milliseconds
+        stopped = venv._processes[1].pid
+        os.kill(stopped, signal.SIGSTOP)
+        try:
+            venv.step_async(np.zeros((2, 2)))
+            with pytest.raises(multiprocessing.TimeoutError):
+                venv.step_wait(timeout=0)
+            with pytest.raises(multiprocessing.TimeoutError):
+                venv.step_wait(timeout=0.2)  # still pending after a wait
+        finally:
+            os.kill(stopped, signal.SIGCONT)
         obs, *_ = venv.step_wait()  # still pending: its result comes now
         assert obs["xyz"].shape[0] == 2
