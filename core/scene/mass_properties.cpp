@@ -78,6 +78,13 @@ void addMass(BodyModel& body, double m, const Vec3& com_B, const Mat33& Ic_B) {
 
 void checkBodyMasses(ArticulationModel& model,
                      const std::function<void(const std::string&)>& fail) {
+  // The mass of each body with everything below it (bodies come parents
+  // first, so children are summed before their parent is read).
+  std::vector<double> subtree_mass(model.bodies.size(), 0);
+  for (std::size_t b = model.bodies.size(); b-- > 0;) {
+    subtree_mass[b] += std::max(model.bodies[b].mass, 0.0);
+    if (model.bodies[b].parent >= 0) subtree_mass[std::size_t(model.bodies[b].parent)] += subtree_mass[b];
+  }
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
     BodyModel& body = model.bodies[b];
     const std::string& link = model.links[std::size_t(body.link)].name;
@@ -91,10 +98,18 @@ void checkBodyMasses(ArticulationModel& model,
       fail(s.str());
     }
     body.inertia = Inertia(body.inertia_sum);
-    if (body.joint >= 0 && !body.massless && !(body.mass > 0))
-      fail("link '" + link + "' moves (joint '" + model.joints[std::size_t(body.joint)].name +
-           "') but has no mass, nor any welded to it: give it an <inertial> or collision "
-           "geometry (a moving body without mass is not physical)");
+    if (body.joint < 0 || body.massless || body.mass > 0) continue;
+    // A massless link between two joints (PartNet's link_N_helper under a
+    // slider+ part, a hand's thumb base) is a valid articulation when
+    // something with mass hangs below it: that mass gives its joint inertia.
+    // Simbody takes it as Body::Massless, as it takes a planar joint's chain.
+    if (subtree_mass[b] > 0) {
+      body.massless = true;
+      continue;
+    }
+    fail("link '" + link + "' moves (joint '" + model.joints[std::size_t(body.joint)].name +
+         "') but neither it nor anything below it has mass: give it an <inertial> or collision "
+         "geometry (a moving body without mass is not physical)");
   }
 }
 

@@ -23,9 +23,10 @@ void addMass(BodyModel& body, double m, const SimTK::Vec3& com_B, const SimTK::M
 
 // After every link is added: each body's summed inertia must be valid (a
 // fixed-joint child's inertia counts only merged into its body), and a
-// body that moves must have mass (a massless moving body is not physical:
-// one fell through the ground at t = 1.46 s). Sets each body's inertia;
-// the error names the link and calls `fail` (which throws).
+// body that moves must have mass or a body with mass below it (a massless
+// moving leaf is not physical: one fell through the ground at t = 1.46 s);
+// a massless one with mass below it becomes `massless`. Sets each body's
+// inertia; the error names the link and calls `fail` (which throws).
 void checkBodyMasses(ArticulationModel& model, const std::function<void(const std::string&)>& fail);
 
 }  // namespace scene_detail

@@ -132,7 +132,8 @@ void Scene::Impl::buildArticulation(Articulation& art, std::vector<ContactShape>
       } else {
         const SimTK::Rotation R(body.axis, SimTK::ZAxis);
         mobod = SimTK::MobilizedBody::Pin(parent, X_PJ * SimTK::Transform(R),
-                                          rigid, SimTK::Transform(R));
+                                          body.massless ? static_cast<const SimTK::Body&>(massless) : rigid,
+                                          SimTK::Transform(R));
       }
     }
     art.body_mobods[b] = mobod.getMobilizedBodyIndex();

@@ -215,17 +215,41 @@ TEST(UrdfRobustness, AWeldedLinkCountsOnlyMergedIntoItsBody) {
 }
 
 // A link that moves but has no mass (no <inertial>, no collision geometry,
-// nothing welded to it) loaded and fell through the ground at t = 1.46 s;
-// it is refused at load, naming the link and its joint.
+// nothing welded to it, nothing below it) loaded and fell through the
+// ground at t = 1.46 s; it is refused at load, naming the link and its joint.
 TEST(UrdfRobustness, AMovingLinkWithoutMassIsRefusedNamingIt) {
   expectMentions(loadError(robot(link("a", inertial()) + link("b") + joint("ab", "a", "b"))),
-                 {"link 'b' moves (joint 'ab') but has no mass"});
+                 {"link 'b' moves (joint 'ab') but neither it nor anything below it has mass"});
+  // A massless chain ending without mass is refused at its first link.
+  expectMentions(loadError(robot(link("a", inertial()) + link("b") + link("c") + joint("ab", "a", "b") +
+                                 joint("bc", "b", "c"))),
+                 {"link 'b' moves (joint 'ab') but neither"});
   // Massless but welded to a link with mass: fine.
   Scene scene;
   const std::string weld = "  <joint name=\"w\" type=\"fixed\"><parent link=\"b\"/><child link=\"c\"/></joint>\n";
   scene.addUrdfString(robot(link("a", inertial()) + link("b") + link("c", inertial()) + joint("ab", "a", "b") + weld),
                       "", "robot", Pose(), true);
   scene.finalize();
+}
+
+// PartNet writes a massless link_N_helper between the two joints of a
+// slider+ part (a seat that slides up and down and turns): the helper's
+// slider carries the seat's mass. It loads, and under gravity the seat
+// slides down its vertical slider to the stop, turning freely about it.
+TEST(UrdfRobustness, AMasslessLinkWithMassBelowItLoadsAndMoves) {
+  const std::string slider =
+      "  <joint name=\"slide\" type=\"prismatic\"><parent link=\"base\"/><child link=\"helper\"/>"
+      "<axis xyz=\"0 0 1\"/><limit lower=\"-0.1\" upper=\"0.1\"/></joint>\n";
+  const std::string urdf = robot(link("base", inertial()) + link("helper") + link("seat", inertial()) + slider +
+                                 joint("turn", "helper", "seat"));
+  Scene scene;
+  const int r = scene.addUrdfString(urdf, "", "chair", Pose(), true);
+  scene.finalize();
+  ASSERT_EQ(scene.getJoints(r).size(), 2u);
+  for (int i = 0; i < 100; ++i) scene.advance(0.01);
+  const Eigen::VectorXd q = scene.getJointPositions(r);
+  EXPECT_NEAR(q[0], -0.1, 0.01);  // at the lower stop
+  EXPECT_TRUE(q.allFinite());
 }
 
 TEST(UrdfRobustness, ABodyFallingThroughTheGroundIsADivergenceNamingIt) {

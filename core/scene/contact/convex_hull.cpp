@@ -4,6 +4,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fcl/geometry/shape/convex.h>
+#include <Eigen/Eigenvalues>
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -320,11 +321,50 @@ std::shared_ptr<const std::vector<VisualMesh>> loadVisualMeshes(const std::strin
   });
 }
 
+std::vector<SimTK::Vec3> padThinPoints(const std::vector<SimTK::Vec3>& points, double thickness) {
+  if (points.empty()) return points;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Vec3& p : points) mean += Eigen::Vector3d(p[0], p[1], p[2]);
+  mean /= static_cast<double>(points.size());
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const Vec3& p : points) {
+    const Eigen::Vector3d d = Eigen::Vector3d(p[0], p[1], p[2]) - mean;
+    covariance += d * d.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+  std::vector<Vec3> shifts;  // one per thin direction: half of what it lacks
+  for (int axis = 0; axis < 3; ++axis) {
+    const Eigen::Vector3d u = solver.eigenvectors().col(axis);
+    double lo = SimTK::Infinity, hi = -SimTK::Infinity;
+    for (const Vec3& p : points) {
+      const double x = u.x() * p[0] + u.y() * p[1] + u.z() * p[2];
+      lo = std::min(lo, x);
+      hi = std::max(hi, x);
+    }
+    if (hi - lo < thickness) {
+      const double half = (thickness - (hi - lo)) / 2;
+      shifts.push_back(Vec3(u.x(), u.y(), u.z()) * half);
+    }
+  }
+  if (shifts.empty()) return points;
+  // Every combination of +-shift over the thin directions.
+  std::vector<Vec3> out;
+  out.reserve(points.size() << shifts.size());
+  for (std::size_t signs = 0; signs < (std::size_t(1) << shifts.size()); ++signs)
+    for (const Vec3& p : points) {
+      Vec3 q = p;
+      for (std::size_t k = 0; k < shifts.size(); ++k) q += (signs >> k & 1 ? 1.0 : -1.0) * shifts[k];
+      out.push_back(q);
+    }
+  return out;
+}
+
 std::shared_ptr<const ConvexHull> loadConvexHull(const std::string& path,
                                                  const SimTK::Vec3& scale) {
   static MeshFileCache<ConvexHull> cache;
-  return cache.findOrLoad(path, scale,
-                          [&] { return calcConvexHull(loadMeshVertices(path, scale)); });
+  return cache.findOrLoad(path, scale, [&] {
+    return calcConvexHull(padThinPoints(loadMeshVertices(path, scale), kMinHullThickness));
+  });
 }
 
 }  // namespace scene_detail

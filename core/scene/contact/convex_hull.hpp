@@ -84,7 +84,26 @@ std::vector<SimTK::Vec3> loadMeshVertices(const std::string& path, const SimTK::
 std::shared_ptr<const std::vector<VisualMesh>> loadVisualMeshes(const std::string& path,
                                                                 const SimTK::Vec3& scale);
 
-// loadMeshVertices + calcConvexHull.
+// The thickness a collision mesh's hull gets at least, m. PartNet-Mobility
+// models panels (a cabinet's back, shelves, drawer bottoms: 9 to 23 meshes
+// in 6 of 8 cabinets, 70 of the oven's 92) as single planar surfaces, which
+// have no convex solid; they carry contact (a drawer's bottom holds what is
+// in it, a back panel stops the gripper), so they become solids this thick,
+// centred on their plane. 1 cm: the thickness of real furniture panels, and
+// 20 times the contact's depth under the gripper's squeeze (100 N over 4
+// points at 1e5 N/m in series: 0.25 mm), so GJK/EPA never sees a contact
+// through the whole solid.
+constexpr double kMinHullThickness = 0.01;
+
+// `points` with every principal direction (of their covariance) along which
+// they span less than `thickness` padded to exactly `thickness`: the points
+// shifted by +-(thickness - extent) / 2 along it. A plane becomes a slab, a
+// line a bar, a point a cube; points that span `thickness` in every
+// principal direction come back unchanged.
+std::vector<SimTK::Vec3> padThinPoints(const std::vector<SimTK::Vec3>& points, double thickness);
+
+// loadMeshVertices + padThinPoints(kMinHullThickness) + calcConvexHull: a
+// flat or nearly flat mesh gives a thin solid, never a FlatHullError.
 std::shared_ptr<const ConvexHull> loadConvexHull(const std::string& path, const SimTK::Vec3& scale);
 
 }  // namespace scene_detail

@@ -53,7 +53,13 @@ QhullStatus runQhull(const std::vector<double>& xyz, std::vector<QhullFacet>& fa
   // Qhull's explanation is long; its first line says what went wrong.
   const std::size_t end = message.find('\n');
   if (end != std::string::npos) message.resize(end);
-  return code == qh_ERRsingular ? QhullStatus::Flat : QhullStatus::Failed;
+  // A flat input stops Qhull in one of two places: the initial simplex
+  // (qh_ERRsingular) or, when every point shares one coordinate, the input
+  // check (QH6013 "input is less than 3-dimensional", qh_ERRinput; a
+  // PartNet cabinet's back panel modelled as one plane gives it).
+  const bool flat = code == qh_ERRsingular ||
+                    (code == qh_ERRinput && message.find("QH6013") != std::string::npos);
+  return flat ? QhullStatus::Flat : QhullStatus::Failed;
 }
 
 }  // namespace scene_detail
