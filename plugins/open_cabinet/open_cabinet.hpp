@@ -44,6 +44,7 @@ struct CabinetModel {
   Eigen::Vector3d placement = Eigen::Vector3d::Zero();
   Eigen::Vector3d lower = Eigen::Vector3d::Zero(), upper = Eigen::Vector3d::Zero();
   std::string summary;  // one line: size, grid, handle types
+  double scale = 1;     // PartNet: applied to every length of the file
 
   std::vector<const TargetLink*> getTargets(TargetKind kind) const;
 };
@@ -85,7 +86,29 @@ std::string toString(HandleType type);
 // PartNet reader (manibench/kit/partnet.hpp). Handles are the
 // visuals whose name contains "handle"; targets are links with a handle
 // and a revolute/continuous (door) or prismatic (drawer) joint.
-CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id);
+// The cabinet is scaled (partnet_loader.cpp: ManiSkill v1's scale for its
+// own ids, else kCabinetDiagonal over the object's bounding-box diagonal,
+// within v1's range) and stands with its joints at their lower limits.
+// `scale` > 0 replaces that rule (the task key partnet_scale).
+CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id, double scale = 0);
+
+// ManiSkill v1's cabinets by id (v1_cabinets.cpp): its hand-tuned scale and
+// how many door / drawer target links its tasks had.
+struct V1Cabinet {
+  double scale;
+  int doors, drawers;
+};
+const std::map<std::string, V1Cabinet>& getV1Cabinets();
+
+// The scale of a PartNet cabinet not in v1's list: its bounding-box
+// diagonal (PartNet units, every joint at 0) becomes kCabinetDiagonal m,
+// within [kMinCabinetScale, kMaxCabinetScale], v1's range. PartNet-Mobility
+// normalises objects to a diagonal of about 2 (2.00-2.11 for the 8
+// cabinets we test on); 1.0 m gives 0.47-0.50, the median of v1's 57
+// hand-tuned scales being 0.49 (drawers) and 0.51 (doors).
+constexpr double kCabinetDiagonal = 1.0;
+constexpr double kMinCabinetScale = 0.2808, kMaxCabinetScale = 0.8129;
+double calcCabinetScale(const std::string& id, double diagonal);
 
 // ---- object ids ------------------------------------------------------------
 
@@ -176,6 +199,7 @@ class OpenCabinetTask : public sdk::Task {
   uint32_t target_joint_ = 0;
   double lower_ = 0, upper_ = 1;
   uint32_t cabinet_joint_count_ = 0;
+  Eigen::VectorXd closed_q_;  // every joint at its lower limit (0 if none)
 };
 
 class OpenCabinetDoorTask : public OpenCabinetTask {

@@ -31,13 +31,20 @@ OpenCabinetTask::OpenCabinetTask(const Config& config, TargetKind kind)
       hold_steps_(config.get<uint32_t>("hold_steps", 10)),
       cabinets_(taskName(kind), "cabinet", readPartNetDir(config, taskName(kind)),
                 {[kind](const std::string& split) { return listGeneratedCabinets(kind, split); }, generateCabinet,
-                 loadPartNetCabinet, [](const CabinetModel& cabinet) {
+                 [scale = config.get<double>("partnet_scale", 0.0)](const std::string& folder, const std::string& id) {
+                   return loadPartNetCabinet(folder, id, scale);
+                 },
+                 [](const CabinetModel& cabinet) {
                    return cabinet.getTargets(TargetKind::kDoor).empty() && cabinet.getTargets(TargetKind::kDrawer).empty()
                               ? "no door or drawer with a handle part (a visual or semantics.txt label naming 'handle')"
                               : "";
                  }, nullptr}) {
-  config.requireKnownKeys({"partnet_dir", "robot_dir", "static_speed", "static_angular_speed", "hold_steps"},
-                         taskName(kind) + ": task");
+  config.requireKnownKeys(
+      {"partnet_dir", "partnet_scale", "robot_dir", "static_speed", "static_angular_speed", "hold_steps"},
+      taskName(kind) + ": task");
+  if (const double scale = config.get<double>("partnet_scale", 0.0); !(scale >= 0) || !std::isfinite(scale))
+    throw Error(taskName(kind) + ": task.partnet_scale must be positive (or 0: the per-object rule)",
+                MB_INVALID_ARGUMENT);
   if (!(static_speed_ > 0) || !(static_angular_speed_ > 0) || hold_steps_ == 0)
     throw Error(taskName(kind) + ": static_speed, static_angular_speed and hold_steps must be positive",
                 MB_INVALID_ARGUMENT);
@@ -103,6 +110,12 @@ void OpenCabinetTask::buildScene(SceneView& scene, const std::string& object_id)
   if (!(upper_ > lower_))
     throw Error(taskName(kind_) + ": joint " + target_->joint + " of cabinet " + cabinet_id + " has no range");
   cabinet_joint_count_ = scene.getJointCount(cabinet_id_);
+  // Closed is each joint's lower limit (ManiSkill v1), 0 where it has none.
+  closed_q_ = Eigen::VectorXd::Zero(cabinet_joint_count_);
+  for (uint32_t j = 0; j < cabinet_joint_count_; ++j) {
+    const double lower = scene.getJointInfo(cabinet_id_, j).lower;
+    if (std::isfinite(lower)) closed_q_[j] = lower;
+  }
   tcp_ = robot_->getTcps().front();
   scene.addLinkToMask(kHandleMask, cabinet_id_, target_link_, "handle");
   scene.addLinkToMask(kTargetLinkMask, cabinet_id_, target_link_);
@@ -118,7 +131,7 @@ void OpenCabinetTask::reset(SceneView& scene, uint64_t seed) {
   const double around = rng.uniform(0.9 * kPi, 1.1 * kPi);
   robot_->placeFacing(scene, rng, centre.head<2>(), distance, around, kPi);
   // every door and drawer closed, joint friction and damping drawn anew
-  scene.setJointPositions(cabinet_id_, Eigen::VectorXd::Zero(cabinet_joint_count_));
+  scene.setJointPositions(cabinet_id_, closed_q_);
   scene.setJointVelocities(cabinet_id_, Eigen::VectorXd::Zero(cabinet_joint_count_));
   for (uint32_t j = 0; j < cabinet_joint_count_; ++j) {
     const double friction = rng.uniform(0.05, 0.15);

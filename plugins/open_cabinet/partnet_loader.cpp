@@ -1,7 +1,8 @@
 // PartNet-Mobility cabinets (asset-facts.md) over the SDK's PartNet reader
 // (manibench/kit/partnet.hpp: folders, mobility.urdf, OBJ vertices). What
 // this family adds is what a handle and a target are: handles are the
-// visuals whose name contains "handle"; a target is a link carrying one
+// visuals whose name (the kit names unnamed ones after their mesh's part
+// in result.json) contains "handle"; a target is a link carrying one
 // whose parent joint is revolute/continuous (door) or prismatic (drawer).
 // The grasp frame comes from the handle meshes' bounding box in the link
 // frame: x out of the cabinet front (which faces -x once the base joint
@@ -10,12 +11,26 @@
 
 #include <manibench/kit/partnet.hpp>
 
+#include <algorithm>
 #include <sstream>
 
 namespace open_cabinet {
 
-CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id) {
-  const partnet::Object object = partnet::loadObject(folder, id);
+double calcCabinetScale(const std::string& id, double diagonal) {
+  const auto v1 = getV1Cabinets().find(id);
+  if (v1 != getV1Cabinets().end()) return v1->second.scale;
+  if (!(diagonal > 0) || !std::isfinite(diagonal))
+    throw Error("PartNet cabinet " + id + ": its visual geometry has no extent", MB_INVALID_ARGUMENT);
+  return std::clamp(kCabinetDiagonal / diagonal, kMinCabinetScale, kMaxCabinetScale);
+}
+
+CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id, double scale) {
+  // The scale needs the unscaled size first: every length of the file
+  // scales alike, so the object is read again at its scale.
+  const bool v1 = !(scale > 0) && getV1Cabinets().count(id) > 0;
+  if (!(scale > 0))
+    scale = calcCabinetScale(id, v1 ? 1.0 : partnet::loadObject(folder, id).calcVisualBounds().extent().norm());
+  const partnet::Object object = partnet::loadObject(folder, id, scale);
   const std::map<std::string, Eigen::Isometry3d> pose = object.calcLinkPoses();
 
   CabinetModel cabinet;
@@ -79,11 +94,34 @@ CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id
   const partnet::Bounds all = object.calcVisualBounds();
   if (all.empty())
     throw Error("PartNet: " + object.dir + "/mobility.urdf has no visual geometry", MB_INVALID_ARGUMENT);
+  // ManiSkill v1 lifts the cabinet, joints at their lower limits (as the
+  // task's reset sets them), so that its collision box touches the ground.
+  // The bounds are taken at q = 0, which is every PartNet door's and
+  // drawer's lower limit we have seen (the 8 cabinets of the tests: 23
+  // joints); the visual and collision meshes are the same files.
   cabinet.placement = Eigen::Vector3d(0, 0, -all.lo.z());  // bottom on the ground
   cabinet.lower = all.lo + cabinet.placement;
   cabinet.upper = all.hi + cabinet.placement;
+  cabinet.scale = scale;
+  // v1's own ids had this many targets of each kind: its link_k is the k-th
+  // such link in link order, as ours, so the first ones are kept.
+  if (const auto found = getV1Cabinets().find(id); found != getV1Cabinets().end()) {
+    std::vector<TargetLink> kept;
+    int kept_doors = 0, kept_drawers = 0;
+    for (const TargetLink& t : cabinet.targets) {
+      int& count = t.kind == TargetKind::kDoor ? kept_doors : kept_drawers;
+      if (count < (t.kind == TargetKind::kDoor ? found->second.doors : found->second.drawers)) {
+        ++count;
+        kept.push_back(t);
+      }
+    }
+    cabinet.targets = std::move(kept);
+    doors = kept_doors;
+    drawers = kept_drawers;
+  }
   std::ostringstream summary;
-  summary << "PartNet-Mobility " << id << ", " << doors << " doors, " << drawers << " drawers with handles";
+  summary << "PartNet-Mobility " << id << " at scale " << scale << (v1 ? " (ManiSkill v1's)" : "") << ", " << doors
+          << " doors, " << drawers << " drawers with handles";
   cabinet.summary = summary.str();
   return cabinet;
 }

@@ -12,6 +12,7 @@
 
 #include <limits>
 #include <regex>
+#include <set>
 #include <sstream>
 
 namespace push_chair {
@@ -51,11 +52,29 @@ ChairModel loadPartNetChair(const std::string& folder, const std::string& id, do
     if (hasLabel(s, "wheel")) wheels.push_back(link.name);
     if (seat == nullptr && hasLabel(s, "seat")) seat = &link;
   }
-  if (wheels.size() != 5)
-    throw Error(where + ": semantics.txt labels " + std::to_string(wheels.size()) +
-                    " links 'wheel'; PushChair needs a chair on 5 wheels (the task's contact materials name "
-                    "wheel_0..wheel_4)",
-                MB_INVALID_ARGUMENT);
+  // ManiSkill's chairs stand on 5 casters; PartNet's office chairs have one
+  // or two wheels per caster (chair 179: 10). The first wheel of each
+  // caster (the wheel's parent link) becomes wheel_0..wheel_4, which the
+  // task's contact materials name (friction 1.0); a caster's second wheel
+  // becomes wheel_5.. and keeps the chair's friction (0.1), since the
+  // task's materials are set before any object is known.
+  {
+    std::vector<std::string> first, second;
+    std::set<std::string> casters;
+    for (const std::string& w : wheels) {
+      const partnet::Joint* j = object.findParentJoint(w);
+      const std::string caster = j == nullptr ? w : j->parent;
+      (casters.insert(caster).second ? first : second).push_back(w);
+    }
+    if (first.size() != 5)
+      throw Error(where + ": semantics.txt labels " + std::to_string(wheels.size()) + " links 'wheel' on " +
+                      std::to_string(first.size()) +
+                      " casters; PushChair needs a chair on 5 casters (the task's contact materials name "
+                      "wheel_0..wheel_4)",
+                  MB_INVALID_ARGUMENT);
+    wheels = first;
+    wheels.insert(wheels.end(), second.begin(), second.end());
+  }
   if (seat == nullptr) throw Error(where + ": semantics.txt labels no link 'seat'", MB_INVALID_ARGUMENT);
 
   ChairModel chair;
@@ -67,8 +86,7 @@ ChairModel loadPartNetChair(const std::string& folder, const std::string& id, do
   std::map<std::string, std::string> rename;
   for (std::size_t k = 0; k < wheels.size(); ++k) rename[wheels[k]] = "wheel_" + std::to_string(k);
   std::string urdf = object.urdf;
-  for (const auto& [from, to] : rename) chair.wheel_links.push_back(to);
-  std::sort(chair.wheel_links.begin(), chair.wheel_links.end());
+  for (std::size_t k = 0; k < wheels.size(); ++k) chair.wheel_links.push_back("wheel_" + std::to_string(k));
   for (const auto& [from, to] : rename)
     urdf = std::regex_replace(urdf, std::regex("(name|link)=\"" + from + "\""), "$1=\"" + to + "\"");
   chair.urdf = urdf;
@@ -153,7 +171,7 @@ ChairModel loadPartNetChair(const std::string& folder, const std::string& id, do
     if (!points.empty()) chair.surface.push_back({renamed(link.name), thinPoints(points)});
   }
   std::ostringstream summary;
-  summary << "PartNet-Mobility " << id << " (scale " << scale << "), " << chair.joints.size() << " joints, 5 wheels, "
+  summary << "PartNet-Mobility " << id << " (scale " << scale << "), " << chair.joints.size() << " joints, " << wheels.size() << " wheels, "
           << std::fixed << std::setprecision(2) << chair.height << " m tall";
   chair.summary = summary.str();
   return chair;

@@ -145,6 +145,29 @@ TEST(PartNet, CorruptLimitNumbersKeepTheirLeadingNumber) {
   EXPECT_EQ(o.urdf.find("1.57.0"), std::string::npos) << "rewritten clean for the host's URDF reader";
 }
 
+// PartNet's joint kinds in full (slider+: a seat on a slider with a hinge
+// on it), and older files whose visuals are unnamed: result.json's part of
+// each mesh names them, in the URDF the host reads too.
+TEST(PartNet, ReadsSliderPlusAndNamesUnnamedVisualsFromResultJson) {
+  BrokenCopy copy;
+  copy.replace("100001/semantics.txt", "link_1 slider drawer", "link_1 slider+ drawer");
+  copy.replace("100001/mobility.urdf", "<visual name=\"handle-4\">", "<visual>");
+  std::ofstream(copy.file("100001/result.json"))
+      << R"([{"text": "Cabinet", "name": "cabinet", "children": [{"text": "Door", "name": "door", "children": [)"
+      << R"({"text": "Handle", "name": "handle", "objs": ["original-door_handle"]}]}]}])";
+  const partnet::Object o = partnet::loadObject(copy.folder(), "100001");
+  ASSERT_NE(o.findSemantic("link_1"), nullptr);
+  EXPECT_EQ(o.findSemantic("link_1")->kind, "slider+");
+  bool named = false;
+  for (const partnet::Link& l : o.links)
+    for (const partnet::Shape& v : l.visuals) named |= v.name == "handle";
+  EXPECT_TRUE(named);
+  EXPECT_NE(o.urdf.find("<visual name=\"handle\""), std::string::npos);
+  std::ofstream(copy.file("100001/result.json")) << "[{\"text\": ";
+  const std::string error = errorOf([&] { partnet::loadObject(copy.folder(), "100001"); });
+  EXPECT_NE(error.find("result.json:1"), std::string::npos) << error;
+}
+
 TEST(PartNet, BadInputNamesTheFileAndTheElement) {
   EXPECT_NE(errorOf([] { partnet::loadObject(kMini, "999"); }).find("no object '999'"), std::string::npos);
   struct Case {

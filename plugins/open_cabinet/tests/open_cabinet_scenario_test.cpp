@@ -1,6 +1,7 @@
 // Expert episodes of OpenCabinetDoor-v0 / OpenCabinetDrawer-v0 with the
 // mobile_panda_ee controller (plugins/open_cabinet), on train and test
-// objects and on the PartNet-Mobility fixture (tests/fixtures/partnet_mini).
+// objects and on the PartNet-Mobility fixture (tests/fixtures/partnet_mini,
+// modelled in metres: task.partnet_scale=1 keeps it at that size).
 // The full success-rate sweep is docs/tasks/open_cabinet.md's table.
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -57,10 +58,10 @@ TEST(OpenCabinetScenario, SameSeedSameTrajectory) {
 
 TEST(OpenCabinetScenario, PartNetFolderReplacesTheGenerator) {
   const std::string dir = std::string(MANIBENCH_TEST_SOURCE_DIR) + "/tests/fixtures/partnet_mini";
-  ExpertSetup s = makeExpertSetup("OpenCabinetDrawer-v0", {"task.partnet_dir=" + dir});
+  ExpertSetup s = makeExpertSetup("OpenCabinetDrawer-v0", {"task.partnet_dir=" + dir, "task.partnet_scale=1"});
   EXPECT_EQ(s.env->listObjects("train"), std::vector<std::string>{"100001_link_1"});
   EXPECT_EQ(s.env->listObjects("test"), std::vector<std::string>{"100002_link_1"});
-  ExpertSetup d = makeExpertSetup("OpenCabinetDoor-v0", {"task.partnet_dir=" + dir});
+  ExpertSetup d = makeExpertSetup("OpenCabinetDoor-v0", {"task.partnet_dir=" + dir, "task.partnet_scale=1"});
   EXPECT_EQ(d.env->listObjects("train"), std::vector<std::string>{"100001_link_0"});
   // The handle's grasp frame faces the robot (-x) and sits in front of the
   // cabinet, the cabinet stands on the ground.
@@ -81,7 +82,7 @@ TEST(OpenCabinetScenario, APartNetFolderOfTestObjectsOnlyRuns) {
   const mb::testing::FixtureCopy copy("partnet_mini");
   const std::filesystem::path dir = copy.folder();
   std::ofstream(dir / "test.txt") << "100001\n100002\n";
-  ExpertSetup s = makeExpertSetup("OpenCabinetDrawer-v0", {"task.partnet_dir=" + dir.string()});
+  ExpertSetup s = makeExpertSetup("OpenCabinetDrawer-v0", {"task.partnet_dir=" + dir.string(), "task.partnet_scale=1"});
   EXPECT_TRUE(s.env->listObjects("train").empty());
   EXPECT_EQ(s.env->listObjects("test"), (std::vector<std::string>{"100001_link_1", "100002_link_1"}));
   s.env->reset("100002_link_1", 0);
@@ -99,9 +100,9 @@ TEST(OpenCabinetScenario, PartNetSemanticsDecideTargetsAndABrokenObjectIsSkipped
   std::ofstream(dir / "100003" / "mobility.urdf") << "<robot name=\"broken\">\n  <link name=\"base\">\n";
 
   ::testing::internal::CaptureStderr();
-  ExpertSetup drawer = makeExpertSetup("OpenCabinetDrawer-v0", {"task.partnet_dir=" + dir.string()});
+  ExpertSetup drawer = makeExpertSetup("OpenCabinetDrawer-v0", {"task.partnet_dir=" + dir.string(), "task.partnet_scale=1"});
   const std::vector<std::string> drawers = drawer.env->listObjects("train");
-  ExpertSetup door = makeExpertSetup("OpenCabinetDoor-v0", {"task.partnet_dir=" + dir.string()});
+  ExpertSetup door = makeExpertSetup("OpenCabinetDoor-v0", {"task.partnet_dir=" + dir.string(), "task.partnet_scale=1"});
   const std::vector<std::string> doors = door.env->listObjects("train");
   const std::vector<std::string> test_doors = door.env->listObjects("test");
   const std::string warnings = ::testing::internal::GetCapturedStderr();

@@ -20,6 +20,7 @@
 #include <manibench/kit/common.hpp>
 #include <manibench/kit/urdf.hpp>
 
+#include <boost/property_tree/json_parser.hpp>
 #include <boost/property_tree/ptree.hpp>
 #include <boost/property_tree/xml_parser.hpp>
 
@@ -92,10 +93,15 @@ struct Joint {
   bool isMovable() const { return type != JointType::kFixed; }
 };
 
-// One line of semantics.txt: 'link_N <hinge|slider|free|heavy|static> <label>'.
+// One line of semantics.txt: 'link_N <kind> <label>', the kinds being
+// PartNet-Mobility's joint types: hinge (revolute or continuous), slider
+// (prismatic), slider+ (a slider with a hinge on it: the URDF puts a
+// massless link_N_helper between the two joints, as an office chair's seat
+// that rises and turns), free (a part that moves with no joint of its own,
+// e.g. a chair's base), heavy (the body), static (a fixed part).
 struct Semantic {
   std::string link;
-  std::string kind;   // hinge, slider, free, heavy, static
+  std::string kind;   // hinge, slider, slider+, free, heavy, static
   std::string label;  // e.g. door, drawer, seat, wheel, caster
 };
 
@@ -126,7 +132,7 @@ inline std::vector<Semantic> readSemantics(const std::string& path) {
   std::vector<Semantic> out;
   std::ifstream in(path);
   if (!in) return out;
-  static const std::set<std::string> kinds = {"hinge", "slider", "free", "heavy", "static"};
+  static const std::set<std::string> kinds = {"hinge", "slider", "slider+", "free", "heavy", "static"};
   std::string line;
   int number = 0;
   while (std::getline(in, line)) {
@@ -135,8 +141,8 @@ inline std::vector<Semantic> readSemantics(const std::string& path) {
     Semantic e;
     if (!(s >> e.link)) continue;  // blank line
     if (!(s >> e.kind) || kinds.count(e.kind) == 0 || !(s >> e.label))
-      throw Error("PartNet: " + path + ":" + std::to_string(number) + ": expected 'link_N <hinge|slider|free|heavy|" +
-                      "static> <label>', got '" + line + "'",
+      throw Error("PartNet: " + path + ":" + std::to_string(number) + ": expected 'link_N <hinge|slider|slider+|free|" +
+                      "heavy|static> <label>', got '" + line + "'",
                   MB_INVALID_ARGUMENT);
     out.push_back(e);
   }
@@ -146,6 +152,18 @@ inline std::vector<Semantic> readSemantics(const std::string& path) {
 namespace detail {
 
 using boost::property_tree::ptree;
+
+// Adds to `out` each mesh (an "objs" entry: "original-12") of a part tree
+// node of result.json and its children, with the name of the innermost
+// named part holding it ("handle", "drawer_front", ...).
+inline void collectMeshParts(const ptree& node, const std::string& name, std::map<std::string, std::string>& out) {
+  const std::string own = node.get<std::string>("name", name);
+  if (const auto objs = node.get_child_optional("objs"))
+    for (const auto& [key, mesh] : *objs) out[mesh.get_value<std::string>()] = own;
+  if (const auto children = node.get_child_optional("children"))
+    for (const auto& [key, child] : *children) collectMeshParts(child, own, out);
+}
+
 
 inline std::string formatNumber(double x) {
   std::ostringstream s;
@@ -281,7 +299,6 @@ class Object {
   std::vector<Link> links;    // parents before children: links.front() is the root
   std::vector<Joint> joints;  // in file order
   std::vector<Semantic> semantics;
-
   const Link& getRoot() const { return links.front(); }
   const Link* findLink(const std::string& name) const {
     for (const Link& l : links)
@@ -381,6 +398,23 @@ class Object {
   mutable std::map<std::string, std::shared_ptr<std::vector<Eigen::Vector3d>>> point_cache_;
 };
 
+// result.json (PartNet's part hierarchy): the part name of each mesh file
+// by its stem ("original-12" -> "handle"). An absent file gives none; one
+// that is not JSON is an error naming it.
+inline std::map<std::string, std::string> readMeshParts(const std::string& path) {
+  std::map<std::string, std::string> out;
+  std::ifstream in(path);
+  if (!in) return out;
+  detail::ptree tree;
+  try {
+    boost::property_tree::read_json(in, tree);
+  } catch (const boost::property_tree::json_parser_error& e) {
+    throw Error("PartNet: " + path + ":" + std::to_string(e.line()) + ": " + e.message(), MB_INVALID_ARGUMENT);
+  }
+  for (const auto& [key, node] : tree) detail::collectMeshParts(node, "", out);
+  return out;
+}
+
 // Sub-folders of `folder` holding a mobility.urdf, sorted.
 inline std::vector<std::string> listObjectIds(const std::string& folder) {
   namespace fs = std::filesystem;
@@ -444,6 +478,7 @@ inline Object loadObject(const std::string& folder, const std::string& id, doubl
   object.id = id;
   object.dir = dir.string();
   object.scale = scale;
+  const std::map<std::string, std::string> mesh_parts = readMeshParts((dir / "result.json").string());
   for (const urdf::Tree::Joint& j : tree.joints) {
     Joint joint;
     joint.name = j.name;
@@ -498,8 +533,18 @@ inline Object loadObject(const std::string& folder, const std::string& id, doubl
       if (scale != 1) detail::scaleGeometry(child, scale, what);
       Shape shape;
       shape.name = detail::getAttribute(child, "name");
-      shape.origin = detail::parseOrigin(child, what);
       shape.geometry = detail::parseGeometry(child, what);
+      // Older files leave visuals unnamed (cabinet 45940): result.json's
+      // part name of the mesh names it, in the URDF too, so that the host's
+      // masks and the families find a "handle" by name either way.
+      if (shape.name.empty() && shape.geometry.kind == Geometry::Kind::kMesh) {
+        const auto part = mesh_parts.find(fs::path(shape.geometry.filename).stem().string());
+        if (part != mesh_parts.end()) {
+          shape.name = part->second;
+          child.put("<xmlattr>.name", shape.name);
+        }
+      }
+      shape.origin = detail::parseOrigin(child, what);
       (visual ? link.visuals : link.collisions).push_back(shape);
     }
     object.links.push_back(std::move(link));
