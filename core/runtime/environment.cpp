@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <iostream>
 #include <stdexcept>
 #include <string>
 
@@ -37,17 +38,32 @@ Environment::Environment(const PluginRegistry& registry, const std::string& envi
     buildScene(fixed_objects_.front());
     return;
   }
-  if (!train.empty()) {
-    buildScene(train.front());
-    return;
-  }
-  // A user's PartNet folder may hold test objects only: build the first of
-  // those, so that the test split still runs.
-  const std::vector<std::string> test = task_->listObjects("test");
-  if (test.empty())
+  // The first object that builds, train first: a user's PartNet folder may
+  // hold test objects only (the test split still runs), and an object whose
+  // files the scene refuses is skipped with a warning (listObjects leaves
+  // it out from then on).
+  std::vector<std::string> candidates = train;
+  if (candidates.empty()) candidates = task_->listObjects("test");
+  if (candidates.empty())
     throw PluginCallError("task '" + task.name + "' lists no objects in either split", MB_ERROR);
-  buildScene(test.front());
+  for (const std::string& object : candidates) {
+    try {
+      buildScene(object);
+      return;
+    } catch (const std::logic_error&) {
+      throw;  // a bug, not the object's files
+    } catch (const std::exception& e) {
+      skipped_objects_[object] = e.what();
+      std::cerr << "manibench: warning: " << task.name << ": skipping object " << object << ": " << e.what()
+                << "\n";
+    }
+  }
+  throw PluginCallError("task '" + task.name + "': none of its " + std::to_string(candidates.size()) +
+                            " objects builds (the first's reason: " + skipped_objects_.begin()->second + ")",
+                        MB_INVALID_ARGUMENT);
 }
+
+void Environment::loadObject(const std::string& object_id) { buildScene(object_id); }
 
 Environment::~Environment() {
   // The controller and task may hold scene ids, the observer's renderer
@@ -85,7 +101,10 @@ PolicyLayout Environment::calcPolicyLayout(std::optional<ObservationMode> mode) 
 
 std::vector<std::string> Environment::listObjects(const std::string& split) const {
   if (!fixed_objects_.empty()) return fixed_objects_;
-  return task_->listObjects(split);
+  std::vector<std::string> ids = task_->listObjects(split);
+  ids.erase(std::remove_if(ids.begin(), ids.end(), [this](const std::string& o) { return skipped_objects_.count(o) > 0; }),
+            ids.end());
+  return ids;
 }
 
 const Scene& Environment::getScene() const {

@@ -208,6 +208,13 @@ const std::vector<JointDescription>& Scene::getJoints(int articulation) const {
   return impl_->getArticulation(articulation, "getJoints").model.joints;
 }
 
+int Scene::getCollisionShapeCount(int articulation) const {
+  std::size_t count = 0;
+  for (const scene_detail::BodyModel& body : impl_->getArticulation(articulation, "getCollisionShapeCount").model.bodies)
+    count += body.shapes.size();
+  return static_cast<int>(count);
+}
+
 const std::vector<VisualShape>& Scene::getVisualShapes() const {
   return impl_->visual_shapes;
 }

@@ -13,6 +13,7 @@
 #include <manibench/visual_observer.hpp>
 
 #include <Eigen/Core>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -71,7 +72,17 @@ class Environment {
   const ControllerDescription& getControllerDescription() const;
   // The layout policies see in `mode` (unset: the environment's own).
   PolicyLayout calcPolicyLayout(std::optional<ObservationMode> mode = std::nullopt) const;
+  // The task's objects of `split`, less those whose scene failed to build
+  // in this environment (getSkippedObjects).
   std::vector<std::string> listObjects(const std::string& split) const;
+  // Objects whose scene could not be built, with the reason (the file and
+  // element at fault). The constructor builds the first object that loads:
+  // one unloadable object of a user's folder warns and is skipped, it never
+  // makes the task unusable.
+  const std::map<std::string, std::string>& getSkippedObjects() const { return skipped_objects_; }
+  // Builds the scene of `object_id` anew (what reset() does when the object
+  // changes), for `manibench objects --check`: throws what building throws.
+  void loadObject(const std::string& object_id);
 
   // Starts an episode on `object_id` (rebuilding the scene only when the
   // object changes) with randomization from `seed`. Identical arguments give
@@ -153,6 +164,7 @@ class Environment {
   EnvironmentOptions options_;
   std::string environment_id_;
   std::vector<std::string> fixed_objects_;  // empty: every object of the task
+  std::map<std::string, std::string> skipped_objects_;  // id -> why it does not build
   std::unique_ptr<TaskInstance> task_;
   TaskDescription description_;  // task_'s, with the timing overrides
   std::unique_ptr<Scene> scene_;

@@ -263,6 +263,8 @@ class Scene {
   const std::string& getLinkName(int link) const;
   const std::vector<JointDescription>& getJoints(int articulation) const;
   int findJoint(int articulation, const std::string& joint_name) const;  // -1
+  // The convex pieces that collide: one per primitive or mesh (its hull).
+  int getCollisionShapeCount(int articulation) const;
   // Every <visual> of every articulation, in the order added (each URDF's
   // links depth first from its root, visuals in file order). Grows with
   // each add; unchanged by finalize and stepping. Link poses come from
