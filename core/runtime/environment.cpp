@@ -50,9 +50,7 @@ Environment::Environment(const PluginRegistry& registry, const std::string& envi
     try {
       buildScene(object);
       return;
-    } catch (const std::logic_error&) {
-      throw;  // a bug, not the object's files
-    } catch (const std::exception& e) {
+    } catch (const ObjectLoadError& e) {
       skipped_objects_[object] = e.what();
       std::cerr << "manibench: warning: " << task.name << ": skipping object " << object << ": " << e.what()
                 << "\n";
@@ -136,6 +134,9 @@ void Environment::buildScene(const std::string& object_id) {
   bridge_->setBuilding(true);
   try {
     task_->buildScene(*bridge_, object_id);
+  } catch (const PluginCallError& e) {
+    bridge_->setBuilding(false);
+    throw ObjectLoadError(e.what(), e.status());
   } catch (...) {
     bridge_->setBuilding(false);
     throw;

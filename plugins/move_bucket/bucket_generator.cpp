@@ -105,12 +105,6 @@ MassProperties calcRodMass(const Eigen::Vector3d& a, const Eigen::Vector3d& b, d
   return m;
 }
 
-std::string inertialXml(const MassProperties& m) {
-  const Eigen::Matrix3d& I = m.inertia;
-  return "    <inertial><origin xyz=\"" + vec(m.com) + "\"/><mass value=\"" + fmt(m.mass) + "\"/><inertia ixx=\"" +
-         fmt(I(0, 0)) + "\" ixy=\"" + fmt(I(0, 1)) + "\" ixz=\"" + fmt(I(0, 2)) + "\" iyy=\"" + fmt(I(1, 1)) +
-         "\" iyz=\"" + fmt(I(1, 2)) + "\" izz=\"" + fmt(I(2, 2)) + "\"/></inertial>\n";
-}
 
 std::array<double, 3> pickColor(Random& rng) {
   static const std::array<std::array<double, 3>, 6> kPlastic = {{{0.80, 0.15, 0.12},
@@ -125,6 +119,13 @@ std::array<double, 3> pickColor(Random& rng) {
 }
 
 }  // namespace
+
+std::string inertialXml(const MassProperties& m) {
+  const Eigen::Matrix3d& I = m.inertia;
+  return "    <inertial><origin xyz=\"" + vec(m.com) + "\"/><mass value=\"" + fmt(m.mass) + "\"/><inertia ixx=\"" +
+         fmt(I(0, 0)) + "\" ixy=\"" + fmt(I(0, 1)) + "\" ixz=\"" + fmt(I(0, 2)) + "\" iyy=\"" + fmt(I(1, 1)) +
+         "\" iyz=\"" + fmt(I(1, 2)) + "\" izz=\"" + fmt(I(2, 2)) + "\"/></inertial>\n";
+}
 
 std::string toString(BucketShape shape) {
   switch (shape) {

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <manibench/kit/family.hpp>
+#include <manibench/kit/file_cache.hpp>
 
 namespace move_bucket {
 
@@ -32,6 +33,9 @@ struct MassProperties {
 MassProperties calcMassProperties(const TriangleMesh& mesh, double density);
 // The sum of several bodies' properties (inertia moved to the common com).
 MassProperties combine(const std::vector<MassProperties>& parts);
+
+// An <inertial> element (com origin, mass, inertia about the com).
+std::string inertialXml(const MassProperties& m);
 
 // A convex solid between two convex polygons of the same vertex count in
 // planes z = z0 and z = z1 (vertex k of one joined to vertex k of the other;
@@ -117,15 +121,19 @@ std::string toString(BucketShape shape);
 // Loads a PartNet-Mobility bucket with every length multiplied by `scale`:
 // body, rim, floor and handle joint measured on its meshes, the URDF given
 // a root link in the bucket frame. Errors name the file and what is wrong.
-BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, double scale);
+// Every link's collision meshes become convex pieces cached under
+// `cache_root` ("": the URDF's meshes as they are, one hull each); the
+// body weighs a shell of kShellThickness at kShellDensity over its surface.
+constexpr double kShellThickness = 0.004;  // m: a plastic bucket's wall
+constexpr double kShellDensity = 1000;     // kg/m^3: ManiSkill v1's bucket density
+BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, double scale,
+                              const std::string& cache_root = "");
 
 // Writes a model's mesh files under `cache_root` (a folder per bucket and
 // content hash, written atomically so that parallel workers agree) and
 // points the model's base_dir at it.
 void writeMeshFiles(BucketModel& model, const std::string& cache_root);
-// $MANIBENCH_CACHE_DIR, else $XDG_CACHE_HOME/manibench, else
-// ~/.cache/manibench, else the system's temporary folder.
-std::string getDefaultCacheRoot();
+// (The cache root: the kit's getDefaultCacheRoot, kit/file_cache.hpp.)
 
 // ---- the state observation, shared with the expert --------------------------
 

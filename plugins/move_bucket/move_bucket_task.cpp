@@ -49,8 +49,8 @@ MoveBucketTask::MoveBucketTask(const Config& config)
       hold_steps_(config.get<uint32_t>("hold_steps", 10)),
       buckets_(kTaskName, "bucket", readPartNetDir(config, kTaskName),
                {listGeneratedBuckets, [](const std::string& id) { return generateBucket(id); },
-                [scale = partnet_scale_](const std::string& folder, const std::string& id) {
-                  return loadPartNetBucket(folder, id, scale);
+                [this](const std::string& folder, const std::string& id) {
+                  return loadPartNetBucket(folder, id, partnet_scale_, cache_dir_);
                 },
                 nullptr, [this](BucketModel& model) { writeMeshFiles(model, cache_dir_); }}) {
   config.requireKnownKeys({"partnet_dir", "robot_dir", "cache_dir", "partnet_scale", "hold_steps"},

@@ -11,12 +11,16 @@
 //   - the rim and the floor measured on the body's mesh vertices (PartNet
 //     meshes are not closed: no volumes, no rays); the reward's surface
 //     points sampled on its triangles.
-// Collision is the URDF's: ManiSkill's buckets come as hand-made convex
-// pieces (supplement B.9), each a <collision> the host takes as a hull.
+// Collision: ManiSkill's buckets came as hand-made convex pieces
+// (supplement B.9); a PartNet body is one concave mesh whose hull would
+// fill the bucket, so the body's collision meshes are decomposed into
+// convex pieces (kit/convex_decomposition.hpp, cached on disk), each a
+// <collision> the host takes as a hull; the handle keeps its meshes.
 // Links without <inertial> get mass from those hulls at the default
 // density (1000, the facts'), so the model's mass is left at 0.
 #include "move_bucket.hpp"
 
+#include <manibench/kit/convex_decomposition.hpp>
 #include <manibench/kit/partnet.hpp>
 
 #include <algorithm>
@@ -56,32 +60,12 @@ const partnet::Joint* findBail(const partnet::Object& object) {
   return first;
 }
 
-// The triangles of an OBJ file's 'f' lines (polygons fanned; 'a/b/c'
-// indices, negative ones counting back from the last vertex so far) over
-// the vertices the SDK reads, multiplied by `scale`.
+// An OBJ file's triangles over its vertices, multiplied by `scale`.
 TriangleMesh readObjMesh(const std::string& path, const Eigen::Vector3d& scale) {
+  partnet::ObjMesh obj = partnet::readObjMesh(path, scale);
   TriangleMesh mesh;
-  mesh.vertices = partnet::readObjVertices(path, scale);
-  std::ifstream in(path);
-  long seen = 0;  // vertices so far
-  int number = 0;
-  for (std::string line; std::getline(in, line);) {
-    ++number;
-    const bool blank = line.size() > 1 && (line[1] == ' ' || line[1] == '\t');
-    if (blank && line[0] == 'v') ++seen;
-    if (!blank || line[0] != 'f') continue;
-    std::istringstream tokens(line.substr(2));
-    std::vector<uint32_t> face;
-    for (std::string token; tokens >> token;) {
-      long i = std::strtol(token.c_str(), nullptr, 10);
-      if (i < 0) i += seen + 1;
-      if (i < 1 || i > long(mesh.vertices.size()))
-        throw Error("PartNet: " + path + ":" + std::to_string(number) + ": bad face index '" + token + "'",
-                    MB_INVALID_ARGUMENT);
-      face.push_back(uint32_t(i - 1));
-    }
-    for (std::size_t k = 1; k + 1 < face.size(); ++k) mesh.triangles.push_back({face[0], face[k], face[k + 1]});
-  }
+  mesh.vertices = std::move(obj.vertices);
+  mesh.triangles = std::move(obj.triangles);
   return mesh;
 }
 
@@ -112,7 +96,73 @@ std::optional<double> findInnerCrossing(const std::vector<Eigen::Vector2d>& rim,
 
 }  // namespace
 
-BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, double scale) {
+// HACD's concavity bounds how far a piece's hull may fill in from the
+// surface: the expert's fingers (open 2 x 40 mm) straddle a 1-2 cm rim, so
+// the inside of the wall must stay within about 1 cm of the mesh. At the
+// kit's default (0.1 of the diagonal: 5 cm here) pieces spanning a quarter
+// of the rim filled 5 cm of its inside and the fingers stopped on them
+// 2.8 cm above the grip, on every bucket.
+const convex::DecompositionOptions kDecomposition = [] {
+  convex::DecompositionOptions o;
+  o.concavity = 0.02;
+  return o;
+}();
+
+// Each link's collision meshes, merged in its frame, as convex pieces (the
+// kit's HACD, cached under `cache_root`): one hull of a bucket's body would
+// fill it, and the ball must sit inside; one hull of a U-shaped handle is a
+// plate across the rim.
+std::map<std::string, std::vector<std::string>> decomposeLinks(const partnet::Object& object,
+                                                               const std::string& cache_root) {
+  std::map<std::string, std::vector<std::string>> pieces;
+  for (const partnet::Link& link : object.links) {
+    convex::Mesh merged;
+    bool concave = false;
+    for (const partnet::Shape& c : link.collisions) {
+      if (c.geometry.kind != partnet::Geometry::Kind::kMesh) continue;
+      const partnet::ObjMesh mesh =
+          partnet::readObjMesh((std::filesystem::path(object.dir) / c.geometry.filename).string(), c.geometry.scale);
+      concave = concave || !convex::isConvex({mesh.vertices, mesh.triangles});
+      const uint32_t offset = uint32_t(merged.vertices.size());
+      for (const Eigen::Vector3d& p : mesh.vertices) merged.vertices.push_back(c.origin * p);
+      for (const auto& t : mesh.triangles) merged.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    }
+    // A link whose meshes are convex pieces already (a hand decomposition,
+    // as ManiSkill's buckets and our fixtures) keeps them.
+    if (concave) pieces[link.name] = convex::decomposeCached(merged, cache_root, kDecomposition);
+  }
+  return pieces;
+}
+
+// The body as a shell of kShellThickness at kShellDensity over its surface
+// (bucket frame; flipped duplicate faces counted once): PartNet gives no
+// masses, and the host's default (its collision hulls' volume) counts the
+// pieces' overlaps and the chords of a curved wall: 7-30 kg for the four
+// real buckets at 0.3, none of which two grippers lift.
+MassProperties calcShellMass(const TriangleMesh& surface) {
+  convex::Mesh mesh{surface.vertices, surface.triangles};
+  mesh = convex::detail::weld(mesh);
+  MassProperties m;
+  Eigen::Vector3d first = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d second = Eigen::Matrix3d::Zero();  // of r r^T about the origin
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3d &a = mesh.vertices[t[0]], &b = mesh.vertices[t[1]], &c = mesh.vertices[t[2]];
+    const double mass = kShellDensity * kShellThickness * 0.5 * (b - a).cross(c - a).norm();
+    const Eigen::Vector3d sum = a + b + c;
+    m.mass += mass;
+    first += mass * sum / 3;
+    // A triangle's second moment: area / 12 (a a^T + b b^T + c c^T + s s^T).
+    second += mass / 12 * (a * a.transpose() + b * b.transpose() + c * c.transpose() + sum * sum.transpose());
+  }
+  if (!(m.mass > 0)) return m;
+  m.com = first / m.mass;
+  const Eigen::Matrix3d about_com = second - m.mass * m.com * m.com.transpose();
+  m.inertia = about_com.trace() * Eigen::Matrix3d::Identity() - about_com;
+  return m;
+}
+
+BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, double scale,
+                              const std::string& cache_root) {
   const partnet::Object object = partnet::loadObject(folder, id, scale);
   const std::string path = object.dir + "/mobility.urdf";
   if (object.findLink(kFrameLink) != nullptr)
@@ -190,6 +240,7 @@ BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, 
         }
   model.surface_points =
       surface.calcArea() > 0 ? sampleSurface(surface, 1024, hashString("surface:partnet:" + id)) : points;
+  const MassProperties shell = calcShellMass(surface);
 
   if (const partnet::Joint* bail = findBail(object)) {
     model.bail_joint = bail->name;
@@ -198,12 +249,31 @@ BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, 
       model.bail_upper = bail->upper;
     }
   }
+  model.urdf = object.urdf;
+  bool decomposed_body = false;  // the body's meshes became convex pieces
+  if (!cache_root.empty()) {
+    const std::map<std::string, std::vector<std::string>> pieces = decomposeLinks(object, cache_root);
+    if (!pieces.empty()) model.urdf = partnet::replaceCollisionMeshes(model.urdf, pieces);
+    for (const std::string& link : body_links) decomposed_body = decomposed_body || pieces.count(link) > 0;
+  }
+  // A decomposed body's mass on the frame link, none on the body's own
+  // links (a body of convex pieces keeps the host's mass from their hulls,
+  // which is right for solid pieces).
+  if (decomposed_body)
+  model.urdf = partnet::editLinks(model.urdf, [&](const std::string& name, boost::property_tree::ptree& link) {
+    if (body_links.count(name) == 0) return;
+    for (auto it = link.begin(); it != link.end();) it = it->first == "inertial" ? link.erase(it) : std::next(it);
+    boost::property_tree::ptree inertial;
+    inertial.put("mass.<xmlattr>.value", "0");
+    for (const char* k : {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"}) inertial.put(std::string("inertia.<xmlattr>.") + k, "0");
+    link.add_child("inertial", inertial);
+  });
   // The new root: the bucket frame, PartNet's root fixed in it.
   std::ostringstream frame;
-  frame << std::setprecision(17) << "\n  <link name=\"" << kFrameLink << "\"/>\n  <joint name=\"" << kFrameLink
+  frame << std::setprecision(17) << "\n  <link name=\"" << kFrameLink << "\">\n"
+        << (decomposed_body ? inertialXml(shell) : "") << "  </link>\n  <joint name=\"" << kFrameLink
         << "_joint\" type=\"fixed\"><parent link=\"" << kFrameLink << "\"/><child link=\"" << object.getRoot().name
         << "\"/><origin xyz=\"" << -origin.x() << " " << -origin.y() << " " << -origin.z() << "\"/></joint>";
-  model.urdf = object.urdf;
   const std::size_t robot = model.urdf.find("<robot");
   const std::size_t open_end = robot == std::string::npos ? robot : model.urdf.find('>', robot);
   if (open_end == std::string::npos) throw Error("PartNet: " + path + ": no <robot> element", MB_INVALID_ARGUMENT);
@@ -212,7 +282,8 @@ BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, 
   std::ostringstream summary;
   summary << std::fixed << std::setprecision(2) << "PartNet-Mobility " << id << ", " << height << " m tall, rim "
           << 2 * model.rim_outer_x << " x " << 2 * model.rim_outer_y << " m"
-          << (model.bail_joint.empty() ? "" : ", handle on " + model.bail_joint);
+          << (model.bail_joint.empty() ? "" : ", handle on " + model.bail_joint)
+          << (decomposed_body ? ", body decomposed" : "");
   model.summary = summary.str();
   return model;
 }

@@ -163,21 +163,38 @@ TEST(ContactTest, BadMeshesAreErrorsNamingLinkAndFile) {
   EXPECT_EQ(scene.getArticulationCount(), 0);
 }
 
-TEST(ContactTest, FlatMeshesAreSkippedWithANote) {
-  const std::string path = getMeshDir() + "/flat.obj";
-  std::ofstream(path) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
-  Scene scene;
-  scene.addGround(0);
-  ::testing::internal::CaptureStderr();
-  const int a = scene.addUrdfString(singleLink("sheet", inertial() + collision(mesh(path))), "",
-                                    "sheet", at(0, 0, 0.1), false);
-  const std::string note = ::testing::internal::GetCapturedStderr();
-  EXPECT_NE(note.find("link 'sheet'"), std::string::npos) << note;
-  EXPECT_NE(note.find("flat.obj"), std::string::npos) << note;
-  scene.finalize();
-  // Without collision geometry it falls through the floor.
-  for (int k = 0; k < 20; ++k) scene.advance(0.01);
-  EXPECT_LT(scene.getRootPose(a).position.z(), 0);
+// PartNet models panels as single planes: a flat mesh becomes a solid
+// kMinHullThickness (1 cm) thick about its plane, so it carries contact.
+// A sheet in z = 0 (Qhull: a singular simplex) rests on the floor at half
+// that; one in x = 0.2 (Qhull's QH6013: every point the same x), turned to
+// lie flat, too; a 2 mm plate grows to 1 cm.
+TEST(ContactTest, FlatMeshesBecomeThinSolids) {
+  const std::string dir = getMeshDir();
+  // Centred on the link's origin, where its mass is (a corner would tip).
+  std::ofstream(dir + "/flat.obj") << "v -0.5 -0.5 0\nv 0.5 -0.5 0\nv 0.5 0.5 0\nv -0.5 0.5 0\nf 1 2 3\nf 1 3 4\n";
+  std::ofstream(dir + "/flat_x.obj") << "v 0.2 -0.5 -0.5\nv 0.2 0.5 -0.5\nv 0.2 0.5 0.5\nv 0.2 -0.5 0.5\nf 1 2 3\nf 1 3 4\n";
+  std::ofstream(dir + "/plate.obj") << "v -0.5 -0.5 0\nv 0.5 -0.5 0\nv 0.5 0.5 0\nv -0.5 0.5 0\nv -0.5 -0.5 0.002\n"
+                                    << "v 0.5 -0.5 0.002\nv 0.5 0.5 0.002\nv -0.5 0.5 0.002\nf 1 2 3\nf 5 6 7\n";
+  const Eigen::Vector3d flat_x(0, kPi / 2, 0);  // turns the x = 0.2 plane to z = -0.2
+  struct Case {
+    std::string file;
+    Eigen::Vector3d rpy;
+    double rest;  // the link origin's height at rest, m
+  };
+  for (const Case& c : {Case{"flat.obj", Eigen::Vector3d::Zero(), 0.005}, Case{"flat_x.obj", flat_x, 0.205},
+                        Case{"plate.obj", Eigen::Vector3d::Zero(), 0.004}}) {
+    Scene scene;
+    scene.addGround(0);
+    ::testing::internal::CaptureStderr();
+    const int a = scene.addUrdfString(
+        singleLink("sheet", inertial() + collision(mesh(dir + "/" + c.file), Eigen::Vector3d::Zero(), c.rpy)), "",
+        "sheet", at(0, 0, c.rest + 0.05), false);
+    const std::string note = ::testing::internal::GetCapturedStderr();
+    EXPECT_EQ(note, "") << c.file << ": nothing is left unsimulated";
+    scene.finalize();
+    for (int k = 0; k < 100; ++k) scene.advance(0.01);
+    EXPECT_NEAR(scene.getRootPose(a).position.z(), c.rest, 5e-4) << c.file;
+  }
 }
 
 TEST(ContactTest, CapsulesAreParsedAlongsideOtherShapes) {

@@ -49,7 +49,7 @@ TEST(MoveBucketPartNet, RimFloorAndHandleAreMeasuredInTheBucketFrame) {
   EXPECT_DOUBLE_EQ(octagon.bail_lower, -2.0);
   EXPECT_DOUBLE_EQ(octagon.bail_upper, 2.0);
   EXPECT_EQ(octagon.body_link, "move_bucket_frame");
-  EXPECT_NE(octagon.urdf.find("<link name=\"move_bucket_frame\"/>"), std::string::npos);
+  EXPECT_NE(octagon.urdf.find("<link name=\"move_bucket_frame\">"), std::string::npos);
   EXPECT_TRUE(octagon.files.empty()) << "meshes stay where they are";
   EXPECT_EQ(octagon.base_dir, kFixture + "/200001");
   ASSERT_GT(octagon.surface_points.size(), 50u);

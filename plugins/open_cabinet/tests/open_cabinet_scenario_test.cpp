@@ -118,4 +118,27 @@ TEST(OpenCabinetScenario, PartNetSemanticsDecideTargetsAndABrokenObjectIsSkipped
   EXPECT_THROW(drawer.env->reset("100003_link_1", 0), std::exception);
 }
 
+// An object the kit reads but whose scene the host refuses (here a
+// collision mesh that is not there, which only the scene loads) is skipped
+// when the environment is made, with the file in the reason; the next
+// object is built instead and the listing leaves the first out.
+TEST(OpenCabinetScenario, AnObjectWhoseSceneDoesNotBuildIsSkipped) {
+  mb::testing::FixtureCopy copy("partnet_mini");
+  const std::filesystem::path dir = copy.folder();
+  std::filesystem::remove(dir / "test.txt");
+  copy.replace("100001/mobility.urdf", "<visual name=\"cabinet_body-1\">",
+               "<collision><geometry><mesh filename=\"textured_objs/missing.obj\"/></geometry></collision>"
+               "<visual name=\"cabinet_body-1\">");
+  ::testing::internal::CaptureStderr();
+  ExpertSetup s = makeExpertSetup("OpenCabinetDrawer-v0", {"task.partnet_dir=" + dir.string(), "task.partnet_scale=1"});
+  const std::string warnings = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(s.env->getObjectId(), "100002_link_1");
+  ASSERT_EQ(s.env->getSkippedObjects().count("100001_link_1"), 1u);
+  EXPECT_NE(s.env->getSkippedObjects().at("100001_link_1").find("missing.obj"), std::string::npos)
+      << s.env->getSkippedObjects().at("100001_link_1");
+  EXPECT_NE(warnings.find("skipping object 100001_link_1"), std::string::npos) << warnings;
+  EXPECT_EQ(s.env->listObjects("train"), std::vector<std::string>{"100002_link_1"});
+  expectExpertSucceeds(s, "100002_link_1", 1);
+}
+
 }  // namespace

@@ -48,6 +48,15 @@ struct StepResult {
   bool isDone() const { return terminated || truncated; }
 };
 
+// The task's build_scene refused an object: its files (a URDF the scene
+// cannot load, a mesh that is not there). Environment's constructor skips
+// such an object; a configuration error (a camera or material naming a
+// link the scene lacks) is no object's fault and propagates as it was.
+class ObjectLoadError : public PluginCallError {
+ public:
+  using PluginCallError::PluginCallError;
+};
+
 class Environment {
  public:
   // Loads the task and builds the scene of its first train object (so the

@@ -20,14 +20,21 @@
 #include <manibench/kit/common.hpp>
 #include <manibench/kit/urdf.hpp>
 
+// (Boost 1.74's JSON reader includes boost/bind.hpp, which warns unless
+// told that its global placeholders are wanted; nothing here uses them.)
+#ifndef BOOST_BIND_GLOBAL_PLACEHOLDERS
+#define BOOST_BIND_GLOBAL_PLACEHOLDERS
+#endif
 #include <boost/property_tree/json_parser.hpp>
 #include <boost/property_tree/ptree.hpp>
 #include <boost/property_tree/xml_parser.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <map>
 #include <memory>
@@ -124,6 +131,41 @@ inline std::vector<Eigen::Vector3d> readObjVertices(const std::string& path,
     out.push_back(v.cwiseProduct(scale));
   }
   return out;
+}
+
+// An OBJ file's vertices (multiplied by `scale`) and triangles.
+struct ObjMesh {
+  std::vector<Eigen::Vector3d> vertices;
+  std::vector<std::array<uint32_t, 3>> triangles;
+};
+
+// The vertices and the triangles of an OBJ file's 'f' lines (polygons
+// fanned; 'a/b/c' indices, negative ones counting back from the last
+// vertex so far). Errors name the file and line.
+inline ObjMesh readObjMesh(const std::string& path, const Eigen::Vector3d& scale = Eigen::Vector3d::Ones()) {
+  ObjMesh mesh;
+  mesh.vertices = readObjVertices(path, scale);
+  std::ifstream in(path);
+  long seen = 0;  // vertices so far
+  int number = 0;
+  for (std::string line; std::getline(in, line);) {
+    ++number;
+    const bool blank = line.size() > 1 && (line[1] == ' ' || line[1] == '\t');
+    if (blank && line[0] == 'v') ++seen;
+    if (!blank || line[0] != 'f') continue;
+    std::istringstream tokens(line.substr(2));
+    std::vector<uint32_t> face;
+    for (std::string token; tokens >> token;) {
+      long i = std::strtol(token.c_str(), nullptr, 10);
+      if (i < 0) i += seen + 1;
+      if (i < 1 || i > long(mesh.vertices.size()))
+        throw Error("PartNet: " + path + ":" + std::to_string(number) + ": bad face index '" + token + "'",
+                    MB_INVALID_ARGUMENT);
+      face.push_back(uint32_t(i - 1));
+    }
+    for (std::size_t k = 1; k + 1 < face.size(); ++k) mesh.triangles.push_back({face[0], face[k], face[k + 1]});
+  }
+  return mesh;
 }
 
 // semantics.txt; an absent file gives no entries (the URDF is enough to
@@ -413,6 +455,39 @@ inline std::map<std::string, std::string> readMeshParts(const std::string& path)
   }
   for (const auto& [key, node] : tree) detail::collectMeshParts(node, "", out);
   return out;
+}
+
+// `urdf` with `edit(name, element)` called on every <link> element (as
+// Boost.PropertyTree's XML: attributes under "<xmlattr>").
+inline std::string editLinks(const std::string& urdf,
+                             const std::function<void(const std::string&, boost::property_tree::ptree&)>& edit) {
+  using detail::ptree;
+  ptree document;
+  std::istringstream in(urdf);
+  boost::property_tree::read_xml(in, document, boost::property_tree::xml_parser::trim_whitespace);
+  for (auto& [tag, link] : document.get_child("robot"))
+    if (tag == "link") edit(detail::getAttribute(link, "name"), link);
+  std::ostringstream out;
+  boost::property_tree::write_xml(out, document, boost::property_tree::xml_writer_make_settings<std::string>(' ', 1));
+  return out.str();
+}
+
+// `urdf` with every <collision> of the links named in `meshes` replaced by
+// one <collision> per mesh file given (absolute paths, in the link frame,
+// unscaled): a part's convex pieces instead of its concave meshes.
+inline std::string replaceCollisionMeshes(const std::string& urdf,
+                                          const std::map<std::string, std::vector<std::string>>& meshes) {
+  return editLinks(urdf, [&](const std::string& name, detail::ptree& link) {
+    const auto found = meshes.find(name);
+    if (found == meshes.end()) return;
+    for (auto it = link.begin(); it != link.end();) it = it->first == "collision" ? link.erase(it) : std::next(it);
+    for (std::size_t k = 0; k < found->second.size(); ++k) {
+      detail::ptree collision;
+      collision.put("<xmlattr>.name", "convex_piece_" + std::to_string(k));
+      collision.put("geometry.mesh.<xmlattr>.filename", found->second[k]);
+      link.add_child("collision", collision);
+    }
+  });
 }
 
 // Sub-folders of `folder` holding a mobility.urdf, sorted.
