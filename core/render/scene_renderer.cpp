@@ -153,6 +153,8 @@ struct SceneRenderer::Impl {
       : scene(s), context(c), lighting(std::move(l)) {}
 
   void upload();
+  // The vertex array of `vertices` (kVertexFloats each) and `indices`.
+  void createBuffers(const std::vector<float>& vertices, const std::vector<std::uint32_t>& indices);
   void releaseGl();
   CameraTarget& getTarget(const CameraSpec& camera);
   const ShaderProgram& getProgram();
@@ -300,7 +302,11 @@ void SceneRenderer::Impl::upload() {
     ground.index_count = range.count;
   }
   link_poses.resize(links.size());
+  createBuffers(vertices, indices);
+}
 
+void SceneRenderer::Impl::createBuffers(const std::vector<float>& vertices,
+                                        const std::vector<std::uint32_t>& indices) {
   glGenVertexArrays(1, &vertex_array);
   glBindVertexArray(vertex_array);
   glGenBuffers(1, &vertex_buffer);
