@@ -20,6 +20,7 @@ struct ShaderProgram {
   int model_view = -1, projection = -1, normal_matrix = -1, color = -1, segment = -1;
   int ambient = -1, directional_to_light = -1, directional_color = -1;
   int point_position = -1, point_color = -1;
+  int textured = -1;  // u_textured; the sampler u_texture is unit 0, set at link
 };
 
 struct RenderContext::Impl {

@@ -3,11 +3,13 @@
 // from the current link pose; per camera an FBO with RGBA8 color, R32UI
 // segmentation (visual index + 1) and 32-bit float depth. Past 600 lines
 // because it is one class whose parts (upload, camera targets, draw,
-// read-back) share its GL state; the shader program and the context-free
-// camera geometry are shader_program.cpp and camera_geometry.cpp.
+// read-back) share its GL state; the shader program, the textures and the
+// context-free camera geometry are shader_program.cpp, texture_cache.cpp
+// and camera_geometry.cpp.
 #include "render_context_impl.hpp"
 #include "shader_program.hpp"
 #include "tessellation.hpp"
+#include "texture_cache.hpp"
 
 #define GL_GLEXT_PROTOTYPES 1
 #include <GL/glcorearb.h>
@@ -55,8 +57,13 @@ struct DrawItem {
   std::size_t first_index = 0;  // into the index buffer
   GLsizei index_count = 0;
   Eigen::Vector4f color = Eigen::Vector4f::Ones();
+  GLuint texture = 0;  // the diffuse texture multiplying color; 0 for none
   bool closed = true;  // primitives: back faces can be culled
 };
+
+// Floats per vertex in the vertex buffer: position, normal, texture
+// coordinates (0 where a mesh has none; see TextureCache for their v).
+constexpr std::size_t kVertexFloats = 8;
 
 // Segmentation value of the ground plane (visuals are index + 1, 0 is
 // nothing): it counts as a hit for depth but names no visual.
@@ -106,6 +113,22 @@ void convertImages(const RawCameraImages& raw, const std::vector<int>& visual_li
   }
 }
 
+// A mesh's vertices as the vertex buffer holds them (kVertexFloats each).
+std::vector<float> interleaveVertices(const VisualMesh& mesh) {
+  const bool has_coords = mesh.texture_coords.size() == mesh.positions.size();
+  std::vector<float> interleaved;
+  interleaved.reserve(mesh.positions.size() * kVertexFloats);
+  for (std::size_t k = 0; k < mesh.positions.size(); ++k) {
+    const Eigen::Vector3f& p = mesh.positions[k];
+    const Eigen::Vector3f n = k < mesh.normals.size() ? mesh.normals[k] : Eigen::Vector3f::UnitZ();
+    const Eigen::Vector2f t = has_coords ? mesh.texture_coords[k] : Eigen::Vector2f::Zero();
+    // 1 - v: the texture's rows are uploaded top first (TextureCache).
+    interleaved.insert(interleaved.end(),
+                       {p.x(), p.y(), p.z(), n.x(), n.y(), n.z(), t.x(), 1.0f - t.y()});
+  }
+  return interleaved;
+}
+
 }  // namespace
 
 struct SceneRenderer::Impl {
@@ -114,6 +137,7 @@ struct SceneRenderer::Impl {
   LightingSpec lighting;
   GLuint vertex_array = 0, vertex_buffer = 0, index_buffer = 0;
   std::vector<DrawItem> items;
+  TextureCache textures;
   DrawItem ground;  // unit square z = 0, |x|, |y| <= 1, facing +z
   std::vector<int> visual_links;    // per visual
   std::vector<char> visual_visible;  // per visual
@@ -129,6 +153,8 @@ struct SceneRenderer::Impl {
       : scene(s), context(c), lighting(std::move(l)) {}
 
   void upload();
+  // The vertex array of `vertices` (kVertexFloats each) and `indices`.
+  void createBuffers(const std::vector<float>& vertices, const std::vector<std::uint32_t>& indices);
   void releaseGl();
   CameraTarget& getTarget(const CameraSpec& camera);
   const ShaderProgram& getProgram();
@@ -177,22 +203,27 @@ void SceneRenderer::Impl::upload() {
   };
   std::map<std::tuple<int, double, double, double>, Range> primitive_ranges;
   std::unordered_map<const VisualMesh*, Range> mesh_ranges;
-  const auto append = [&](const float* v, std::size_t vertex_count, const std::uint32_t* idx,
-                          std::size_t index_count) {
-    Range range{static_cast<GLint>(vertices.size() / 6), indices.size(),
+  // `v`: `stride` floats per vertex (6 without texture coordinates).
+  const auto append = [&](const float* v, std::size_t stride, std::size_t vertex_count,
+                          const std::uint32_t* idx, std::size_t index_count) {
+    Range range{static_cast<GLint>(vertices.size() / kVertexFloats), indices.size(),
                 static_cast<GLsizei>(index_count)};
-    vertices.insert(vertices.end(), v, v + vertex_count * 6);
+    for (std::size_t k = 0; k < vertex_count; ++k) {
+      vertices.insert(vertices.end(), v + k * stride, v + (k + 1) * stride);
+      vertices.resize(vertices.size() + (kVertexFloats - stride), 0.0f);
+    }
     indices.insert(indices.end(), idx, idx + index_count);
     return range;
   };
   const auto addItem = [&](int visual, const Range& range, const Eigen::Vector4f& color,
-                           bool closed) {
+                           GLuint texture, bool closed) {
     DrawItem item;
     item.visual = visual;
     item.base_vertex = range.base_vertex;
     item.first_index = range.first_index;
     item.index_count = range.count;
     item.color = color;
+    item.texture = texture;
     item.closed = closed;
     items.push_back(item);
   };
@@ -215,22 +246,20 @@ void SceneRenderer::Impl::upload() {
         if (mesh.indices.empty()) continue;
         auto found = mesh_ranges.find(&mesh);
         if (found == mesh_ranges.end()) {
-          std::vector<float> interleaved;
-          interleaved.reserve(mesh.positions.size() * 6);
-          for (std::size_t k = 0; k < mesh.positions.size(); ++k) {
-            const Eigen::Vector3f& p = mesh.positions[k];
-            const Eigen::Vector3f n =
-                k < mesh.normals.size() ? mesh.normals[k] : Eigen::Vector3f::UnitZ();
-            interleaved.insert(interleaved.end(), {p.x(), p.y(), p.z(), n.x(), n.y(), n.z()});
-          }
+          const std::vector<float> interleaved = interleaveVertices(mesh);
           found = mesh_ranges
-                      .emplace(&mesh, append(interleaved.data(), mesh.positions.size(),
-                                             mesh.indices.data(), mesh.indices.size()))
+                      .emplace(&mesh, append(interleaved.data(), kVertexFloats,
+                                             mesh.positions.size(), mesh.indices.data(),
+                                             mesh.indices.size()))
                       .first;
         }
+        // A URDF material replaces the file's, texture included (the
+        // visual asked for that color).
+        const bool textured = !shape.has_material && !mesh.texture.empty() &&
+                              mesh.texture_coords.size() == mesh.positions.size();
         // Mesh files may be open or inconsistently wound: no culling.
         addItem(visual, found->second, shape.has_material ? shape.color : mesh.color,
-                /*closed=*/false);
+                textured ? textures.findOrLoad(mesh.texture) : 0, /*closed=*/false);
       }
       continue;
     }
@@ -253,11 +282,11 @@ void SceneRenderer::Impl::upload() {
         case VisualShape::Kind::Mesh: break;
       }
       found = primitive_ranges
-                  .emplace(key, append(mesh.vertices.data(), mesh.getVertexCount(),
+                  .emplace(key, append(mesh.vertices.data(), 6, mesh.getVertexCount(),
                                        mesh.indices.data(), mesh.indices.size()))
                   .first;
     }
-    addItem(visual, found->second, shape.color, /*closed=*/true);
+    addItem(visual, found->second, shape.color, /*texture=*/0, /*closed=*/true);
   }
   for (const DrawItem& item : items) triangle_count += static_cast<std::size_t>(item.index_count) / 3;
   // The ground quad, always uploaded (4 vertices): whether it is drawn is
@@ -266,14 +295,18 @@ void SceneRenderer::Impl::upload() {
     const float quad[] = {-1, -1, 0, 0, 0, 1, 1, -1, 0, 0, 0, 1,
                           1,  1,  0, 0, 0, 1, -1, 1, 0, 0, 0, 1};
     const std::uint32_t quad_indices[] = {0, 1, 2, 0, 2, 3};
-    const Range range = append(quad, 4, quad_indices, 6);
+    const Range range = append(quad, 6, 4, quad_indices, 6);
     ground.visual = -1;
     ground.base_vertex = range.base_vertex;
     ground.first_index = range.first_index;
     ground.index_count = range.count;
   }
   link_poses.resize(links.size());
+  createBuffers(vertices, indices);
+}
 
+void SceneRenderer::Impl::createBuffers(const std::vector<float>& vertices,
+                                        const std::vector<std::uint32_t>& indices) {
   glGenVertexArrays(1, &vertex_array);
   glBindVertexArray(vertex_array);
   glGenBuffers(1, &vertex_buffer);
@@ -285,11 +318,15 @@ void SceneRenderer::Impl::upload() {
   glBufferData(GL_ELEMENT_ARRAY_BUFFER,
                static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)), indices.data(),
                GL_STATIC_DRAW);
+  const GLsizei stride = kVertexFloats * sizeof(float);
   glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, nullptr);
   glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride,
                         reinterpret_cast<const void*>(3 * sizeof(float)));
+  glEnableVertexAttribArray(2);
+  glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, stride,
+                        reinterpret_cast<const void*>(6 * sizeof(float)));
   glBindVertexArray(0);
   checkGlError("uploading the scene's geometry");
 }
@@ -300,6 +337,7 @@ void SceneRenderer::Impl::releaseGl() {
     glDeleteRenderbuffers(3, target.renderbuffers);
   }
   targets.clear();
+  textures.release();
   if (vertex_array != 0) glDeleteVertexArrays(1, &vertex_array);
   if (vertex_buffer != 0) glDeleteBuffers(1, &vertex_buffer);
   if (index_buffer != 0) glDeleteBuffers(1, &index_buffer);
@@ -362,6 +400,10 @@ const ShaderProgram& SceneRenderer::Impl::getProgram() {
   program.directional_color = location("u_directional_color");
   program.point_position = location("u_point_position");
   program.point_color = location("u_point_color");
+  program.textured = location("u_textured");
+  glUseProgram(program.id);
+  glUniform1i(location("u_texture"), 0);
+  glUseProgram(0);
   return programs.emplace(counts, program).first->second;
 }
 
@@ -518,6 +560,12 @@ void SceneRenderer::Impl::draw(const CameraSpec& camera, const Pose& camera_pose
   glUseProgram(program.id);
   glUniformMatrix4fv(program.projection, 1, GL_FALSE, projection.data());
   d.setLightUniforms(program, world_to_view);
+  // Untextured until an item has a texture (the program is shared: another
+  // renderer may have left u_textured set).
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, 0);
+  glUniform1i(program.textured, 0);
+  GLuint bound_texture = 0;
   glBindVertexArray(d.vertex_array);
   if (d.lighting.draw_ground && d.scene.hasGround()) {
     // An unbounded plane: a square under the camera reaching past every
@@ -556,6 +604,11 @@ void SceneRenderer::Impl::draw(const CameraSpec& camera, const Pose& camera_pose
     glUniformMatrix3fv(program.normal_matrix, 1, GL_FALSE, normal_matrix.data());
     glUniform4fv(program.color, 1, item.color.data());
     glUniform1ui(program.segment, static_cast<GLuint>(item.visual + 1));
+    if (item.texture != bound_texture) {
+      bound_texture = item.texture;
+      glBindTexture(GL_TEXTURE_2D, bound_texture);
+      glUniform1i(program.textured, bound_texture != 0 ? 1 : 0);
+    }
     if (item.closed != culling) {
       culling = item.closed;
       if (culling) glEnable(GL_CULL_FACE); else glDisable(GL_CULL_FACE);
@@ -565,6 +618,7 @@ void SceneRenderer::Impl::draw(const CameraSpec& camera, const Pose& camera_pose
         reinterpret_cast<const void*>(item.first_index * sizeof(std::uint32_t)), item.base_vertex);
   }
   glBindVertexArray(0);
+  glBindTexture(GL_TEXTURE_2D, 0);
 
   target.drawn = true;
   target.camera_to_world = camera_to_world;
@@ -630,11 +684,15 @@ void SceneRenderer::setVisualColor(int visual, const Eigen::Vector4f& rgba) {
   }
   if (!rgba.allFinite()) throw RenderError("setVisualColor: color is not finite");
   for (DrawItem& item : impl_->items) {
-    if (item.visual == visual) item.color = rgba;
+    if (item.visual != visual) continue;
+    item.color = rgba;
+    item.texture = 0;  // a color replaces the file's material, as a URDF material does
   }
 }
 
 std::size_t SceneRenderer::getTriangleCount() const { return impl_->triangle_count; }
+
+std::size_t SceneRenderer::getTextureCount() const { return impl_->textures.getCount(); }
 
 const RenderDeviceInfo& SceneRenderer::getDeviceInfo() const { return impl_->context.info; }
 

@@ -11,15 +11,18 @@ namespace {
 const char* const kVertexShader = R"(#version 330 core
 layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec3 a_normal;
+layout(location = 2) in vec2 a_texture_coord;
 uniform mat4 u_model_view;
 uniform mat4 u_projection;
 uniform mat3 u_normal_matrix;
 out vec3 v_position;
 out vec3 v_normal;
+out vec2 v_texture_coord;
 void main() {
   vec4 p = u_model_view * vec4(a_position, 1.0);
   v_position = p.xyz;
   v_normal = u_normal_matrix * a_normal;
+  v_texture_coord = a_texture_coord;
   gl_Position = u_projection * p;
 }
 )";
@@ -27,11 +30,17 @@ void main() {
 // Lights arrive in the camera (view) frame. The light counts are compile-
 // time constants (one program per count pair): llvmpipe runs loops with
 // uniform bounds about five times slower than unrolled ones. Specular
-// exponent 32 by repeated squaring (pow() is slow there too).
+// exponent 32 by repeated squaring (pow() is slow there too). A textured
+// mesh's diffuse color is its material color times the texture's rgb (as
+// an OBJ's Kd and map_Kd); u_textured is uniform, so untextured draws skip
+// the sampling and derivatives stay defined.
 const char* const kFragmentShaderBody = R"(
 in vec3 v_position;
 in vec3 v_normal;
+in vec2 v_texture_coord;
 uniform vec4 u_color;
+uniform bool u_textured;
+uniform sampler2D u_texture;
 uniform uint u_segment;
 uniform vec3 u_ambient;
 uniform vec3 u_directional_to_light[DIRECTIONAL_SIZE];
@@ -46,6 +55,8 @@ float specular(vec3 n, vec3 l, vec3 v) {
   return s;
 }
 void main() {
+  vec3 albedo = u_color.rgb;
+  if (u_textured) albedo *= texture(u_texture, v_texture_coord).rgb;
   vec3 n = normalize(v_normal);
   if (!gl_FrontFacing) n = -n;
   vec3 v = normalize(-v_position);
@@ -65,7 +76,7 @@ void main() {
     diffuse += u_point_color[i] * (lambert / r2);
     if (lambert > 0.0) shine += u_point_color[i] * (specular(n, l, v) / r2);
   }
-  o_color = vec4(clamp(u_color.rgb * diffuse + 0.1 * shine, 0.0, 1.0), 1.0);
+  o_color = vec4(clamp(albedo * diffuse + 0.1 * shine, 0.0, 1.0), 1.0);
   o_segment = u_segment;
 }
 )";

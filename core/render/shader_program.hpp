@@ -1,5 +1,6 @@
 // Internal to core/render: the scene renderer's one shader program (Phong
-// lighting with directional and point lights, a segmentation output), its
+// lighting with directional and point lights, an optional diffuse texture,
+// a segmentation output), its
 // GLSL sources and how it is built for a light count.
 #pragma once
 

@@ -281,6 +281,15 @@ std::vector<VisualMesh> readVisualMeshes(const std::string& path, const SimTK::V
       }
       out.normals.push_back(n);
     }
+    // Assimp keeps the file's v-up convention (no aiProcess_FlipUVs): the
+    // renderer flips rows of the image instead.
+    if (mesh->HasTextureCoords(0)) {
+      out.texture_coords.reserve(mesh->mNumVertices);
+      for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
+        const aiVector3D& t = mesh->mTextureCoords[0][v];
+        out.texture_coords.emplace_back(t.x, t.y);
+      }
+    }
     for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
       const aiFace& face = mesh->mFaces[f];
       if (face.mNumIndices != 3) continue;

@@ -230,13 +230,17 @@ class SceneRenderer {
   void setLighting(const LightingSpec& lighting);
   const LightingSpec& getLighting() const;
   // Per visual (index into Scene::getVisualShapes()): hide it from every
-  // camera (e.g. goal markers), or override its color (config materials).
+  // camera (e.g. goal markers), or override its color (config materials;
+  // a plain color, its meshes' textures no longer drawn).
   void setVisualVisible(int visual, bool visible);
   void setVisualColor(int visual, const Eigen::Vector4f& rgba);
 
   // Triangles drawn per camera with every visual visible (primitives as
   // tessellated here, plus mesh triangles; the ground's 2 not included).
   std::size_t getTriangleCount() const;
+  // Distinct texture image files uploaded (meshes whose material has a
+  // diffuse texture that could be read, docs/rendering.md).
+  std::size_t getTextureCount() const;
   const RenderDeviceInfo& getDeviceInfo() const;
 
  private:

@@ -49,6 +49,10 @@ struct JointDescription {
 // the mesh frame with the URDF scale applied, unit normals per vertex.
 struct VisualMesh {
   std::vector<Eigen::Vector3f> positions, normals;
+  // Per vertex (u, v) of the file's first texture coordinate set, as the
+  // file has them: v up (0 is the image's bottom row, OBJ's convention),
+  // often outside [0, 1] (the texture repeats). Empty when it has none.
+  std::vector<Eigen::Vector2f> texture_coords;
   std::vector<std::uint32_t> indices;  // three per triangle, counterclockwise
   Eigen::Vector4f color = Eigen::Vector4f::Ones();  // the sub-mesh material's diffuse rgba
   std::string texture;  // diffuse texture path (relative ones resolved), or ""
