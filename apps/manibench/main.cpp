@@ -46,8 +46,9 @@ Commands:
   train sac|sac-population  SAC agents on the dense reward, one per object for
                             demonstrations (supplement C.2; docs/learning.md)
   plot DIR...               figures: eval results (success and each condition
-                            per object, train vs test) or training curves
-                            (matplotlib; docs/evaluation.md)
+                            per object, train vs test), training curves or a
+                            render folder's point cloud (matplotlib;
+                            docs/evaluation.md)
   view TASK                 a window on a task: free and task cameras, masks,
                             point cloud, overlay; drive the robot by keyboard
                             (--record FILE.h5), watch --policy NAME or

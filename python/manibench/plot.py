@@ -10,7 +10,10 @@ test`` of one task, say) are given; the numbers are summary.csv's. A DIR of
 ``manibench train`` (log.csv, and eval.csv for behaviour cloning): the
 training curves, each loss (and SAC's return and success rate) against the
 iteration or environment step, and the evaluations' success rate per split.
-The default figure is DIR/results.png (first DIR) or DIR/curves.png.
+A DIR of ``manibench render --out DIR`` (pointcloud.ply): the point cloud a
+policy gets, each point in its colour, seen from above and behind the
+robot. The default figure is DIR/results.png (first DIR), DIR/curves.png or
+DIR/pointcloud.png.
 
 Only the standard library and matplotlib: it never imports the extension
 module. `manibench plot` runs this file (bin/manibench-plot finds it).
@@ -137,9 +140,70 @@ def plot_training(directory: str):
     return fig
 
 
+PLY_TYPES = {"float": "<f4", "double": "<f8", "uchar": "u1", "char": "i1", "int": "<i4", "uint": "<u4",
+             "short": "<i2", "ushort": "<u2"}
+
+
+def read_ply(path: str):
+    """The vertices of a binary little-endian PLY file (manibench render's
+    point clouds) as a numpy structured array, one field per property."""
+    import numpy as np
+
+    with open(path, "rb") as f:
+        if f.readline().strip() != b"ply":
+            raise ValueError(f"{path}: not a PLY file")
+        count, fields = 0, []
+        while True:
+            line = f.readline()
+            if not line:
+                raise ValueError(f"{path}: no end_header")
+            words = line.decode("ascii", "replace").split()
+            if words[:1] == ["format"] and words[1] != "binary_little_endian":
+                raise ValueError(f"{path}: format {words[1]} (binary_little_endian expected)")
+            if words[:2] == ["element", "vertex"]:
+                count = int(words[2])
+            elif words[:1] == ["property"]:
+                if words[1] not in PLY_TYPES:
+                    raise ValueError(f"{path}: property type {words[1]}")
+                fields.append((words[2], PLY_TYPES[words[1]]))
+            elif words[:1] == ["end_header"]:
+                break
+        data = np.frombuffer(f.read(), dtype=np.dtype(fields), count=count)
+    return data
+
+
+def plot_pointcloud(directory: str):
+    """The point cloud of a render folder, coloured by its rgb."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    points = read_ply(os.path.join(directory, "pointcloud.ply"))
+    fig = plt.figure(figsize=(6.4, 4.8))
+    ax = fig.add_subplot(projection="3d")
+    rgb = np.stack([points["red"], points["green"], points["blue"]], axis=1) / 255.0
+    ax.scatter(points["x"], points["y"], points["z"], c=rgb, s=4, depthshade=False)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_zlabel("z (m)")
+    # Equal scales on the three axes, so that shapes are not distorted.
+    lo = np.array([points[k].min() for k in "xyz"])
+    hi = np.array([points[k].max() for k in "xyz"])
+    centre, half = (lo + hi) / 2, (hi - lo).max() / 2
+    ax.set_xlim(centre[0] - half, centre[0] + half)
+    ax.set_ylim(centre[1] - half, centre[1] + half)
+    ax.set_zlim(centre[2] - half, centre[2] + half)
+    ax.view_init(elev=30, azim=-150)
+    ax.set_title(f"{len(points)} points")
+    return fig
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="manibench plot", description=__doc__.split("\n\n")[0])
-    parser.add_argument("dirs", nargs="+", metavar="DIR", help="eval --out folders, or one train --out folder")
+    parser.add_argument("dirs", nargs="+", metavar="DIR",
+                        help="eval --out folders, or one train --out or render --out folder")
     parser.add_argument("--out", help="the figure (.png, .pdf, .svg)")
     args = parser.parse_args(argv)
     try:
@@ -147,9 +211,12 @@ def main(argv: list[str] | None = None) -> int:
             fig, default = plot_eval(args.dirs), os.path.join(args.dirs[0], "results.png")
         elif len(args.dirs) == 1 and os.path.exists(os.path.join(args.dirs[0], "log.csv")):
             fig, default = plot_training(args.dirs[0]), os.path.join(args.dirs[0], "curves.png")
+        elif len(args.dirs) == 1 and os.path.exists(os.path.join(args.dirs[0], "pointcloud.ply")):
+            fig, default = plot_pointcloud(args.dirs[0]), os.path.join(args.dirs[0], "pointcloud.png")
         else:
             raise FileNotFoundError("each DIR must hold summary.csv (manibench eval --out), or one DIR log.csv "
-                                    "(manibench train --out): " + ", ".join(args.dirs))
+                                    "(manibench train --out) or pointcloud.ply (manibench render --out): " +
+                                    ", ".join(args.dirs))
         out = args.out or default
         fig.savefig(out, dpi=120)
     except (OSError, ValueError, KeyError) as e:

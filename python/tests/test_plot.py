@@ -63,3 +63,18 @@ def test_training_curves(tmp_path):
     assert rates == {"train": [0.5], "test": [0.25]}
     assert plot.main([str(tmp_path)]) == 0
     assert (tmp_path / "curves.png").exists()
+
+
+def test_pointcloud_figure(tmp_path):
+    """A render folder's pointcloud.ply: read back point for point (the
+    sampled cloud's 1,200 points, their rgb), and drawn."""
+    out = tmp_path / "frames"
+    subprocess.run([BINARY, "render", "OpenCabinetDrawer-v0", "--seed", "1", "--obs", "pointcloud", "--out", str(out)],
+                   check=True, capture_output=True)
+    points = plot.read_ply(str(out / "pointcloud.ply"))
+    assert len(points) == 1200
+    assert {"x", "y", "z", "red", "green", "blue"} <= set(points.dtype.names)
+    assert (points["z"] > -0.01).all()
+    run = subprocess.run([BINARY, "plot", str(out)], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert (out / "pointcloud.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
