@@ -164,7 +164,7 @@ MassProperties calcShellMass(const TriangleMesh& surface) {
 BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, double scale,
                               const std::string& cache_root) {
   const partnet::Object object = partnet::loadObject(folder, id, scale);
-  const std::string path = object.dir + "/mobility.urdf";
+  const std::string& path = object.urdf_file;
   if (object.findLink(kFrameLink) != nullptr)
     throw Error("PartNet: " + path + ": link name '" + kFrameLink + "' is taken (MoveBucket adds it)",
                 MB_INVALID_ARGUMENT);

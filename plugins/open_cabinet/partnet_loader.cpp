@@ -93,7 +93,7 @@ CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id
   }
   const partnet::Bounds all = object.calcVisualBounds();
   if (all.empty())
-    throw Error("PartNet: " + object.dir + "/mobility.urdf has no visual geometry", MB_INVALID_ARGUMENT);
+    throw Error("PartNet: " + object.urdf_file + " has no visual geometry", MB_INVALID_ARGUMENT);
   // ManiSkill v1 lifts the cabinet, joints at their lower limits (as the
   // task's reset sets them), so that its collision box touches the ground.
   // The bounds are taken at q = 0, which is every PartNet door's and

@@ -134,7 +134,7 @@ ChairModel loadPartNetChair(const std::string& folder, const std::string& id, do
 
   // Placement, seat surface, footprint, reward points.
   const partnet::Bounds all = object.calcVisualBounds();
-  if (all.empty()) throw Error(where + ": mobility.urdf has no visual geometry", MB_INVALID_ARGUMENT);
+  if (all.empty()) throw Error(where + ": " + object.urdf_file + " has no visual geometry", MB_INVALID_ARGUMENT);
   chair.root_height = -all.lo.z();
   chair.height = all.hi.z() - all.lo.z();
   partnet::Bounds seat_bounds;

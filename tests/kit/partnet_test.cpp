@@ -168,6 +168,24 @@ TEST(PartNet, ReadsSliderPlusAndNamesUnnamedVisualsFromResultJson) {
   EXPECT_NE(error.find("result.json:1"), std::string::npos) << error;
 }
 
+// A folder with ManiSkill's decomposed URDFs is read from those:
+// mobility_cvx.urdf (ManiSkill2, whose folders hold only it) before
+// mobility_fixed.urdf (v1) before mobility.urdf.
+TEST(PartNet, PrefersTheDecomposedUrdfs) {
+  BrokenCopy copy;
+  const std::string urdf = readFile(copy.file("100001/mobility.urdf"));
+  std::ofstream(copy.file("100001/mobility_fixed.urdf")) << std::regex_replace(urdf, std::regex("joint_0"), "fixed_0");
+  EXPECT_NE(partnet::loadObject(copy.folder(), "100001").findJoint("fixed_0"), nullptr);
+  std::ofstream(copy.file("100001/mobility_cvx.urdf")) << std::regex_replace(urdf, std::regex("joint_0"), "cvx_0");
+  const partnet::Object o = partnet::loadObject(copy.folder(), "100001");
+  EXPECT_NE(o.findJoint("cvx_0"), nullptr);
+  EXPECT_EQ(o.urdf_file, copy.file("100001/mobility_cvx.urdf"));
+  std::filesystem::remove(copy.file("100002/mobility.urdf"));
+  EXPECT_EQ(partnet::listObjectIds(copy.folder()), std::vector<std::string>{"100001"});
+  std::ofstream(copy.file("100002/mobility_cvx.urdf")) << readFile(copy.file("100001/mobility.urdf"));
+  EXPECT_EQ(partnet::listObjectIds(copy.folder()), (std::vector<std::string>{"100001", "100002"}));
+}
+
 TEST(PartNet, BadInputNamesTheFileAndTheElement) {
   EXPECT_NE(errorOf([] { partnet::loadObject(kMini, "999"); }).find("no object '999'"), std::string::npos);
   struct Case {

@@ -229,6 +229,7 @@ class Object {
   std::string id;
   std::string dir;   // the object's folder (relative mesh paths start here)
   std::string urdf;  // limits completed, lengths scaled
+  std::string urdf_file;  // the file it was read from (findUrdfFile)
   double scale = 1;  // applied to every length of the file
   std::vector<Link> links;    // parents before children: links.front() is the root
   std::vector<Joint> joints;  // in file order
@@ -365,14 +366,26 @@ inline std::string replaceCollisionMeshes(const std::string& urdf,
   });
 }
 
-// Sub-folders of `folder` holding a mobility.urdf, sorted.
+// The URDF an object's folder is read from, the decomposed ones first:
+// ManiSkill2's mobility_cvx.urdf (its collision meshes made convex with
+// CoACD; its asset folders hold only this one), ManiSkill v1's
+// mobility_fixed.urdf, then the dataset's mobility.urdf. "" if none.
+inline std::string findUrdfFile(const std::string& object_dir) {
+  for (const char* name : {"mobility_cvx.urdf", "mobility_fixed.urdf", "mobility.urdf"}) {
+    const std::filesystem::path path = std::filesystem::path(object_dir) / name;
+    if (std::filesystem::is_regular_file(path)) return path.string();
+  }
+  return "";
+}
+
+// Sub-folders of `folder` holding an object's URDF (findUrdfFile), sorted.
 inline std::vector<std::string> listObjectIds(const std::string& folder) {
   namespace fs = std::filesystem;
   if (!fs::is_directory(folder))
     throw Error("PartNet: '" + folder + "' is not a folder", MB_INVALID_ARGUMENT);
   std::vector<std::string> ids;
   for (const fs::directory_entry& e : fs::directory_iterator(folder))
-    if (e.is_directory() && fs::exists(e.path() / "mobility.urdf")) ids.push_back(e.path().filename().string());
+    if (e.is_directory() && !findUrdfFile(e.path().string()).empty()) ids.push_back(e.path().filename().string());
   std::sort(ids.begin(), ids.end());
   return ids;
 }
@@ -406,7 +419,7 @@ inline std::vector<std::string> listObjectIds(const std::string& folder, const s
   return ids;
 }
 
-// Loads <folder>/<id>/mobility.urdf and semantics.txt. Every length of the
+// Loads <folder>/<id>/'s URDF (findUrdfFile) and semantics.txt. Every length of the
 // URDF (origins, mesh scales, primitive sizes, prismatic limits, inertial
 // origins; masses by scale^3 and inertias by scale^5) is multiplied by
 // `scale`; <limit> elements without effort or velocity get effort 100 and
@@ -419,7 +432,8 @@ inline Object loadObject(const std::string& folder, const std::string& id, doubl
   if (!(scale > 0) || !std::isfinite(scale))
     throw Error("PartNet: scale must be positive, got " + detail::formatNumber(scale), MB_INVALID_ARGUMENT);
   const fs::path dir = fs::path(folder) / id;
-  const std::string path = (dir / "mobility.urdf").string();
+  const std::string found = findUrdfFile(dir.string());
+  const std::string path = found.empty() ? (dir / "mobility.urdf").string() : found;
   std::ifstream in(path);
   if (!in) throw Error("PartNet: no object '" + id + "' (" + path + " is missing)", MB_NOT_FOUND);
   urdf::Tree tree = urdf::readTree(in, "PartNet: " + path);
@@ -427,6 +441,7 @@ inline Object loadObject(const std::string& folder, const std::string& id, doubl
   Object object;
   object.id = id;
   object.dir = dir.string();
+  object.urdf_file = path;
   object.scale = scale;
   const std::map<std::string, std::string> mesh_parts = readMeshParts((dir / "result.json").string());
   for (const urdf::Tree::Joint& j : tree.joints) {
