@@ -94,7 +94,6 @@ std::optional<double> findInnerCrossing(const std::vector<Eigen::Vector2d>& rim,
   return side * (a.y() + t * (b.y() - a.y()));
 }
 
-}  // namespace
 
 // HACD's concavity bounds how far a piece's hull may fill in from the
 // surface: the expert's fingers (open 2 x 40 mm) straddle a 1-2 cm rim, so
@@ -160,6 +159,48 @@ MassProperties calcShellMass(const TriangleMesh& surface) {
   m.inertia = about_com.trace() * Eigen::Matrix3d::Identity() - about_com;
   return m;
 }
+
+// The bucket's URDF: PartNet's, its concave links as convex pieces (cached
+// under `cache_root`; none when it is ""), a decomposed body's mass as the
+// shell's, and a new root link in the bucket frame (`origin`: the frame's
+// origin in the object frame) with PartNet's root fixed in it.
+// `decomposed_body` says whether the body's meshes became pieces.
+std::string makeUrdf(const partnet::Object& object, const std::set<std::string>& body_links,
+                     const Eigen::Vector3d& origin, const MassProperties& shell, const std::string& cache_root,
+                     bool& decomposed_body) {
+  std::string urdf = object.urdf;
+  decomposed_body = false;
+  if (!cache_root.empty()) {
+    const std::map<std::string, std::vector<std::string>> pieces = decomposeLinks(object, cache_root);
+    if (!pieces.empty()) urdf = partnet::replaceCollisionMeshes(urdf, pieces);
+    for (const std::string& link : body_links) decomposed_body = decomposed_body || pieces.count(link) > 0;
+  }
+  // A decomposed body's mass on the frame link, none on the body's own
+  // links (a body of convex pieces keeps the host's mass from their hulls,
+  // which is right for solid pieces).
+  if (decomposed_body)
+  urdf = partnet::editLinks(urdf, [&](const std::string& name, boost::property_tree::ptree& link) {
+    if (body_links.count(name) == 0) return;
+    for (auto it = link.begin(); it != link.end();) it = it->first == "inertial" ? link.erase(it) : std::next(it);
+    boost::property_tree::ptree inertial;
+    inertial.put("mass.<xmlattr>.value", "0");
+    for (const char* k : {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"}) inertial.put(std::string("inertia.<xmlattr>.") + k, "0");
+    link.add_child("inertial", inertial);
+  });
+  // The new root: the bucket frame, PartNet's root fixed in it.
+  std::ostringstream frame;
+  frame << std::setprecision(17) << "\n  <link name=\"" << kFrameLink << "\">\n"
+        << (decomposed_body ? inertialXml(shell) : "") << "  </link>\n  <joint name=\"" << kFrameLink
+        << "_joint\" type=\"fixed\"><parent link=\"" << kFrameLink << "\"/><child link=\"" << object.getRoot().name
+        << "\"/><origin xyz=\"" << -origin.x() << " " << -origin.y() << " " << -origin.z() << "\"/></joint>";
+  const std::size_t robot = urdf.find("<robot");
+  const std::size_t open_end = robot == std::string::npos ? robot : urdf.find('>', robot);
+  if (open_end == std::string::npos) throw Error("PartNet: " + object.urdf_file + ": no <robot> element", MB_INVALID_ARGUMENT);
+  urdf.insert(open_end + 1, frame.str());
+  return urdf;
+}
+
+}  // namespace
 
 BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, double scale,
                               const std::string& cache_root) {
@@ -249,35 +290,8 @@ BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, 
       model.bail_upper = bail->upper;
     }
   }
-  model.urdf = object.urdf;
-  bool decomposed_body = false;  // the body's meshes became convex pieces
-  if (!cache_root.empty()) {
-    const std::map<std::string, std::vector<std::string>> pieces = decomposeLinks(object, cache_root);
-    if (!pieces.empty()) model.urdf = partnet::replaceCollisionMeshes(model.urdf, pieces);
-    for (const std::string& link : body_links) decomposed_body = decomposed_body || pieces.count(link) > 0;
-  }
-  // A decomposed body's mass on the frame link, none on the body's own
-  // links (a body of convex pieces keeps the host's mass from their hulls,
-  // which is right for solid pieces).
-  if (decomposed_body)
-  model.urdf = partnet::editLinks(model.urdf, [&](const std::string& name, boost::property_tree::ptree& link) {
-    if (body_links.count(name) == 0) return;
-    for (auto it = link.begin(); it != link.end();) it = it->first == "inertial" ? link.erase(it) : std::next(it);
-    boost::property_tree::ptree inertial;
-    inertial.put("mass.<xmlattr>.value", "0");
-    for (const char* k : {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"}) inertial.put(std::string("inertia.<xmlattr>.") + k, "0");
-    link.add_child("inertial", inertial);
-  });
-  // The new root: the bucket frame, PartNet's root fixed in it.
-  std::ostringstream frame;
-  frame << std::setprecision(17) << "\n  <link name=\"" << kFrameLink << "\">\n"
-        << (decomposed_body ? inertialXml(shell) : "") << "  </link>\n  <joint name=\"" << kFrameLink
-        << "_joint\" type=\"fixed\"><parent link=\"" << kFrameLink << "\"/><child link=\"" << object.getRoot().name
-        << "\"/><origin xyz=\"" << -origin.x() << " " << -origin.y() << " " << -origin.z() << "\"/></joint>";
-  const std::size_t robot = model.urdf.find("<robot");
-  const std::size_t open_end = robot == std::string::npos ? robot : model.urdf.find('>', robot);
-  if (open_end == std::string::npos) throw Error("PartNet: " + path + ": no <robot> element", MB_INVALID_ARGUMENT);
-  model.urdf.insert(open_end + 1, frame.str());
+  bool decomposed_body = false;
+  model.urdf = makeUrdf(object, body_links, origin, shell, cache_root, decomposed_body);
 
   std::ostringstream summary;
   summary << std::fixed << std::setprecision(2) << "PartNet-Mobility " << id << ", " << height << " m tall, rim "

@@ -38,6 +38,31 @@ std::vector<Eigen::Vector3d> thinPoints(const std::vector<Eigen::Vector3d>& poin
   return out;
 }
 
+// ManiSkill's chairs stand on 5 casters; PartNet's office chairs have one
+// or two wheels per caster (chair 179: 10). The first wheel of each caster
+// (the wheel's parent link) comes first, to become wheel_0..wheel_4, which
+// the task's contact materials name (friction 1.0); a caster's second
+// wheel comes after, becomes wheel_5.. and keeps the chair's friction
+// (0.1), since the task's materials are set before any object is known.
+std::vector<std::string> orderWheels(const partnet::Object& object, const std::vector<std::string>& wheels,
+                                     const std::string& where) {
+  std::vector<std::string> first, second;
+  std::set<std::string> casters;
+  for (const std::string& w : wheels) {
+    const partnet::Joint* j = object.findParentJoint(w);
+    const std::string caster = j == nullptr ? w : j->parent;
+    (casters.insert(caster).second ? first : second).push_back(w);
+  }
+  if (first.size() != 5)
+    throw Error(where + ": semantics.txt labels " + std::to_string(wheels.size()) + " links 'wheel' on " +
+                    std::to_string(first.size()) +
+                    " casters; PushChair needs a chair on 5 casters (the task's contact materials name "
+                    "wheel_0..wheel_4)",
+                MB_INVALID_ARGUMENT);
+  first.insert(first.end(), second.begin(), second.end());
+  return first;
+}
+
 }  // namespace
 
 ChairModel loadPartNetChair(const std::string& folder, const std::string& id, double scale) {
@@ -52,29 +77,7 @@ ChairModel loadPartNetChair(const std::string& folder, const std::string& id, do
     if (hasLabel(s, "wheel")) wheels.push_back(link.name);
     if (seat == nullptr && hasLabel(s, "seat")) seat = &link;
   }
-  // ManiSkill's chairs stand on 5 casters; PartNet's office chairs have one
-  // or two wheels per caster (chair 179: 10). The first wheel of each
-  // caster (the wheel's parent link) becomes wheel_0..wheel_4, which the
-  // task's contact materials name (friction 1.0); a caster's second wheel
-  // becomes wheel_5.. and keeps the chair's friction (0.1), since the
-  // task's materials are set before any object is known.
-  {
-    std::vector<std::string> first, second;
-    std::set<std::string> casters;
-    for (const std::string& w : wheels) {
-      const partnet::Joint* j = object.findParentJoint(w);
-      const std::string caster = j == nullptr ? w : j->parent;
-      (casters.insert(caster).second ? first : second).push_back(w);
-    }
-    if (first.size() != 5)
-      throw Error(where + ": semantics.txt labels " + std::to_string(wheels.size()) + " links 'wheel' on " +
-                      std::to_string(first.size()) +
-                      " casters; PushChair needs a chair on 5 casters (the task's contact materials name "
-                      "wheel_0..wheel_4)",
-                  MB_INVALID_ARGUMENT);
-    wheels = first;
-    wheels.insert(wheels.end(), second.begin(), second.end());
-  }
+  wheels = orderWheels(object, wheels, where);
   if (seat == nullptr) throw Error(where + ": semantics.txt labels no link 'seat'", MB_INVALID_ARGUMENT);
 
   ChairModel chair;
