@@ -16,6 +16,18 @@
 
 namespace open_cabinet {
 
+namespace {
+
+// Above the ground by half the thickness the host gives flat collision
+// meshes (core/scene/contact/convex_hull.hpp, kMinHullThickness): PartNet's
+// lowest faces (a door's bottom edge, a plinth) are often planar, and as
+// 1 cm solids about their plane they would reach 5 mm into the ground. A
+// door resting on the ground with friction 1 did not open (41083's
+// second door stayed at 0.02 rad under the expert's pull).
+constexpr double kGroundClearance = 0.005;
+
+}  // namespace
+
 double calcCabinetScale(const std::string& id, double diagonal) {
   const auto v1 = getV1Cabinets().find(id);
   if (v1 != getV1Cabinets().end()) return v1->second.scale;
@@ -99,7 +111,7 @@ CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id
   // The bounds are taken at q = 0, which is every PartNet door's and
   // drawer's lower limit we have seen (the 8 cabinets of the tests: 23
   // joints); the visual and collision meshes are the same files.
-  cabinet.placement = Eigen::Vector3d(0, 0, -all.lo.z());  // bottom on the ground
+  cabinet.placement = Eigen::Vector3d(0, 0, -all.lo.z() + kGroundClearance);
   cabinet.lower = all.lo + cabinet.placement;
   cabinet.upper = all.hi + cabinet.placement;
   cabinet.scale = scale;
