@@ -141,10 +141,9 @@ struct Builder {
     }
   }
 
-  // The convex hull of a <mesh>, or null (with a note in `unsimulated`)
-  // if the mesh is flat.
-  std::shared_ptr<const ConvexHull> loadMeshHull(const urdf::Link& link, const urdf::Mesh& mesh,
-                                                 const std::string& what) {
+  // The convex hull of a <mesh>; a flat or thin one is a 1 cm solid
+  // (loadConvexHull pads it), so every mesh found has one.
+  std::shared_ptr<const ConvexHull> loadMeshHull(const urdf::Link& link, const urdf::Mesh& mesh) {
     const Vec3 scale(mesh.scale.x, mesh.scale.y, mesh.scale.z);
     if (!scale.isFinite() || scale[0] == 0 || scale[1] == 0 || scale[2] == 0)
       failUrdf(source, "link '" + link.name + "': mesh '" + mesh.filename + "' has scale " +
@@ -155,9 +154,6 @@ struct Builder {
       failUrdf(source, "link '" + link.name + "': collision mesh " + describeMissingMesh(mesh.filename, base_dir));
     try {
       return loadConvexHull(path, scale);
-    } catch (const FlatHullError& e) {
-      model.unsimulated.push_back(what + " ('" + path + "': " + e.what() + ")");
-      return nullptr;
     } catch (const std::exception& e) {
       failUrdf(source, "link '" + link.name + "': collision mesh '" + path + "': " + e.what());
     }
@@ -217,9 +213,7 @@ struct Builder {
                      shape.geometry = capsule ? ShapeGeometry::makeCapsule(c.radius, c.length / 2)
                                               : ShapeGeometry::makeCylinder(c.radius, c.length / 2);
                    } else if (g.type == urdf::Geometry::MESH) {
-                     std::shared_ptr<const ConvexHull> hull = loadMeshHull(link, static_cast<const urdf::Mesh&>(g), what);
-                     if (!hull) return;
-                     shape.geometry = ShapeGeometry::makeConvex(std::move(hull));
+                     shape.geometry = ShapeGeometry::makeConvex(loadMeshHull(link, static_cast<const urdf::Mesh&>(g)));
                    } else {
                      model.unsimulated.push_back(what + " (unknown geometry type)");
                      return;

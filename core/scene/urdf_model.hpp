@@ -70,9 +70,9 @@ struct ArticulationModel {
   std::vector<JointDescription> joints;
   // Every <visual>, with `link` the articulation-local link index.
   std::vector<VisualShape> visuals;
-  // Collision geometry that exists in the URDF but is not simulated (a
-  // flat mesh: "link 'x': mesh 'name' (why)"), reported once when the URDF
-  // is added.
+  // Collision geometry that exists in the URDF but is not simulated (an
+  // unknown geometry type: "link 'x': collision 'name' (why)"), reported
+  // once when the URDF is added.
   std::vector<std::string> unsimulated;
 };
 
