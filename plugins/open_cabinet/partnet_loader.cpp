@@ -38,10 +38,12 @@ double calcCabinetScale(const std::string& id, double diagonal) {
 
 CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id, double scale) {
   // The scale needs the unscaled size first: every length of the file
-  // scales alike, so the object is read again at its scale.
+  // scales alike, so the object is read again at its scale, and its
+  // bounds are the unscaled ones times the scale (its meshes are read once).
   const bool v1 = !(scale > 0) && getV1Cabinets().count(id) > 0;
-  if (!(scale > 0))
-    scale = calcCabinetScale(id, v1 ? 1.0 : partnet::loadObject(folder, id).calcVisualBounds().extent().norm());
+  partnet::Bounds unscaled;
+  if (!(scale > 0) && !v1) unscaled = partnet::loadObject(folder, id).calcVisualBounds();
+  if (!(scale > 0)) scale = calcCabinetScale(id, v1 ? 1.0 : unscaled.extent().norm());
   const partnet::Object object = partnet::loadObject(folder, id, scale);
   const std::map<std::string, Eigen::Isometry3d> pose = object.calcLinkPoses();
 
@@ -103,11 +105,18 @@ CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id
     (t.kind == TargetKind::kDoor ? doors : drawers)++;
     cabinet.targets.push_back(t);
   }
-  const partnet::Bounds all = object.calcVisualBounds();
+  partnet::Bounds all;
+  if (unscaled.empty()) {
+    all = object.calcVisualBounds();
+  } else {
+    all.add(scale * unscaled.lo);
+    all.add(scale * unscaled.hi);
+  }
   if (all.empty())
     throw Error("PartNet: " + object.urdf_file + " has no visual geometry", MB_INVALID_ARGUMENT);
   // ManiSkill v1 lifts the cabinet, joints at their lower limits (as the
-  // task's reset sets them), so that its collision box touches the ground.
+  // task's reset sets them), so that its collision box touches the ground
+  // (here: the meshes' box, kGroundClearance above it).
   // The bounds are taken at q = 0, which is every PartNet door's and
   // drawer's lower limit we have seen (the 8 cabinets of the tests: 23
   // joints); the visual and collision meshes are the same files.
