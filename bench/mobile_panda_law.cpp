@@ -12,7 +12,7 @@ namespace {
 constexpr double kBaseMax = 0.5, kYawMax = 3.14, kLiftMax = 0.5, kArmMax = 3.14;  // per action 1
 constexpr double kBaseDamping = 1000;
 constexpr double kArmDamping[7] = {200, 300, 200, 100, 100, 100, 100};
-constexpr double kGripperStiffness = 1000, kGripperDamping = 50;
+constexpr double kGripperStiffness = 5000, kGripperDamping = 800;
 constexpr double kGripperClosed = 0.0, kGripperOpen = 0.04;
 constexpr double kCutoffHz = 40;  // velocity_stage.hpp
 

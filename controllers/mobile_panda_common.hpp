@@ -33,7 +33,7 @@ inline std::string formatNumber(double x) {
 //   base_damping: 1000      (root_x, root_y, root_yaw, lift)
 //   arm_damping: [200, 300, 200, 100, 100, 100, 100]  (joint1..7, or one
 //                           number for all; ManiSkill: 100, see README.md)
-//   gripper_stiffness: 1000 gripper_damping: 50  (N/m, N s/m)
+//   gripper_stiffness: 5000 gripper_damping: 800  (N/m, N s/m; see below)
 //   gripper_closed: 0.0     gripper_open: 0.04   (m per finger)
 // ManiSkill damps every arm joint with 100. The shoulder and elbow (joints
 // 1-3) carry most of the arm: their drive time constant, inertia / damping,
@@ -62,6 +62,17 @@ inline std::array<double, kPandaArmJoints> readArmDamping(const sdk::Config& con
   return damping;
 }
 
+// The fingers: a position drive whose squeeze is what the Panda hand gives
+// (70 N continuous): 5000 N/m presses 25-75 N on a 10-30 mm handle or rim.
+// At 1000 N/m (5-15 N) real PartNet doors did not open: their handles are
+// fins that the pads hold by friction alone, and the fingers slid to the
+// fin's edge while the door, damped with up to 20 N m s, stood (door expert
+// 15/100 on ../shared/partnet's 10 doors; 89/100 at 5000 N/m, drawers
+// 100/100 either way); a bucket slipped out of the fingers. The damping
+// keeps a closing finger under 0.25 m/s (5000 x 0.04 / 800), as a real
+// hand's: at the 3 m/s that 5000 N/m reaches with 50 N s/m, a pad moves
+// 6 mm per 2 ms step and passes through a thin rim (and 10000 N/m with 50
+// N s/m opened 68/100 real doors).
 struct MobilePandaSettings {
   double base_max, yaw_max, lift_max, arm_max;
   double base_damping;
@@ -75,8 +86,8 @@ struct MobilePandaSettings {
         arm_max(requirePositive(config, "arm_max_velocity", 3.14)),
         base_damping(requirePositive(config, "base_damping", 1000.0)),
         arm_damping(readArmDamping(config, controller)),
-        gripper_stiffness(requirePositive(config, "gripper_stiffness", 1000.0)),
-        gripper_damping(requirePositive(config, "gripper_damping", 50.0)),
+        gripper_stiffness(requirePositive(config, "gripper_stiffness", 5000.0)),
+        gripper_damping(requirePositive(config, "gripper_damping", 800.0)),
         gripper_closed(config.get<double>("gripper_closed", 0.0)),
         gripper_open(config.get<double>("gripper_open", 0.04)) {
     if (!std::isfinite(gripper_closed) || !std::isfinite(gripper_open) ||

@@ -83,13 +83,6 @@ sdk::TaskSpec MoveBucketTask::describe() const {
   spec.success_conditions = {"on_platform", "upright", "static", "ball_inside", "success"};
   spec.success_hold_steps = hold_steps_;
   spec.masks = {"robot"};
-  // The Panda hand squeezes with up to 70 N; the controllers' default
-  // finger stiffness (1000 N/m) would press 7-12 N on a 14-24 mm rim,
-  // which cannot hold a 3 kg bucket by friction. 5000 N/m: 35-60 N. The
-  // damping keeps a closing finger under 0.25 m/s (5000 x 0.04 / 800), as a
-  // real hand's: at the 3 m/s that 5000 N/m with the default 50 N s/m would
-  // reach, a pad moves 6 mm per 2 ms step and passes through a thin rim.
-  spec.controller_config = "gripper_stiffness: 5000\ngripper_damping: 800\n";
   // ManiSkill v1: bucket, ball and platform friction 0.5 (default 0.5), fingers 2.
   std::ostringstream config;
   config << "physics:\n  contact:\n    ground: {static_friction: 0.5, dynamic_friction: 0.5}\n    bodies:\n";
