@@ -33,9 +33,12 @@ struct TemporaryFolder {
   std::string path;
 };
 
+constexpr double kRimWidth = 0.015;  // the flat rim of makeCup(true), outwards
+
 // A cylinder cup (side and bottom, open at the top) of 32 sectors and 6
-// rings, each triangle also flipped.
-convex::Mesh makeCup() {
+// rings, each triangle also flipped; with `rim`, a flat ring kRimWidth wide
+// round the top (as PartNet's buckets 100441 and 100454 have).
+convex::Mesh makeCup(bool rim = false) {
   convex::Mesh m;
   constexpr int kSectors = 32, kRings = 6;
   for (int r = 0; r <= kRings; ++r)
@@ -51,6 +54,18 @@ convex::Mesh makeCup() {
       m.triangles.push_back({at(r, s), at(r, s + 1), at(r + 1, s + 1)});
       m.triangles.push_back({at(r, s), at(r + 1, s + 1), at(r + 1, s)});
     }
+  if (rim) {
+    const uint32_t outer = uint32_t(m.vertices.size());
+    for (int s = 0; s < kSectors; ++s) {
+      const double a = 2 * M_PI * s / kSectors;
+      m.vertices.emplace_back((kRadius + kRimWidth) * std::cos(a), (kRadius + kRimWidth) * std::sin(a), kHeight);
+    }
+    for (int s = 0; s < kSectors; ++s) {
+      const uint32_t o = outer + uint32_t(s), o1 = outer + uint32_t((s + 1) % kSectors);
+      m.triangles.push_back({at(kRings, s), o, o1});
+      m.triangles.push_back({at(kRings, s), o1, at(kRings, s + 1)});
+    }
+  }
   for (int s = 0; s < kSectors; ++s) m.triangles.push_back({centre, at(0, s + 1), at(0, s)});
   const std::size_t n = m.triangles.size();
   for (std::size_t i = 0; i < n; ++i) m.triangles.push_back({m.triangles[i][0], m.triangles[i][2], m.triangles[i][1]});
@@ -104,6 +119,39 @@ TEST(ConvexDecomposition, ACupStaysHollowAndItsWallIsCovered) {
   const std::vector<convex::Mesh> again = convex::decompose(cup);
   ASSERT_EQ(again.size(), pieces.size());
   for (std::size_t k = 0; k < pieces.size(); ++k) EXPECT_EQ(again[k].vertices, pieces[k].vertices) << k;
+}
+
+// HACD measures concavity along the surface's normals, which a flat ring
+// does not see: the hull of a rim is a lid over the opening (on 3 of the 4
+// real buckets the grippers stood on one). The coverage check makes such a
+// piece again of short parts of the rim.
+TEST(ConvexDecomposition, AFlatRimMakesNoLid) {
+  const convex::Mesh cup = makeCup(true);
+  convex::DecompositionOptions options;
+  options.concavity = 0.02;  // as MoveBucket's PartNet loader
+  auto covering = [](const std::vector<convex::Mesh>& pieces, const Eigen::Vector3d& p) {
+    for (const convex::Mesh& piece : pieces)
+      if (isInside(piece, p)) return true;
+    return false;
+  };
+  // The opening just below the rim, from the axis to 2 cm inside the wall.
+  const std::vector<Eigen::Vector3d> opening = {
+      {0, 0, kHeight - 0.002}, {0.06, 0.03, kHeight - 0.002}, {-0.1, 0.05, kHeight - 0.001}, {0.0, -0.13, kHeight}};
+  const std::vector<convex::Mesh> pieces = convex::decompose(cup, options);
+  for (const Eigen::Vector3d& p : opening) EXPECT_FALSE(covering(pieces, p)) << p.transpose();
+  // The rim itself is still there, all round.
+  for (int s = 0; s < 12; ++s) {
+    const double a = 2 * M_PI * (s + 0.25) / 12;
+    const Eigen::Vector3d on_rim =
+        (kRadius + kRimWidth / 2) * Eigen::Vector3d(std::cos(a), std::sin(a), 0) + Eigen::Vector3d(0, 0, kHeight);
+    EXPECT_TRUE(covering(pieces, on_rim)) << s;
+  }
+  // Without the check, HACD's own pieces close the opening.
+  options.min_coverage = 0;
+  const std::vector<convex::Mesh> hacd = convex::decompose(cup, options);
+  int closed = 0;
+  for (const Eigen::Vector3d& p : opening) closed += covering(hacd, p) ? 1 : 0;
+  EXPECT_GT(closed, 0) << "HACD left this rim open: the test no longer shows the lid it guards against";
 }
 
 TEST(ConvexDecomposition, PiecesAreCachedByContent) {

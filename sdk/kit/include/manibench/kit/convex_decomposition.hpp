@@ -56,6 +56,7 @@ struct DecompositionOptions {
   std::size_t max_piece_vertices = 64;
   double shell = 0.005;              // half thickness given to the surface, fraction of the diagonal
   double connect = 0.015;            // parts closer than this are joined, fraction of the diagonal
+  double min_coverage = 0.6;         // a piece whose hull is less covered by the surface is split (lids)
 };
 
 namespace detail {
@@ -151,6 +152,150 @@ inline Mesh solidify(const Mesh& in, double h) {
   return out;
 }
 
+// Squared distance from p to the triangle abc (Ericson, Real-Time
+// Collision Detection, 5.1.5).
+inline double calcSquaredDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                  const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return ap.squaredNorm();
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return bp.squaredNorm();
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return (p - (a + ab * (d1 / (d1 - d3)))).squaredNorm();
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return cp.squaredNorm();
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return (p - (a + ac * (d2 / (d2 - d6)))).squaredNorm();
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0)
+    return (p - (b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))))).squaredNorm();
+  const double denominator = 1 / (va + vb + vc);
+  return (p - (a + ab * (vb * denominator) + ac * (vc * denominator))).squaredNorm();
+}
+
+// The share of a piece's hull surface (area-weighted samples, 4 per face)
+// within `reach` of the surface it was made from. HACD measures concavity
+// from the surface to the hull along the surface's normals, which a flat
+// ring does not see: the hull of a bucket's rim is a lid over the whole
+// opening, 0 away along the ring's vertical normals (3 of the 4 real
+// buckets got one, on which the grippers stood). Such a lid is covered only
+// where the ring is (about 0.3); a piece hugging the surface, as HACD's
+// bound keeps the rest, about 1.
+inline double calcCoverage(const Mesh& piece, const Mesh& surface, double reach) {
+  Eigen::Vector3d lo = piece.vertices.front(), hi = lo;
+  for (const Eigen::Vector3d& v : piece.vertices) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  lo.array() -= reach;
+  hi.array() += reach;
+  std::vector<std::size_t> near;  // the surface's triangles whose box meets the piece's, grown by reach
+  for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
+    const auto& tri = surface.triangles[t];
+    Eigen::Vector3d tlo = surface.vertices[tri[0]], thi = tlo;
+    for (int k = 1; k < 3; ++k) {
+      tlo = tlo.cwiseMin(surface.vertices[tri[k]]);
+      thi = thi.cwiseMax(surface.vertices[tri[k]]);
+    }
+    if ((tlo.array() <= hi.array()).all() && (thi.array() >= lo.array()).all()) near.push_back(t);
+  }
+  const double reach2 = reach * reach;
+  double total = 0, covered = 0;
+  for (const auto& face : piece.triangles) {
+    const Eigen::Vector3d &a = piece.vertices[face[0]], &b = piece.vertices[face[1]], &c = piece.vertices[face[2]];
+    const double area = 0.5 * (b - a).cross(c - a).norm();
+    if (!(area > 0)) continue;
+    const Eigen::Vector3d samples[4] = {(a + b + c) / 3, (4 * a + b + c) / 6, (a + 4 * b + c) / 6, (a + b + 4 * c) / 6};
+    for (const Eigen::Vector3d& p : samples) {
+      total += area;
+      for (const std::size_t t : near) {
+        const auto& tri = surface.triangles[t];
+        if (calcSquaredDistance(p, surface.vertices[tri[0]], surface.vertices[tri[1]], surface.vertices[tri[2]]) <=
+            reach2) {
+          covered += area;
+          break;
+        }
+      }
+    }
+  }
+  return total > 0 ? covered / total : 1.0;
+}
+
+// The surface's triangles with every vertex in the piece's hull (within
+// `tolerance`): the part of the surface a piece was made of.
+inline std::vector<uint32_t> findInside(const Mesh& piece, const Mesh& surface, double tolerance) {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& v : piece.vertices) centre += v;
+  centre /= double(piece.vertices.size());
+  std::vector<std::pair<Eigen::Vector3d, double>> planes;  // outward normal n, offset: n.x <= offset inside
+  for (const auto& f : piece.triangles) {
+    const Eigen::Vector3d& a = piece.vertices[f[0]];
+    Eigen::Vector3d n = (piece.vertices[f[1]] - a).cross(piece.vertices[f[2]] - a);
+    if (!(n.norm() > 0)) continue;
+    n.normalize();
+    if (n.dot(centre - a) > 0) n = -n;
+    planes.emplace_back(n, n.dot(a) + tolerance);
+  }
+  std::vector<uint32_t> inside;
+  for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
+    bool all = true;
+    for (int k = 0; k < 3 && all; ++k)
+      for (const auto& [n, offset] : planes)
+        if (n.dot(surface.vertices[surface.triangles[t][k]]) > offset) {
+          all = false;
+          break;
+        }
+    if (all) inside.push_back(uint32_t(t));
+  }
+  return inside;
+}
+
+// `triangles` of `surface` cut in halves at the median of the longest axis
+// of their centres until each part spans at most `extent`; each part is one
+// piece (its hull is what the host takes).
+inline void bisect(const Mesh& surface, std::vector<uint32_t> triangles, double extent, std::vector<Mesh>& out) {
+  auto centre = [&](uint32_t t) {
+    const auto& tri = surface.triangles[t];
+    return Eigen::Vector3d((surface.vertices[tri[0]] + surface.vertices[tri[1]] + surface.vertices[tri[2]]) / 3);
+  };
+  Eigen::Vector3d lo = surface.vertices[surface.triangles[triangles[0]][0]], hi = lo, clo = centre(triangles[0]),
+                  chi = clo;
+  for (const uint32_t t : triangles) {
+    for (const uint32_t v : surface.triangles[t]) {
+      lo = lo.cwiseMin(surface.vertices[v]);
+      hi = hi.cwiseMax(surface.vertices[v]);
+    }
+    clo = clo.cwiseMin(centre(t));
+    chi = chi.cwiseMax(centre(t));
+  }
+  Eigen::Index axis = 0;
+  (chi - clo).maxCoeff(&axis);
+  if ((hi - lo).maxCoeff() > extent && triangles.size() > 1 && chi[axis] > clo[axis]) {
+    const auto middle = triangles.begin() + std::ptrdiff_t(triangles.size() / 2);
+    std::nth_element(triangles.begin(), middle, triangles.end(),
+                     [&](uint32_t a, uint32_t b) { return centre(a)[axis] < centre(b)[axis]; });
+    bisect(surface, std::vector<uint32_t>(triangles.begin(), middle), extent, out);
+    bisect(surface, std::vector<uint32_t>(middle, triangles.end()), extent, out);
+    return;
+  }
+  Mesh part;
+  std::map<uint32_t, uint32_t> index;
+  for (const uint32_t t : triangles) {
+    std::array<uint32_t, 3> tri{};
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = surface.triangles[t][k];
+      const auto [it, added] = index.emplace(v, uint32_t(part.vertices.size()));
+      if (added) part.vertices.push_back(surface.vertices[v]);
+      tri[k] = it->second;
+    }
+    part.triangles.push_back(tri);
+  }
+  out.push_back(std::move(part));
+}
+
 }  // namespace detail
 
 // Whether `mesh` is convex already: every triangle's plane has all the
@@ -225,7 +370,19 @@ inline std::vector<Mesh> decompose(const Mesh& mesh, const DecompositionOptions&
     Mesh piece;
     for (const auto& p : hull_points) piece.vertices.emplace_back(p.X(), p.Y(), p.Z());
     for (const auto& t : hull_triangles) piece.triangles.push_back({uint32_t(t.X()), uint32_t(t.Y()), uint32_t(t.Z())});
-    if (piece.vertices.size() >= 3) pieces.push_back(std::move(piece));
+    if (piece.vertices.size() < 3) continue;
+    // A piece the surface covers too little of (a lid over a rim) is made
+    // again of the surface inside it, in parts no longer than 4 concavities
+    // (a 4.5 cm chord of a 17 cm rim reaches 1.5 mm into the opening).
+    const double reach = options.concavity * diagonal;
+    if (options.min_coverage > 0 && detail::calcCoverage(piece, solid, reach) < options.min_coverage) {
+      const std::vector<uint32_t> inside = detail::findInside(piece, solid, 1e-6 * diagonal);
+      if (!inside.empty()) {
+        detail::bisect(solid, inside, 4 * reach, pieces);
+        continue;
+      }
+    }
+    pieces.push_back(std::move(piece));
   }
   return pieces;
 }
@@ -246,11 +403,11 @@ inline std::vector<std::string> decomposeCached(const Mesh& mesh, const std::str
                                                 const DecompositionOptions& options = {}) {
   namespace fs = std::filesystem;
   ContentHash hash;
-  hash.add(std::string("hacd-1"));  // this header's algorithm and preprocessing
+  hash.add(std::string("hacd-2"));  // this header's algorithm and preprocessing
   hash.add(mesh.vertices.data(), mesh.vertices.size() * sizeof(Eigen::Vector3d));
   hash.add(mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0]));
   const double numbers[] = {options.concavity, double(options.min_pieces), double(options.max_piece_vertices),
-                            options.shell, options.connect};
+                            options.shell, options.connect, options.min_coverage};
   hash.add(numbers, sizeof numbers);
   const fs::path folder = fs::path(cache_root) / "convex" / hash.str();
   if (!isCompleteFolder(folder.string())) {
