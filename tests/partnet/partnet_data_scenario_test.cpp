@@ -7,7 +7,7 @@
 //
 // What is checked is what a user with the dataset meets: every object
 // loads in each family it belongs to (the oven is skipped for its reason),
-// the targets found per object, the drawer expert's success, a
+// the targets found per object, each expert's success, a
 // demonstration on a real object replayed bit for bit, a point cloud in
 // the colours of the meshes' textures.
 #include <gtest/gtest.h>
@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <iostream>
 #include <sstream>
 #include <string>
 
@@ -86,24 +87,58 @@ TEST(PartNetData, EveryChairAndBucketLoads) {
   EXPECT_NE(bucket.out.find("4 of 4 objects loaded"), std::string::npos) << bucket.out;
 }
 
+// The success rate `eval` prints for `task`'s expert on the folder's
+// objects of `category`, `episodes` per object (evaluation seed 0: the
+// same episodes every run), after checking that all `expected` ran.
+double evalExpert(const std::string& task, const std::string& expert, const std::string& folder, int episodes,
+                  int expected) {
+  const std::string out = (std::filesystem::temp_directory_path() / ("manibench_partnet_" + task)).string();
+  std::filesystem::remove_all(out);
+  const auto result = runCli({"eval", task, "--policy", expert, "--split", "train", "--episodes-per-object",
+                              std::to_string(episodes), "--workers", "2", "--no-progress", "--set",
+                              "task.partnet_dir=" + folder, "--out", out});
+  std::filesystem::remove_all(out);
+  EXPECT_EQ(result.exit_code, 0) << result.out << result.err;
+  const std::string ran = std::to_string(expected) + " of " + std::to_string(expected) + " episodes";
+  EXPECT_NE(result.out.find(ran), std::string::npos) << result.out;
+  const std::size_t all = result.out.find("\nall ");
+  if (all == std::string::npos) {
+    ADD_FAILURE() << "no 'all' row: " << result.out;
+    return 0;
+  }
+  std::istringstream row(result.out.substr(all + 5));
+  int count = 0;
+  double success = 0;
+  row >> count >> success;
+  std::cout << task << ", " << expert << ": " << success << " of " << count << " episodes\n";
+  return success;
+}
+
+// The targets: drawer 90 %, door 80 %, chair and bucket 60 %.
+// docs/partnet.md has the rates over more episodes (drawers 100 / 100,
+// doors 89 / 100, chairs 33 / 50, buckets 31 / 40).
 TEST(PartNetData, TheDrawerExpertOpensEveryRealDrawer) {
   REQUIRE_CATEGORY(folder, "StorageFurniture");
-  const std::string out = (std::filesystem::temp_directory_path() / "manibench_partnet_drawers").string();
-  std::filesystem::remove_all(out);
-  const auto result = runCli({"eval", "OpenCabinetDrawer-v0", "--policy", "open_cabinet_expert", "--split", "train",
-                              "--episodes-per-object", "1", "--workers", "2", "--no-progress", "--set",
-                              "task.partnet_dir=" + folder, "--out", out});
-  ASSERT_EQ(result.exit_code, 0) << result.out << result.err;
-  // 10 drawers of 6 cabinets, seed 0: all open (the target: 90 %).
-  EXPECT_NE(result.out.find("10 of 10 episodes"), std::string::npos) << result.out;
-  const std::size_t all = result.out.find("\nall ");
-  ASSERT_NE(all, std::string::npos) << result.out;
-  std::istringstream row(result.out.substr(all + 5));
-  int episodes = 0;
-  double success = 0;
-  row >> episodes >> success;
-  EXPECT_GE(success, 0.9) << result.out;
-  std::filesystem::remove_all(out);
+  // 10 drawers of 6 cabinets, seed 0: all open.
+  EXPECT_EQ(evalExpert("OpenCabinetDrawer-v0", "open_cabinet_expert", folder, 1, 10), 1.0);
+}
+
+TEST(PartNetData, TheDoorExpertOpensRealDoors) {
+  REQUIRE_CATEGORY(folder, "StorageFurniture");
+  // 10 doors of 7 cabinets, 2 episodes each (19 of 20 on 2026-11-28).
+  EXPECT_GE(evalExpert("OpenCabinetDoor-v0", "open_cabinet_expert", folder, 2, 20), 0.8);
+}
+
+TEST(PartNetData, TheChairExpertPushesRealChairs) {
+  REQUIRE_CATEGORY(folder, "Chair");
+  // 2 chairs, 5 episodes each (7 of 10 on 2026-11-28).
+  EXPECT_GE(evalExpert("PushChair-v0", "push_chair_expert", folder, 5, 10), 0.6);
+}
+
+TEST(PartNetData, TheBucketExpertMovesRealBuckets) {
+  REQUIRE_CATEGORY(folder, "Bucket");
+  // 4 buckets, 3 episodes each (10 of 12 on 2026-11-28).
+  EXPECT_GE(evalExpert("MoveBucket-v0", "move_bucket_expert", folder, 3, 12), 0.6);
 }
 
 TEST(PartNetData, ADemonstrationOnARealCabinetReplaysBitForBit) {
