@@ -126,6 +126,10 @@ std::string toString(BucketShape shape);
 // body weighs a shell of kShellThickness at kShellDensity over its surface.
 constexpr double kShellThickness = 0.004;  // m: a plastic bucket's wall
 constexpr double kShellDensity = 1000;     // kg/m^3: ManiSkill v1's bucket density
+// ManiSkill v1's scale of a PartNet bucket: 0.3, and 0.35 for its bucket
+// 4018 (its only exception: ../shared/reference/maniskill-v1-objects).
+double calcBucketScale(const std::string& id);
+
 BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, double scale,
                               const std::string& cache_root = "");
 

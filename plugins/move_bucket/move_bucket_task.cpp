@@ -45,19 +45,19 @@ std::string writePlatformUrdf() {
 
 MoveBucketTask::MoveBucketTask(const Config& config)
     : cache_dir_(config.get<std::string>("cache_dir", "")),
-      partnet_scale_(config.get<double>("partnet_scale", 0.3)),
+      partnet_scale_(config.get<double>("partnet_scale", 0.0)),
       hold_steps_(config.get<uint32_t>("hold_steps", 10)),
       buckets_(kTaskName, "bucket", readPartNetDir(config, kTaskName),
                {listGeneratedBuckets, [](const std::string& id) { return generateBucket(id); },
                 [this](const std::string& folder, const std::string& id) {
-                  return loadPartNetBucket(folder, id, partnet_scale_, cache_dir_);
+                  return loadPartNetBucket(folder, id, partnet_scale_ > 0 ? partnet_scale_ : calcBucketScale(id), cache_dir_);
                 },
                 nullptr, [this](BucketModel& model) { writeMeshFiles(model, cache_dir_); }}) {
   config.requireKnownKeys({"partnet_dir", "robot_dir", "cache_dir", "partnet_scale", "hold_steps"},
                          "MoveBucket: task");
   if (hold_steps_ == 0) throw Error("MoveBucket: task.hold_steps must be positive", MB_INVALID_ARGUMENT);
-  if (!(partnet_scale_ > 0) || !std::isfinite(partnet_scale_))
-    throw Error("MoveBucket: task.partnet_scale must be positive", MB_INVALID_ARGUMENT);
+  if (!(partnet_scale_ >= 0) || !std::isfinite(partnet_scale_))
+    throw Error("MoveBucket: task.partnet_scale must be positive (or 0: ManiSkill v1's)", MB_INVALID_ARGUMENT);
   if (cache_dir_.empty()) cache_dir_ = getDefaultCacheRoot();
   // The observation layout (ObservationLayout) and the expert assume the
   // dual-arm robot's 22 joints and 88-value agent vector.

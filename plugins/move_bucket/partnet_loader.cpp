@@ -205,6 +205,8 @@ std::string makeUrdf(const partnet::Object& object, const std::set<std::string>&
 
 }  // namespace
 
+double calcBucketScale(const std::string& id) { return id == "4018" ? 0.35 : 0.3; }
+
 BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, double scale,
                               const std::string& cache_root) {
   const partnet::Object object = partnet::loadObject(folder, id, scale);

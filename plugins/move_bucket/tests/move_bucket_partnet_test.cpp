@@ -33,6 +33,13 @@ TEST(MoveBucketPartNet, SplitsComeFromTestTxt) {
   EXPECT_EQ(manibench::kit::partnet::listObjectIds(kFixture, "test"), std::vector<std::string>{"200002"});
 }
 
+// ManiSkill v1 scaled its buckets by 0.3, and its bucket 4018 by 0.35: a
+// folder of v1's own ids gets v1's sizes (task.partnet_scale 0, the default).
+TEST(MoveBucketPartNet, V1ScalesItsBucketsAsV1Did) {
+  EXPECT_EQ(bk::calcBucketScale("4018"), 0.35);
+  for (const char* id : {"4000", "4019", "100461", "200001"}) EXPECT_EQ(bk::calcBucketScale(id), 0.3) << id;
+}
+
 TEST(MoveBucketPartNet, RimFloorAndHandleAreMeasuredInTheBucketFrame) {
   const bk::BucketModel octagon = bk::loadPartNetBucket(kFixture, "200001", kScale);
   // 0.28 m tall, apothem 0.15 at the rim (flat faces on x and y), walls 7 mm,
