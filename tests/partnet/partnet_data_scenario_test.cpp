@@ -141,7 +141,7 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(ExpertCase{"OpenCabinetDrawer-v0", "open_cabinet_expert", "StorageFurniture", 1, 10, 0.9},  // (10 / 10)
                     ExpertCase{"OpenCabinetDoor-v0", "open_cabinet_expert", "StorageFurniture", 2, 20, 0.8},    // (19 / 20)
                     ExpertCase{"PushChair-v0", "push_chair_expert", "Chair", 5, 10, 0.6},                       // (7 / 10)
-                    ExpertCase{"MoveBucket-v0", "move_bucket_expert", "Bucket", 3, 12, 0.6}),                   // (10 / 12)
+                    ExpertCase{"MoveBucket-v0", "move_bucket_expert", "Bucket", 3, 12, 0.6}),                   // (9 / 12)
     [](const ::testing::TestParamInfo<ExpertCase>& info) {
       std::string name = info.param.task;
       return name.substr(0, name.find('-'));
