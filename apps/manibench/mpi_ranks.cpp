@@ -1,6 +1,8 @@
 // MPI ranks through libmanibench_mpi.so (mpi_ranks.hpp, docs/distributed.md).
 #include "mpi_ranks.hpp"
 
+#include <manibench/plugin_registry.hpp>
+
 #include <dlfcn.h>
 #include <unistd.h>
 
@@ -35,14 +37,18 @@ bool MpiRanks::isStartedByMpi() {
 }
 
 MpiRanks::MpiRanks() : module_(std::make_unique<Module>()) {
-  // Beside this program (the build tree), then the install's library folder.
+  // Beside this program (the build tree), then in the library folder of
+  // the installation this program is in, found from where it is as the
+  // plugins are (a moved install or the .deb too), then at the configured
+  // prefix.
   char self[PATH_MAX];
   const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
   const std::filesystem::path dir =
       n > 0 ? std::filesystem::path(std::string(self, std::size_t(n))).parent_path() : ".";
-  const std::vector<std::string> candidates = {
-      (dir / "libmanibench_mpi.so").string(),
-      std::string(MANIBENCH_INSTALL_LIBDIR) + "/manibench/libmanibench_mpi.so"};
+  std::vector<std::string> candidates = {(dir / "libmanibench_mpi.so").string()};
+  if (const std::string modules = findHostModuleDir(); !modules.empty())
+    candidates.push_back(modules + "/libmanibench_mpi.so");
+  candidates.push_back(std::string(MANIBENCH_INSTALL_LIBDIR) + "/manibench/libmanibench_mpi.so");
   std::string errors;
   for (const std::string& path : candidates) {
     if (access(path.c_str(), R_OK) != 0) continue;
@@ -51,10 +57,12 @@ MpiRanks::MpiRanks() : module_(std::make_unique<Module>()) {
     if (module_->handle) break;
     errors += std::string("; ") + dlerror();
   }
-  if (!module_->handle)
-    throw std::runtime_error("started by mpirun, but this build has no MPI module (looked for " + candidates[0] +
-                             " and " + candidates[1] + errors +
+  if (!module_->handle) {
+    std::string looked;
+    for (const std::string& path : candidates) looked += (looked.empty() ? "" : ", ") + path;
+    throw std::runtime_error("started by mpirun, but this build has no MPI module (looked for " + looked + errors +
                              "): build with Debian's libopenmpi-dev installed (scripts/install-deps)");
+  }
   auto find = [&](const char* name) {
     void* symbol = dlsym(module_->handle, name);
     if (!symbol) throw std::runtime_error(std::string("the MPI module lacks ") + name);

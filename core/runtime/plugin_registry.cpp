@@ -131,6 +131,11 @@ std::string findHostPrefix() {
   return sdk::findPrefixAbove(findHostImageFolder(), MANIBENCH_PLUGIN_SUBDIR).string();
 }
 
+std::string findHostModuleDir() {
+  const std::string prefix = findHostPrefix();
+  return prefix.empty() ? "" : (fs::path(prefix) / fs::path(MANIBENCH_PLUGIN_SUBDIR).parent_path()).string();
+}
+
 std::string findHostDataRoot() {
   const std::string prefix = findHostPrefix();
   std::error_code ec;

@@ -85,3 +85,17 @@ obs, info = env.reset(seed=0)
 obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
 print("installed checks: import manibench OK,", len(tasks), "tasks, reward", float(reward))
 PY
+
+# 5. MPI ranks from the installed program: its MPI module is found in the
+# installation's own library folder, wherever the tree lies (it used to be
+# looked for only beside the program and at the configured prefix).
+if command -v mpirun >/dev/null && [[ -n "$(find "$prefix/lib" -name libmanibench_mpi.so)" ]]; then
+  env -u MANIBENCH_PLUGIN_PATH -u MANIBENCH_DATA_DIR HOME="$work" mpirun --allow-run-as-root --oversubscribe \
+    --mca btl self,vader -np 2 "$cli" eval Reach-v0 --policy random --objects 8 --levels 0-3 \
+    --set episode.max_steps=10 --no-progress --out "$work/mpi" >"$work/mpi.log" 2>&1 ||
+    { cat "$work/mpi.log"; fail "mpirun -np 2 manibench eval"; }
+  grep -q '"complete": true' "$work/mpi/summary.json" || { cat "$work/mpi.log"; fail "MPI eval summary incomplete"; }
+  echo "installed checks: mpirun -np 2 manibench eval OK"
+else
+  echo "installed checks: no mpirun or no MPI module installed, MPI check skipped"
+fi

@@ -66,6 +66,9 @@ struct LoadFailure {
 std::string findHostPrefix();
 // <prefix>/share/manibench when it exists (the robots: sdk/data.hpp), else "".
 std::string findHostDataRoot();
+// <prefix>/<libdir>/manibench, the folder of the host's own modules (the
+// MPI module; the plugins are in its plugins/), else "".
+std::string findHostModuleDir();
 
 // The controller a policy's actions are for (ABI 1.4), or "" when it names
 // none (a policy built against ABI 1.3 or older never does).
