@@ -375,10 +375,21 @@ class Bcq : public Algorithm {
   torch::Tensor decode(const ObservationBatch& obs, const torch::Tensor& z) {
     return torch::tanh(decoder_->forward(obs, z));
   }
+  // The latents come from `generator` (the acting policy's, seeded per
+  // episode) or, without one, libtorch's default generator of the
+  // observations' device. A generator of another device (the policy's CPU
+  // one beside networks on CUDA, which at::normal refuses: "Expected a
+  // 'cuda' device type for generator") draws on its own device and the
+  // draw is moved: the same seed gives the same latents on either device.
   torch::Tensor sampleActions(const ObservationBatch& obs, c10::optional<at::Generator> generator) {
-    const torch::Tensor z = at::normal(0.0, 1.0, {obs.size(), latent_dim_}, generator,
-                                       obs.state.options()).clamp(-0.5, 0.5);
-    return decode(obs, z);
+    const torch::TensorOptions options = obs.state.options();
+    torch::Tensor z;
+    if (generator.has_value() && generator->device() != options.device())
+      z = at::normal(0.0, 1.0, {obs.size(), latent_dim_}, generator, options.device(generator->device()))
+              .to(options.device());
+    else
+      z = at::normal(0.0, 1.0, {obs.size(), latent_dim_}, generator, options);
+    return decode(obs, z.clamp(-0.5, 0.5));
   }
   torch::Tensor perturb(Network* actor, const ObservationBatch& obs, const torch::Tensor& a) {
     if (actor == nullptr) return a;

@@ -217,7 +217,14 @@ torch::Tensor PointNetImpl::forward(const torch::Tensor& xyz, const torch::Tenso
                                     const torch::Tensor& mask) {
   if (g_pointnet_definition) return forwardDefinition(xyz, rgb, seg, state, mask);
   const int64_t batch = xyz.size(0), points = xyz.size(1), masks = seg.size(2);
-  const int64_t most = std::max<int64_t>(1, int64_t(mask.sum(1).max().item<float>()));
+  // The gather's size is data (the fullest cloud's count), which a CUDA
+  // device would have to hand back to the host on every call (about 30
+  // syncs per BCQ or TD3+BC update): off the CPU every point stays, and the
+  // masked pooling below ignores the others, as the definition does. On
+  // the CPU the count costs nothing and the gather saves the per-point
+  // layers of the points outside the mask.
+  const int64_t most =
+      xyz.is_cpu() ? std::max<int64_t>(1, int64_t(mask.sum(1).max().item<float>())) : points;
   torch::Tensor gxyz = xyz, grgb = rgb, gseg = seg, gmask = mask;
   if (most < points) {
     // Members first, in their order; then as many rows as the fullest cloud.

@@ -39,6 +39,7 @@ void TrainOptions::writeYaml(YAML::Node& node) const {
   node["seed"] = seed;
   node["threads"] = threads;
   node["device"] = device;
+  node["eval_device"] = eval_device;
   node["checkpoint_every"] = checkpoint_every;
   node["log_every"] = log_every;
   node["normalize_state"] = normalize_state;
@@ -68,6 +69,7 @@ TrainOptions TrainOptions::readYaml(const YAML::Node& node) {
   o.seed = node["seed"].as<uint64_t>();
   o.threads = node["threads"].as<int>();
   o.device = node["device"].as<std::string>();
+  o.eval_device = node["eval_device"].as<std::string>("cpu");  // absent before it was an option
   o.checkpoint_every = node["checkpoint_every"].as<int64_t>();
   o.log_every = node["log_every"].as<int64_t>();
   o.normalize_state = node["normalize_state"].as<bool>();
@@ -154,15 +156,15 @@ class Trainer {
   TrainResult resume(int64_t iterations) {
     const std::string newest = findNewestCheckpoint(dir_.string());
     if (newest.empty()) throw LearningError("'" + dir_.string() + "' has no checkpoint to resume from");
-    LoadedCheckpoint loaded = loadCheckpoint(newest, device_, true, {"torch_generator", "sampler", "log_row"});
+    LoadedCheckpoint loaded =
+        loadCheckpoint(newest, device_, true, {kCpuGeneratorExtra, kCudaGeneratorExtra, "sampler", "log_row"});
     loaded.info.spec.checkSame(spec_, "the checkpoint '" + newest + "'", "the demonstrations");
     algorithm_ = std::move(loaded.algorithm);
     if (iterations > 0) options_.iterations = iterations;
     YAML::Node node;
     options_.writeYaml(node);
     writeText(dir_ / "train.yaml", yamlText(node));
-    at::Generator generator = at::detail::getDefaultCPUGenerator();  // shares the default's state
-    generator.set_state(loaded.extras.at("torch_generator"));
+    restoreGeneratorStates(loaded.extras, device_);
     sampler_ = std::make_unique<BatchSampler>(*dataset_, options_.algorithm.batch_size, options_.seed,
                                               algorithm_->needsNextObservations(), options_.network);
     const torch::Tensor s = loaded.extras.at("sampler");
@@ -201,12 +203,10 @@ class Trainer {
     const BatchSampler::Position p = sampler_->getPosition();
     const torch::Tensor sampler = torch::tensor({int64_t(p.epoch_seed), p.epoch, p.batch}, torch::kInt64);
     const fs::path path = fs::absolute(dir_ / "checkpoints" / checkpointName(iteration));
-    saveCheckpoint(path.string(), info, *algorithm_,
-                   {{"torch_generator", at::detail::getDefaultCPUGenerator().get_state()},
-                    {"sampler", sampler},
-                    {"log_row", log_row_}});
-    writeText(dir_ / "policy.yaml", "# manibench eval TASK --policy torch_policy --policy-config " +
-                                        (dir_ / "policy.yaml").string() + "\ncheckpoint: '" + path.string() + "'\n");
+    std::map<std::string, torch::Tensor> extras{{"sampler", sampler}, {"log_row", log_row_}};
+    addGeneratorStates(extras, device_);
+    saveCheckpoint(path.string(), info, *algorithm_, extras);
+    writePolicyConfig(dir_, "TASK", path.string(), options_.eval_device);
     last_checkpoint_ = path.string();
     return last_checkpoint_;
   }

@@ -313,6 +313,8 @@ TEST_F(LearningTraining, TrainEvaluatesThroughTheCommandLine) {
   EXPECT_TRUE(contains(summary, "\"sandbox\": false")) << summary;
   EXPECT_TRUE(fs::exists(file("cli_run/checkpoints/iter_0000060.pt")));
   EXPECT_TRUE(contains(readFile(file("cli_run/policy.yaml")), "iter_0000060.pt"));
+  // Evaluation runs on the CPU unless asked, whatever trained the checkpoint.
+  EXPECT_TRUE(contains(readFile(file("cli_run/policy.yaml")), "\ndevice: cpu\n")) << readFile(file("cli_run/policy.yaml"));
   // Starting again into the same directory is refused; --resume to more iterations is not.
   const auto again = runCli({"train", "bc", "--demos", file("reach.h5"), "--out", file("cli_run")});
   EXPECT_EQ(again.exit_code, 1);

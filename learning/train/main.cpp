@@ -90,6 +90,8 @@ Output and evaluation:
   --eval-workers N        evaluation workers (default 1)
   --eval-seed S           the evaluation's base seed (default 1000: not the
                           demonstrations' own episodes, made with seed 0)
+  --eval-device cpu|cuda  what DIR/policy.yaml runs the checkpoints on (default
+                          cpu, whatever --device trained them on)
   --no-progress           no progress line (shown only on a terminal)
   --resume DIR            continue the training in DIR from its newest checkpoint
 )";
@@ -197,6 +199,7 @@ ml::TrainOptions parseTrainOptions(const mb::cli::Arguments& args, int argc, cha
     throw UsageError("--eval-split takes train or test", kUsage);
   if (has("eval-objects")) o.eval_objects = splitList(value("eval-objects"));
   if (has("eval-episodes")) o.eval_episodes = uint32_t(parseInteger(value("eval-episodes"), "--eval-episodes", 1));
+  if (has("eval-device")) o.eval_device = ml::parseDevice(value("eval-device")).str();
   if (has("eval-seed")) o.eval_seed = uint64_t(parseInteger(value("eval-seed"), "--eval-seed", 0));
   if (has("eval-workers")) o.eval_workers = unsigned(parseInteger(value("eval-workers"), "--eval-workers", 1));
   std::string command = "manibench train";
@@ -212,7 +215,7 @@ int run(int argc, char** argv) {
       "dropout", "iterations", "batch-size", "lr", "weight-decay", "seed", "threads", "device", "gamma", "tau",
       "alpha", "action-noise", "noise-clip", "policy-delay", "phi", "lambda", "train-samples", "eval-samples",
       "out", "checkpoint-every", "log-every", "eval-every", "eval-task", "eval-split", "eval-objects",
-      "eval-episodes", "eval-workers", "eval-seed", "resume"};
+      "eval-episodes", "eval-workers", "eval-seed", "eval-device", "resume"};
   const mb::cli::Arguments args =
       mb::cli::parseArguments(argc, argv, 2, valued, {"normalize-state", "step-input", "robot-frame", "executed-actions", "no-progress"}, kUsage, {"demos"});
   if (args.help) {

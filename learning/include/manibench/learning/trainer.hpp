@@ -5,7 +5,7 @@
 //   DIR/log.csv               iteration, seconds, each loss (averaged since the previous row), it/s
 //   DIR/eval.csv              iteration, split, episodes, successes, success_rate
 //   DIR/checkpoints/iter_N.pt every --checkpoint-every iterations, at the end and on a stop
-//   DIR/policy.yaml           `checkpoint: <the newest>`: what --policy-config takes
+//   DIR/policy.yaml           `checkpoint: <the newest>`, `device: <eval_device>`: what --policy-config takes
 //   DIR/environment.yaml      the demonstrations' environment configuration (--config takes it)
 //   DIR/eval/iter_N/          each evaluation's results (manibench eval --out)
 //
@@ -38,6 +38,10 @@ struct TrainOptions {
   uint64_t seed = 0;
   int threads = 1;
   std::string device = "cpu";
+  // The device policy.yaml names for evaluating the checkpoints (the
+  // torch_policy plugin runs inside the environment's process, one
+  // observation at a time: the CPU unless asked, whatever trained it).
+  std::string eval_device = "cpu";
   int64_t checkpoint_every = 1000;
   int64_t log_every = 100;
   bool normalize_state = false;  // (s - mean) / std per feature, from the demonstrations
