@@ -9,16 +9,22 @@ namespace manibench::learning {
 
 // --- options ------------------------------------------------------------------------------
 
-AlgorithmOptions AlgorithmOptions::makeDefaults(const std::string& name) {
+AlgorithmOptions AlgorithmOptions::makeDefaults(const std::string& name, const std::string& mode) {
   AlgorithmOptions o;
   o.name = name;
+  // ManiSkill-Learn's configurations decay the weights (5e-6) of every
+  // network on point clouds, and in the state mode only BCQ's VAE (its
+  // state BC and TD3+BC configurations have none). Here one value serves
+  // all of an algorithm's networks: BCQ's critics get its VAE's.
+  const bool points = mode != "state";
   if (name == "bc") {
-    // ManiSkill-Learn's BC: batch 128, Adam 3e-4, weight decay 5e-6.
+    // ManiSkill-Learn's BC: batch 128, Adam 3e-4 (its state configuration:
+    // 1e-3; manibench's state-mode results were measured at 3e-4).
     o.batch_size = 128;
     o.lr = 3e-4;
-    o.weight_decay = 5e-6;
+    o.weight_decay = points ? 5e-6 : 0;
   } else if (name == "bcq") {
-    // Table 7 (and ManiSkill-Learn's weight decay).
+    // Table 7.
     o.batch_size = 64;
     o.lr = 5e-4;
     o.weight_decay = 5e-6;
@@ -26,7 +32,7 @@ AlgorithmOptions AlgorithmOptions::makeDefaults(const std::string& name) {
     // Table 8; the batch is ManiSkill-Learn's (the table gives none).
     o.batch_size = 64;
     o.lr = 5e-4;
-    o.weight_decay = 0;
+    o.weight_decay = points ? 5e-6 : 0;
   } else if (name == "sac") {
     // Table 6: Adam 3e-4, discount 0.95, minibatch 1024, tau 0.005.
     o.batch_size = 1024;
@@ -56,7 +62,9 @@ void AlgorithmOptions::writeYaml(YAML::Node& node) const {
   node["action_noise"] = action_noise;
   node["noise_clip"] = noise_clip;
   node["policy_delay"] = policy_delay;
+  node["bc_tanh"] = bc_tanh;
   node["init_temperature"] = init_temperature;
+  node["temperature_gradient_log"] = temperature_gradient_log;
   node["tune_temperature"] = tune_temperature;
   node["target_entropy_per_dim"] = target_entropy_per_dim;
   node["log_std_min"] = log_std_min;
@@ -82,6 +90,9 @@ AlgorithmOptions AlgorithmOptions::readYaml(const YAML::Node& node) {
   o.policy_delay = node["policy_delay"].as<int64_t>();
   // Absent from the checkpoints written before SAC: the defaults.
   o.init_temperature = node["init_temperature"].as<double>(o.init_temperature);
+  // Absent from the checkpoints written before these options: what they ran.
+  o.bc_tanh = node["bc_tanh"].as<bool>(false);
+  o.temperature_gradient_log = node["temperature_gradient_log"].as<bool>(node["init_temperature"].IsDefined());
   o.tune_temperature = node["tune_temperature"].as<bool>(o.tune_temperature);
   o.target_entropy_per_dim = node["target_entropy_per_dim"].as<double>(o.target_entropy_per_dim);
   o.log_std_min = node["log_std_min"].as<double>(o.log_std_min);
@@ -256,16 +267,20 @@ class BehaviorCloning : public Algorithm {
   }
   bool needsNextObservations() const override { return false; }
   std::vector<std::string> getLossNames() const override { return {"loss"}; }
+  torch::Tensor policy(const ObservationBatch& obs) {
+    const torch::Tensor out = actor_->forward(obs, {});
+    return options_.bc_tanh ? torch::tanh(out) : out;
+  }
   std::vector<double> update(const TransitionBatch& batch, int64_t) override {
     actor_->train();
-    const torch::Tensor loss = torch::mse_loss(actor_->forward(batch.obs, {}), batch.actions);
+    const torch::Tensor loss = torch::mse_loss(policy(batch.obs), batch.actions);
     step(*optimizer_, loss);
     return {loss.item<double>()};
   }
   torch::Tensor act(const ObservationBatch& obs, at::Generator&) override {
     torch::NoGradGuard no_grad;
     actor_->eval();
-    return actor_->forward(obs, {});
+    return policy(obs);
   }
 
  private:
@@ -526,8 +541,8 @@ class Sac : public Algorithm {
       step(*actor_optimizer_, actor_loss);
     }
     if (options_.tune_temperature) {
-      const torch::Tensor temperature_loss = -(log_temperature_ * (log_prob.detach() + target_entropy_)).mean();
-      step(*temperature_optimizer_, temperature_loss);
+      const torch::Tensor by = options_.temperature_gradient_log ? log_temperature_ : log_temperature_.exp();
+      step(*temperature_optimizer_, -(by * (log_prob.detach() + target_entropy_)).mean());
     }
     if ((iteration + 1) % options_.target_update_every == 0) {
       softUpdate(*critic1_target_, *critic1_, options_.tau);

@@ -87,6 +87,17 @@ void NetOptions::writeYaml(YAML::Node& node) const {
   node["ff"] = ff;
   node["dropout"] = dropout;
   node["transformer_head"] = transformer_head;
+  node["transformer_masks"] = transformer_masks;
+}
+
+NetOptions NetOptions::makeDefaults(const std::string& algorithm) {
+  NetOptions o;
+  if (algorithm == "bcq" || algorithm == "td3bc") {
+    o.width = 192;
+    o.layers = 2;
+    o.ff = 768;
+  }
+  return o;
 }
 
 NetOptions NetOptions::readYaml(const YAML::Node& node) {
@@ -106,6 +117,7 @@ NetOptions NetOptions::readYaml(const YAML::Node& node) {
   o.ff = node["ff"].as<int64_t>();
   o.dropout = node["dropout"].as<double>();
   o.transformer_head = node["transformer_head"].as<std::vector<int64_t>>();
+  o.transformer_masks = node["transformer_masks"].as<bool>(true);  // absent: written before the option
   return o;
 }
 
@@ -409,11 +421,12 @@ TORCH_MODULE(AttentionPooling);
 class PnTransformerNetwork : public Network {
  public:
   PnTransformerNetwork(const NetOptions& o, const ObservationSpec& spec, int64_t extra, int64_t out)
-      : Network(calcInputStateDim(o, spec), extra, out), mask_count_(spec.mask_count) {
+      : Network(calcInputStateDim(o, spec), extra, out), mask_count_(spec.mask_count),
+        pointnet_masks_(o.transformer_masks ? spec.mask_count : 0) {
     const int64_t state_input = state_dim_ + extra;
     for (int64_t i = 0; i < mask_count_ + 2; ++i) {
       pointnets_.push_back(register_module("pointnet" + std::to_string(i),
-                                           PointNet(mask_count_, state_input, std::vector<int64_t>{o.width, o.width}, false)));
+                                           PointNet(pointnet_masks_, state_input, std::vector<int64_t>{o.width, o.width}, false)));
       globals_.push_back(register_module("global" + std::to_string(i),
                                          Mlp(o.width, std::vector<int64_t>{o.width, o.width}, false)));
     }
@@ -445,8 +458,9 @@ class PnTransformerNetwork : public Network {
     const std::vector<torch::Tensor> masks = calcPointMasks(obs);
     std::vector<torch::Tensor> tokens{state_mlp_->forward(s)};
     std::vector<torch::Tensor> present{torch::ones({obs.size()}, s.options())};
+    const torch::Tensor seg = obs.seg.slice(-1, 0, pointnet_masks_);
     for (std::size_t i = 0; i < masks.size(); ++i) {
-      tokens.push_back(globals_[i]->forward(pointnets_[i]->forward(obs.xyz, obs.rgb, obs.seg, s, masks[i])));
+      tokens.push_back(globals_[i]->forward(pointnets_[i]->forward(obs.xyz, obs.rgb, seg, s, masks[i])));
       present.push_back((masks[i].sum(1) > 0).to(torch::kFloat32));
     }
     return {torch::stack(tokens, 1), torch::stack(present, 1)};
@@ -466,6 +480,7 @@ class PnTransformerNetwork : public Network {
 
  private:
   int64_t mask_count_;
+  int64_t pointnet_masks_;  // the mask channels each PointNet sees (NetOptions::transformer_masks)
   std::vector<PointNet> pointnets_;
   std::vector<Mlp> globals_;
   Mlp state_mlp_{nullptr};

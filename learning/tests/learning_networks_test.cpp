@@ -224,7 +224,7 @@ TEST(LearningAlgorithms, EveryAlgorithmStepsAndActsOnEveryNetwork) {
       at::Generator generator = at::detail::createCPUGenerator(1);
       const torch::Tensor a = algorithm->act(batch.obs, generator);
       EXPECT_EQ(a.sizes(), (std::vector<int64_t>{4, 3}));
-      if (std::string(name) != "bc") EXPECT_LE(a.abs().max().item<float>(), 1.0f);
+      EXPECT_LE(a.abs().max().item<float>(), 1.0f);  // BC's too: tanh, as ManiSkill-Learn's
     }
 }
 
@@ -403,6 +403,40 @@ TEST(LearningAlgorithms, BcqSamplesWithTheActingGeneratorOnEveryDevice) {
   for (const auto& [name, network] : bcq->getNetworks()) network->to(torch::kCUDA);
   at::Generator g4 = at::detail::createCPUGenerator(7);
   EXPECT_TRUE(torch::allclose(bcq->act(obs.to(torch::kCUDA), g4).cpu(), a, 1e-4, 1e-5));
+}
+
+// ManiSkill-Learn's settings are the defaults; what older checkpoints ran
+// reads back as they ran it.
+TEST(LearningAlgorithms, ManiSkillLearnsSettingsAndTheOlderOnes) {
+  const NetOptions offline = NetOptions::makeDefaults("td3bc"), bc = NetOptions::makeDefaults("bc");
+  EXPECT_EQ(std::vector<int64_t>({offline.layers, offline.width, offline.ff}), std::vector<int64_t>({2, 192, 768}));
+  EXPECT_EQ(std::vector<int64_t>({bc.layers, bc.width, bc.ff}), std::vector<int64_t>({6, 256, 1024}));
+  EXPECT_EQ(AlgorithmOptions::makeDefaults("td3bc", "pointcloud").weight_decay, 5e-6);
+  EXPECT_EQ(AlgorithmOptions::makeDefaults("bc", "state").weight_decay, 0);
+  YAML::Node a, n;
+  AlgorithmOptions::makeDefaults("sac").writeYaml(a);
+  makeNet(NetKind::PnTransformer).writeYaml(n);
+  EXPECT_TRUE(AlgorithmOptions::readYaml(a).bc_tanh);
+  EXPECT_FALSE(AlgorithmOptions::readYaml(a).temperature_gradient_log);
+  EXPECT_FALSE(NetOptions::readYaml(n).transformer_masks);
+  a.remove("bc_tanh");
+  a.remove("temperature_gradient_log");
+  n.remove("transformer_masks");
+  EXPECT_FALSE(AlgorithmOptions::readYaml(a).bc_tanh);
+  EXPECT_TRUE(AlgorithmOptions::readYaml(a).temperature_gradient_log);
+  EXPECT_TRUE(NetOptions::readYaml(n).transformer_masks);
+  // The transformer's PointNets see xyz, rgb and the state, not the K mask channels.
+  const ObservationSpec spec = makeCloudSpec();
+  NetOptions with = makeNet(NetKind::PnTransformer);
+  with.transformer_masks = true;
+  const int64_t k = spec.mask_count, width = with.width;
+  EXPECT_EQ(countParameters(*makeNetwork(with, spec, 0, 3)) -
+                countParameters(*makeNetwork(makeNet(NetKind::PnTransformer), spec, 0, 3)),
+            (k + 2) * k * width);
+  // SAC starts at alpha = 1 (log alpha = 0).
+  torch::manual_seed(0);
+  auto sac = makeAlgorithm(AlgorithmOptions::makeDefaults("sac"), makeNet(NetKind::Mlp), makeStateSpec(), torch::kCPU);
+  EXPECT_EQ(sac->update(makeTransitions(8, makeStateSpec()), 0)[2], 1.0);
 }
 
 TEST(LearningCheckpoints, FilesThatAreNotCheckpointsAreClearErrors) {

@@ -78,6 +78,17 @@ struct NetOptions {
   int64_t ff = 1024;
   double dropout = 0.1;
   std::vector<int64_t> transformer_head{128};
+  // Whether the transformer's PointNets also see each point's mask
+  // channels. ManiSkill-Learn's pop them (each PointNet already sees one
+  // mask's points; xyz, rgb and the agent state go in); on: the checkpoints
+  // written before this option, which read back with it on.
+  bool transformer_masks = false;
+
+  // ManiSkill-Learn's sizes for `algorithm`'s networks: BC's pn_transformer
+  // as above; BCQ's and TD3+BC's (its offline-RL configurations) 2 blocks
+  // of width 192 and feed-forward 768, which also sets their cost (BCQ
+  // runs six such networks, four on 10x repeated clouds).
+  static NetOptions makeDefaults(const std::string& algorithm);
 
   // Whether the state input is more than the current state vector.
   bool hasExtraStateInputs() const {
