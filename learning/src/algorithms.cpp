@@ -391,19 +391,23 @@ class Bcq : public Algorithm {
     return torch::tanh(decoder_->forward(obs, z));
   }
   // The latents come from `generator` (the acting policy's, seeded per
-  // episode) or, without one, libtorch's default generator of the
+  // episode) or, without one (nullptr), libtorch's default generator of the
   // observations' device. A generator of another device (the policy's CPU
   // one beside networks on CUDA, which at::normal refuses: "Expected a
   // 'cuda' device type for generator") draws on its own device and the
   // draw is moved: the same seed gives the same latents on either device.
-  torch::Tensor sampleActions(const ObservationBatch& obs, c10::optional<at::Generator> generator) {
+  // (A pointer, not an optional: c10::optional is its own class in libtorch
+  // 1.13 and std::optional in 2.x.)
+  torch::Tensor sampleActions(const ObservationBatch& obs, at::Generator* generator) {
     const torch::TensorOptions options = obs.state.options();
+    const std::vector<int64_t> size{obs.size(), latent_dim_};
     torch::Tensor z;
-    if (generator.has_value() && generator->device() != options.device())
-      z = at::normal(0.0, 1.0, {obs.size(), latent_dim_}, generator, options.device(generator->device()))
-              .to(options.device());
+    if (generator == nullptr)
+      z = at::normal(0.0, 1.0, size, {}, options);
+    else if (generator->device() != options.device())
+      z = at::normal(0.0, 1.0, size, *generator, options.device(generator->device())).to(options.device());
     else
-      z = at::normal(0.0, 1.0, {obs.size(), latent_dim_}, generator, options);
+      z = at::normal(0.0, 1.0, size, *generator, options);
     return decode(obs, z.clamp(-0.5, 0.5));
   }
   torch::Tensor perturb(Network* actor, const ObservationBatch& obs, const torch::Tensor& a) {
@@ -430,7 +434,7 @@ class Bcq : public Algorithm {
       torch::NoGradGuard no_grad;
       const int64_t n = options_.train_samples;
       const ObservationBatch next = b.next_obs.repeatEach(n);
-      const torch::Tensor next_action = perturb(actor_target_.get(), next, sampleActions(next, c10::nullopt));
+      const torch::Tensor next_action = perturb(actor_target_.get(), next, sampleActions(next, nullptr));
       const torch::Tensor q1 = critic1_target_->forward(next, next_action);
       const torch::Tensor q2 = critic2_target_->forward(next, next_action);
       const torch::Tensor q = options_.lambda * torch::min(q1, q2) + (1 - options_.lambda) * torch::max(q1, q2);
@@ -447,7 +451,7 @@ class Bcq : public Algorithm {
       torch::Tensor sampled;
       {
         torch::NoGradGuard no_grad;
-        sampled = sampleActions(b.obs, c10::nullopt);
+        sampled = sampleActions(b.obs, nullptr);
       }
       const torch::Tensor actor_loss = -critic1_->forward(b.obs, perturb(actor_.get(), b.obs, sampled)).mean();
       step(*actor_optimizer_, actor_loss);
@@ -465,7 +469,7 @@ class Bcq : public Algorithm {
     for (auto& [name, network] : networks_) network->eval();
     const int64_t n = options_.eval_samples, b = obs.size();
     const ObservationBatch many = obs.repeatEach(n);
-    const torch::Tensor actions = perturb(actor_.get(), many, sampleActions(many, generator));
+    const torch::Tensor actions = perturb(actor_.get(), many, sampleActions(many, &generator));
     const torch::Tensor q = critic1_->forward(many, actions).view({b, n});
     const torch::Tensor best = std::get<1>(q.max(1));  // [B]
     const torch::Tensor rows = torch::arange(b, best.options()) * n + best;

@@ -331,8 +331,9 @@ TEST(LearningCheckpoints, ACheckpointLoadsOntoTheDeviceAskedFor) {
       saveCheckpoint(path, info, *algorithm, extras);
       LoadedCheckpoint loaded = loadCheckpoint(path, to, true, {"marker", kCpuGeneratorExtra, kCudaGeneratorExtra});
       for (const auto& [name, network] : loaded.algorithm->getNetworks()) {
-        for (const torch::Tensor& p : network->parameters()) EXPECT_EQ(p.device(), to) << name;
-        for (const torch::Tensor& b : network->buffers()) EXPECT_EQ(b.device(), to) << name;
+        // (The type: a tensor's device has an index, "cuda:0", where "cuda" has none.)
+        for (const torch::Tensor& p : network->parameters()) EXPECT_EQ(p.device().type(), to.type()) << name;
+        for (const torch::Tensor& b : network->buffers()) EXPECT_EQ(b.device().type(), to.type()) << name;
       }
       for (const auto& [name, tensor] : loaded.extras) EXPECT_TRUE(tensor.is_cpu()) << name;
       EXPECT_EQ(loaded.extras.count(kCudaGeneratorExtra), from.is_cuda() ? 1u : 0u);
@@ -347,7 +348,9 @@ TEST(LearningCheckpoints, ACheckpointLoadsOntoTheDeviceAskedFor) {
       torch::manual_seed(5);
       loaded.algorithm->update(batch.to(to), 3);
       const std::vector<torch::Tensor> a = copyParameters(*algorithm), b = copyParameters(*loaded.algorithm);
-      for (std::size_t i = 0; i < a.size(); ++i) EXPECT_TRUE(torch::equal(a[i], b[i])) << i;
+      // (CUDA's backward of a gather adds with atomics, in no fixed order.)
+      for (std::size_t i = 0; i < a.size(); ++i)
+        EXPECT_TRUE(from.is_cpu() ? torch::equal(a[i], b[i]) : torch::allclose(a[i], b[i], 1e-5, 1e-6)) << i;
     }
   std::remove(path.c_str());
 }
