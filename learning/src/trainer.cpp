@@ -101,11 +101,10 @@ class Trainer {
       options_.network.kind = spec_.isPointCloud() ? NetKind::PnTransformer : NetKind::Mlp;
       options_.pick_network = false;
     }
-    if (options_.pick_weight_decay) {
-      options_.algorithm.weight_decay =
-          AlgorithmOptions::makeDefaults(options_.algorithm.name, spec_.mode).weight_decay;
-      options_.pick_weight_decay = false;
-    }
+    const AlgorithmOptions for_mode = AlgorithmOptions::makeDefaults(options_.algorithm.name, spec_.mode);
+    if (options_.pick_lr) options_.algorithm.lr = for_mode.lr;
+    if (options_.pick_weight_decay) options_.algorithm.weight_decay = for_mode.weight_decay;
+    options_.pick_lr = options_.pick_weight_decay = false;
     if (options_.robot_frame) {
       options_.network.robot_frame = planRobotFrameInputs(spec_);
       options_.robot_frame = false;  // from now on the network's options carry it

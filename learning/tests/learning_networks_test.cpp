@@ -416,6 +416,8 @@ TEST(LearningAlgorithms, ManiSkillLearnsSettingsAndTheOlderOnes) {
   EXPECT_EQ(std::vector<int64_t>({bc.layers, bc.width, bc.ff}), std::vector<int64_t>({6, 256, 1024}));
   EXPECT_EQ(AlgorithmOptions::makeDefaults("td3bc", "pointcloud").weight_decay, 5e-6);
   EXPECT_EQ(AlgorithmOptions::makeDefaults("bc", "state").weight_decay, 0);
+  EXPECT_EQ(AlgorithmOptions::makeDefaults("bc", "state").lr, 1e-3);
+  EXPECT_EQ(AlgorithmOptions::makeDefaults("bc", "pointcloud").lr, 3e-4);
   YAML::Node a, n;
   AlgorithmOptions::makeDefaults("sac").writeYaml(a);
   makeNet(NetKind::PnTransformer).writeYaml(n);

@@ -69,7 +69,8 @@ Network:
 Optimization:
   --iterations N          gradient steps (default 10000)
   --batch-size N          default 128 (bc), 64 (bcq: Table 7; td3bc)
-  --lr X                  Adam's rate: default 3e-4 (bc), 5e-4 (bcq, td3bc)
+  --lr X                  Adam's rate: default 3e-4 (bc on point clouds), 1e-3 (bc on
+                          states), 5e-4 (bcq, td3bc)
   --weight-decay X        ManiSkill-Learn's: 5e-6 on point clouds; state: 5e-6 (bcq), 0 (bc, td3bc)
   --no-tanh               bc: the network's output as the action (default tanh of it)
   --seed S                initialization, batches, noise (default 0)
@@ -185,6 +186,7 @@ ml::TrainOptions parseTrainOptions(const mb::cli::Arguments& args, int argc, cha
   if (has("lr")) o.algorithm.lr = parseNumber(value("lr"), "--lr");
   if (has("weight-decay")) o.algorithm.weight_decay = parseNumber(value("weight-decay"), "--weight-decay");
   o.pick_weight_decay = !has("weight-decay");
+  o.pick_lr = !has("lr");
   o.algorithm.bc_tanh = !has("no-tanh");
   if (has("seed")) o.seed = uint64_t(parseInteger(value("seed"), "--seed", 0));
   if (has("threads")) o.threads = int(parseInteger(value("threads"), "--threads", 1));

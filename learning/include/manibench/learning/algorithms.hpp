@@ -66,8 +66,9 @@ struct AlgorithmOptions {
   int64_t target_update_every = 1;
 
   // The tables' values (and ManiSkill-Learn's where the tables are
-  // silent) for `name` on observations of `mode` (the weight decay is
-  // ManiSkill-Learn's for the mode); throws LearningError for an unknown name.
+  // silent) for `name` on observations of `mode` (BC's learning rate and the
+  // weight decay are ManiSkill-Learn's for the mode); throws LearningError
+  // for an unknown name.
   static AlgorithmOptions makeDefaults(const std::string& name, const std::string& mode = "state");
   void writeYaml(YAML::Node& node) const;
   static AlgorithmOptions readYaml(const YAML::Node& node);

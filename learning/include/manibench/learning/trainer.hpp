@@ -33,8 +33,9 @@ struct TrainOptions {
   // network.kind was not chosen: mlp for state demonstrations,
   // pn_transformer for point clouds.
   bool pick_network = false;
-  // algorithm.weight_decay was not chosen: ManiSkill-Learn's for the
-  // demonstrations' observation mode (AlgorithmOptions::makeDefaults).
+  // algorithm.lr, algorithm.weight_decay were not chosen: ManiSkill-Learn's
+  // for the demonstrations' observation mode (AlgorithmOptions::makeDefaults).
+  bool pick_lr = false;
   bool pick_weight_decay = false;
   DatasetOptions data;
   int64_t iterations = 10000;  // gradient steps in all
