@@ -105,14 +105,18 @@ AlgorithmOptions AlgorithmOptions::readYaml(const YAML::Node& node) {
   return o;
 }
 
-TransitionBatch TransitionBatch::to(const torch::Device& device) const {
+TransitionBatch TransitionBatch::map(const std::function<torch::Tensor(const torch::Tensor&)>& f) const {
   TransitionBatch out;
-  out.obs = obs.to(device);
-  if (next_obs.state.defined()) out.next_obs = next_obs.to(device);
-  out.actions = actions.to(device);
-  if (rewards.defined()) out.rewards = rewards.to(device);
-  if (dones.defined()) out.dones = dones.to(device);
+  out.obs = obs.map(f);
+  if (next_obs.state.defined()) out.next_obs = next_obs.map(f);
+  out.actions = f(actions);
+  if (rewards.defined()) out.rewards = f(rewards);
+  if (dones.defined()) out.dones = f(dones);
   return out;
+}
+
+TransitionBatch TransitionBatch::to(const torch::Device& device, bool non_blocking) const {
+  return map([&](const torch::Tensor& t) { return t.to(device, non_blocking); });
 }
 
 // --- the base -----------------------------------------------------------------------------

@@ -10,40 +10,28 @@ namespace manibench::learning {
 
 // --- batches ------------------------------------------------------------------------------
 
-ObservationBatch ObservationBatch::to(const torch::Device& device) const {
+ObservationBatch ObservationBatch::map(const std::function<torch::Tensor(const torch::Tensor&)>& f) const {
   ObservationBatch out;
-  out.state = state.to(device);
+  out.state = f(state);
   if (hasPoints()) {
-    out.xyz = xyz.to(device);
-    out.rgb = rgb.to(device);
-    out.seg = seg.to(device);
-    out.valid = valid.to(device);
+    out.xyz = f(xyz);
+    out.rgb = f(rgb);
+    out.seg = f(seg);
+    out.valid = f(valid);
   }
   return out;
+}
+
+ObservationBatch ObservationBatch::to(const torch::Device& device, bool non_blocking) const {
+  return map([&](const torch::Tensor& t) { return t.to(device, non_blocking); });
 }
 
 ObservationBatch ObservationBatch::repeatEach(int64_t n) const {
-  ObservationBatch out;
-  out.state = state.repeat_interleave(n, 0);
-  if (hasPoints()) {
-    out.xyz = xyz.repeat_interleave(n, 0);
-    out.rgb = rgb.repeat_interleave(n, 0);
-    out.seg = seg.repeat_interleave(n, 0);
-    out.valid = valid.repeat_interleave(n, 0);
-  }
-  return out;
+  return map([&](const torch::Tensor& t) { return t.repeat_interleave(n, 0); });
 }
 
 ObservationBatch ObservationBatch::select(const torch::Tensor& index) const {
-  ObservationBatch out;
-  out.state = state.index_select(0, index);
-  if (hasPoints()) {
-    out.xyz = xyz.index_select(0, index);
-    out.rgb = rgb.index_select(0, index);
-    out.seg = seg.index_select(0, index);
-    out.valid = valid.index_select(0, index);
-  }
-  return out;
+  return map([&](const torch::Tensor& t) { return t.index_select(0, index); });
 }
 
 torch::Tensor calcValidPoints(const torch::Tensor& xyz, const torch::Tensor& rgb,

@@ -76,6 +76,7 @@ Optimization:
   --seed S                initialization, batches, noise (default 0)
   --threads N             libtorch and OpenBLAS threads (default 1)
   --device cpu|cuda       cuda needs a libtorch built with it (default cpu)
+  --prefetch              gather the next batch while this one trains (always on cuda)
 Offline RL (bcq, td3bc; Tables 7 and 8):
   --gamma X  --tau X      discount (0.95), target smoothing (0.005)
   --alpha X               td3bc's BC weight alpha (0.02; 0 is BC)
@@ -166,6 +167,7 @@ ml::TrainOptions parseTrainOptions(const mb::cli::Arguments& args, int argc, cha
   if (has("cache-gb"))
     o.data.cache_bytes = uint64_t(parseNumber(value("cache-gb"), "--cache-gb") * double(uint64_t(1) << 30));
   o.normalize_state = has("normalize-state");
+  o.prefetch = has("prefetch");
   o.data.executed_actions = has("executed-actions");
   if (has("net")) o.network.kind = ml::parseNetKind(value("net"));
   o.pick_network = !has("net");
@@ -228,7 +230,7 @@ int run(int argc, char** argv) {
       "out", "checkpoint-every", "log-every", "eval-every", "eval-task", "eval-split", "eval-objects",
       "eval-episodes", "eval-workers", "eval-seed", "eval-device", "resume"};
   const mb::cli::Arguments args =
-      mb::cli::parseArguments(argc, argv, 2, valued, {"normalize-state", "step-input", "robot-frame", "executed-actions", "no-progress", "no-tanh", "transformer-masks"}, kUsage, {"demos"});
+      mb::cli::parseArguments(argc, argv, 2, valued, {"normalize-state", "step-input", "robot-frame", "executed-actions", "no-progress", "no-tanh", "transformer-masks", "prefetch"}, kUsage, {"demos"});
   if (args.help) {
     std::cout << kUsage;
     return 0;

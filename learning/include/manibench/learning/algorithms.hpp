@@ -81,7 +81,9 @@ struct TransitionBatch {
   torch::Tensor actions;  // [B, A], clipped to [-1, 1]
   torch::Tensor rewards;  // [B]
   torch::Tensor dones;    // [B]
-  TransitionBatch to(const torch::Device& device) const;
+  // `f` applied to each tensor it holds (ObservationBatch::map).
+  TransitionBatch map(const std::function<torch::Tensor(const torch::Tensor&)>& f) const;
+  TransitionBatch to(const torch::Device& device, bool non_blocking = false) const;
 };
 
 class Algorithm {

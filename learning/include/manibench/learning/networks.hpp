@@ -13,6 +13,7 @@
 #include <torch/torch.h>
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -33,7 +34,11 @@ struct ObservationBatch {
 
   int64_t size() const { return state.size(0); }
   bool hasPoints() const { return xyz.defined(); }
-  ObservationBatch to(const torch::Device& device) const;
+  // `f` applied to each tensor it holds.
+  ObservationBatch map(const std::function<torch::Tensor(const torch::Tensor&)>& f) const;
+  // On `device`; `non_blocking`: a copy from pinned memory to CUDA returns
+  // before it completes (the device's stream orders it before later work).
+  ObservationBatch to(const torch::Device& device, bool non_blocking = false) const;
   // Row i repeated n times in a row (rows i*n .. i*n+n-1): BCQ's action samples.
   ObservationBatch repeatEach(int64_t n) const;
   // Rows `index` (a 1-D int64 tensor).

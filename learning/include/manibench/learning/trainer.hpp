@@ -46,6 +46,10 @@ struct TrainOptions {
   // torch_policy plugin runs inside the environment's process, one
   // observation at a time: the CPU unless asked, whatever trained it).
   std::string eval_device = "cpu";
+  // Gather the next batch in another thread while the current one trains:
+  // always on CUDA; on the CPU off unless asked (the gather then competes
+  // with the step for the cores). The weights are the same either way.
+  bool prefetch = false;
   int64_t checkpoint_every = 1000;
   int64_t log_every = 100;
   bool normalize_state = false;  // (s - mean) / std per feature, from the demonstrations
