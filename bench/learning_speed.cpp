@@ -5,10 +5,15 @@
 // 11). bench/learning_speed.py runs it beside the same networks written in
 // python3-torch on the same libtorch (docs/learning-results.md has the numbers).
 // `--algorithm sac|td3bc|bcq` times those algorithms' gradient steps instead
-// (MLP only), and `--pairs N` alternates N times between the actor step
+// (any network), and `--pairs N` alternates N times between the actor step
 // that freezes the critics and the reference that does not, printing each
 // pair (the VM is noisy: only pairs measured side by side compare).
+// `--device cuda` trains there (the batch is made once, on the device: the
+// networks' speed, not the loader's); `--checkpoint PATH` then saves the
+// network, loads it onto the CPU and prints how far the CPU's actions are
+// from the device's (the round trip of a checkpoint trained on a GPU).
 #include <manibench/learning/algorithms.hpp>
+#include <manibench/learning/checkpoint.hpp>
 #include <manibench/learning/compute.hpp>
 
 #include <chrono>
@@ -16,6 +21,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
+#include <map>
 #include <string>
 
 namespace ml = manibench::learning;
@@ -30,6 +36,8 @@ struct Options {
   bool definition = false;
   std::string algorithm = "bc";
   int pairs = 0;
+  std::string device = "cpu";
+  std::string checkpoint;  // the round trip's file (empty: none)
 };
 
 ml::ObservationSpec makeSpec(bool cloud) {
@@ -70,7 +78,8 @@ ml::TransitionBatch makeTransitions(const ml::ObservationSpec& spec, int64_t bat
   return b;
 }
 
-// Gradient steps per second of `algorithm` for `seconds` (after two untimed).
+// Gradient steps per second of `algorithm` for `seconds` (after two untimed;
+// every update returns its losses with .item(), which waits for a device).
 double timeUpdates(ml::Algorithm& algorithm, const ml::TransitionBatch& batch, double seconds) {
   using clock = std::chrono::steady_clock;
   for (int i = 0; i < 2; ++i) algorithm.update(batch, i);
@@ -87,14 +96,16 @@ double timeUpdates(ml::Algorithm& algorithm, const ml::TransitionBatch& batch, d
 // The online and actor-critic algorithms: frozen critics against the reference, in pairs.
 int runActorCritic(const Options& o) {
   ml::setUpTrainingCompute(o.threads);
+  const torch::Device device = ml::parseDevice(o.device);
   torch::manual_seed(0);
-  ml::NetOptions net;
-  const ml::ObservationSpec spec = makeSpec(false);
-  ml::AlgorithmOptions options = ml::AlgorithmOptions::makeDefaults(o.algorithm);
+  ml::NetOptions net = ml::NetOptions::makeDefaults(o.algorithm);
+  net.kind = ml::parseNetKind(o.net);
+  const ml::ObservationSpec spec = makeSpec(net.kind != ml::NetKind::Mlp);
+  ml::AlgorithmOptions options = ml::AlgorithmOptions::makeDefaults(o.algorithm, spec.mode);
   options.batch_size = o.batch;
-  auto frozen = ml::makeAlgorithm(options, net, spec, torch::kCPU);
-  auto reference = ml::makeAlgorithm(options, net, spec, torch::kCPU);
-  const ml::TransitionBatch batch = makeTransitions(spec, o.batch);
+  auto frozen = ml::makeAlgorithm(options, net, spec, device);
+  auto reference = ml::makeAlgorithm(options, net, spec, device);
+  const ml::TransitionBatch batch = makeTransitions(spec, o.batch).to(device);
   double sum_frozen = 0, sum_reference = 0;
   for (int pair = 0; pair < std::max(o.pairs, 1); ++pair) {
     ml::setActorStepFreezesCritics(true);
@@ -109,29 +120,54 @@ int runActorCritic(const Options& o) {
     if (o.pairs > 0)
       std::printf("pair %d: frozen critics %.3f updates/s, reference %.3f updates/s (x%.3f)\n", pair, a, b, a / b);
     else
-      std::printf("%s batch %lld threads %d: %.3f updates/s\n", o.algorithm.c_str(), (long long)o.batch, o.threads,
-                  a);
+      std::printf("%s %s batch %lld threads %d device %s: %.3f updates/s\n", o.algorithm.c_str(), o.net.c_str(),
+                  (long long)o.batch, o.threads, o.device.c_str(), a);
   }
   if (o.pairs > 1)
     std::printf("%s batch %lld threads %d, mean of %d pairs: frozen %.3f, reference %.3f updates/s (x%.3f)\n",
                 o.algorithm.c_str(), (long long)o.batch, o.threads, o.pairs, sum_frozen / o.pairs,
                 sum_reference / o.pairs, sum_frozen / sum_reference);
-  std::fprintf(stderr, "%s\n", ml::describeCompute(ml::calcComputeInfo(), torch::kCPU).c_str());
+  std::fprintf(stderr, "%s\n", ml::describeCompute(ml::calcComputeInfo(), device).c_str());
   return 0;
+}
+
+// Saves `algorithm` (trained on `device`), loads it onto the CPU, and prints
+// the largest difference between the two's actions on the same observations.
+void roundTrip(const ml::Algorithm& algorithm, const ml::NetOptions& net, const ml::ObservationSpec& spec,
+               const std::string& path, const torch::Device& device) {
+  ml::CheckpointInfo info;
+  info.algorithm = algorithm.getOptions();
+  info.network = net;
+  info.spec = spec;
+  std::map<std::string, torch::Tensor> extras;
+  ml::addGeneratorStates(extras, device);
+  ml::saveCheckpoint(path, info, algorithm, extras);
+  ml::LoadedCheckpoint cpu = ml::loadCheckpoint(path, torch::kCPU, true, {ml::kCpuGeneratorExtra, ml::kCudaGeneratorExtra});
+  ml::LoadedCheckpoint there = ml::loadCheckpoint(path, device, false);
+  const ml::ObservationBatch obs = makeBatch(spec, 4);
+  at::Generator g1 = at::detail::createCPUGenerator(0), g2 = at::detail::createCPUGenerator(0);
+  const torch::Tensor a = there.algorithm->act(obs.to(device), g1).cpu(), b = cpu.algorithm->act(obs, g2);
+  bool all_cpu = true;
+  for (const auto& [name, network] : cpu.algorithm->getNetworks())
+    for (const torch::Tensor& p : network->parameters()) all_cpu = all_cpu && p.is_cpu();
+  std::printf("round trip %s -> cpu: parameters on the cpu %s, CUDA random state %s, largest action difference %.3g\n",
+              device.str().c_str(), all_cpu ? "yes" : "NO",
+              cpu.extras.count(ml::kCudaGeneratorExtra) ? "saved" : "absent", (a - b).abs().max().item<double>());
 }
 
 int run(const Options& o) {
   if (o.algorithm != "bc") return runActorCritic(o);
   ml::setUpTrainingCompute(o.threads);  // as the trainer: without kept memory PN+T ran 0.31 it/s here, with it 0.46 (one thread)
   ml::setPointNetDefinitionMode(o.definition);
+  const torch::Device device = ml::parseDevice(o.device);
   torch::manual_seed(0);
   ml::NetOptions net;
   net.kind = ml::parseNetKind(o.net);
   const ml::ObservationSpec spec = makeSpec(net.kind != ml::NetKind::Mlp);
-  auto bc = ml::makeAlgorithm(ml::AlgorithmOptions::makeDefaults("bc"), net, spec, torch::kCPU);
+  auto bc = ml::makeAlgorithm(ml::AlgorithmOptions::makeDefaults("bc", spec.mode), net, spec, device);
   ml::TransitionBatch batch;
-  batch.obs = makeBatch(spec, o.batch);
-  batch.actions = torch::rand({o.batch, 11}) * 2 - 1;
+  batch.obs = makeBatch(spec, o.batch).to(device);
+  batch.actions = (torch::rand({o.batch, 11}) * 2 - 1).to(device);
   using clock = std::chrono::steady_clock;
   for (int i = 0; i < 2; ++i) bc->update(batch, i);
   int64_t iterations = 0;
@@ -142,21 +178,22 @@ int run(const Options& o) {
     elapsed = std::chrono::duration<double>(clock::now() - start).count();
   }
   // One observation at a time, as the policy plugin acts.
-  const ml::ObservationBatch one = makeBatch(spec, 1);
+  const ml::ObservationBatch one = makeBatch(spec, 1).to(device);
   at::Generator generator = at::detail::createCPUGenerator(0);
-  for (int i = 0; i < 3; ++i) bc->act(one, generator);
+  for (int i = 0; i < 3; ++i) bc->act(one, generator).cpu();  // waits for a device, as the policy plugin does
   int64_t acts = 0;
   const auto act_start = clock::now();
   double act_elapsed = 0;
   while (act_elapsed < std::min(5.0, o.seconds) || acts < 10) {
-    bc->act(one, generator);
+    bc->act(one, generator).cpu();  // waits for a device, as the policy plugin does
     ++acts;
     act_elapsed = std::chrono::duration<double>(clock::now() - act_start).count();
   }
-  std::printf("manibench %s batch %lld threads %d%s: %.3f it/s (%lld iterations in %.1f s), act %.3f ms\n",
-              o.net.c_str(), (long long)o.batch, o.threads, o.definition ? " (definition)" : "",
+  std::printf("manibench %s batch %lld threads %d device %s%s: %.3f it/s (%lld iterations in %.1f s), act %.3f ms\n",
+              o.net.c_str(), (long long)o.batch, o.threads, o.device.c_str(), o.definition ? " (definition)" : "",
               double(iterations) / elapsed, (long long)iterations, elapsed, 1e3 * act_elapsed / double(acts));
-  std::fprintf(stderr, "%s\n", ml::describeCompute(ml::calcComputeInfo(), torch::kCPU).c_str());
+  std::fprintf(stderr, "%s\n", ml::describeCompute(ml::calcComputeInfo(), device).c_str());
+  if (!o.checkpoint.empty()) roundTrip(*bc, net, spec, o.checkpoint, device);
   return 0;
 }
 
@@ -177,11 +214,13 @@ int main(int argc, char** argv) {
     else if (a == "--definition") o.definition = true;
     else if (a == "--algorithm") o.algorithm = next();
     else if (a == "--pairs") o.pairs = std::stoi(next());
+    else if (a == "--device") o.device = next();
+    else if (a == "--checkpoint") o.checkpoint = next();
     else {
       std::cerr << "usage: manibench_learning_bench [--net mlp|pointnet|pn_transformer] [--batch N] "
-                   "[--threads N] [--seconds S] [--definition]\n"
-                   "       manibench_learning_bench --algorithm sac|td3bc|bcq [--batch N] [--threads N] "
-                   "[--seconds S] [--pairs N]\n";
+                   "[--threads N] [--seconds S] [--definition] [--device cpu|cuda] [--checkpoint PATH]\n"
+                   "       manibench_learning_bench --algorithm sac|td3bc|bcq [--net ...] [--batch N] [--threads N] "
+                   "[--seconds S] [--pairs N] [--device cpu|cuda]\n";
       return 2;
     }
   }

@@ -165,7 +165,8 @@ def run_python(net, batch, threads, seconds):
         def __init__(self, masks, state, out, w=256, layers=6):
             super().__init__()
             self.masks = masks
-            self.pointnets = nn.ModuleList([PointNet(masks, state, [w, w], False) for _ in range(masks + 2)])
+            # Without the mask channels, as manibench's (and ManiSkill-Learn's).
+            self.pointnets = nn.ModuleList([PointNet(0, state, [w, w], False) for _ in range(masks + 2)])
             self.globals = nn.ModuleList([Mlp(w, [w, w], False) for _ in range(masks + 2)])
             self.state_mlp = Mlp(state, [w, w], False)
             self.task = nn.Parameter(torch.empty(1, 1, w))
@@ -182,7 +183,7 @@ def run_python(net, batch, threads, seconds):
             tokens = [self.state_mlp(obs["state"])]
             present = [torch.ones(b)]
             for i, m in enumerate(masks):
-                tokens.append(self.globals[i](self.pointnets[i](obs["xyz"], obs["rgb"], seg, obs["state"], m)))
+                tokens.append(self.globals[i](self.pointnets[i](obs["xyz"], obs["rgb"], seg[..., :0], obs["state"], m)))
                 present.append((m.sum(1) > 0).float())
             x = torch.cat([self.task.expand(b, 1, -1), torch.stack(tokens, 1)], 1)
             p = torch.stack(present, 1)
@@ -224,12 +225,13 @@ def run_python(net, batch, threads, seconds):
     cloud = net != "mlp"
     model = {"mlp": lambda: StateMlp(80, 11), "pointnet": lambda: VanillaPointNet(3, 51, 11),
              "pn_transformer": lambda: PnTransformer(3, 51, 11)}[net]()
-    optimizer = torch.optim.Adam(model.parameters(), lr=3e-4, weight_decay=5e-6)
+    # manibench's BC defaults for the mode (AlgorithmOptions::makeDefaults).
+    optimizer = torch.optim.Adam(model.parameters(), lr=3e-4 if cloud else 1e-3, weight_decay=5e-6 if cloud else 0)
     obs, actions = make_batch(cloud, batch), torch.rand(batch, 11) * 2 - 1
 
     def update():
         model.train()
-        loss = torch.nn.functional.mse_loss(model(obs), actions)
+        loss = torch.nn.functional.mse_loss(torch.tanh(model(obs)), actions)
         optimizer.zero_grad()
         loss.backward()
         optimizer.step()
@@ -240,10 +242,10 @@ def run_python(net, batch, threads, seconds):
     model.eval()
     with torch.no_grad():
         for _ in range(3):
-            model(one)
+            torch.tanh(model(one))
         acts, act_start = 0, time.perf_counter()
         while time.perf_counter() - act_start < min(5.0, seconds) or acts < 10:
-            model(one)
+            torch.tanh(model(one))
             acts += 1
         act_elapsed = time.perf_counter() - act_start
     parameters = sum(p.numel() for p in model.parameters())

@@ -9,16 +9,26 @@ namespace manibench::learning {
 
 // --- options ------------------------------------------------------------------------------
 
-AlgorithmOptions AlgorithmOptions::makeDefaults(const std::string& name) {
+AlgorithmOptions AlgorithmOptions::makeDefaults(const std::string& name, const std::string& mode) {
   AlgorithmOptions o;
   o.name = name;
+  // The learning rate and weight decay are ManiSkill-Learn's for the mode.
+  // ManiSkill-Learn's configurations decay the weights (5e-6) of every
+  // network on point clouds, and in the state mode only BCQ's VAE (its
+  // state BC and TD3+BC configurations have none). Here one value serves
+  // all of an algorithm's networks: BCQ's critics get its VAE's.
+  const bool points = mode != "state";
   if (name == "bc") {
-    // ManiSkill-Learn's BC: batch 128, Adam 3e-4, weight decay 5e-6.
+    // ManiSkill-Learn's BC: batch 128, Adam 3e-4 on point clouds, 1e-3 in
+    // the state mode (its state configuration). manibench's state-mode
+    // results before 2026-11-28 ran 3e-4 with weight decay 5e-6 and no tanh,
+    // which did better on the drawer at 10,000 iterations
+    // (docs/learning-results.md, "The same sweep in the state mode").
     o.batch_size = 128;
-    o.lr = 3e-4;
-    o.weight_decay = 5e-6;
+    o.lr = points ? 3e-4 : 1e-3;
+    o.weight_decay = points ? 5e-6 : 0;
   } else if (name == "bcq") {
-    // Table 7 (and ManiSkill-Learn's weight decay).
+    // Table 7.
     o.batch_size = 64;
     o.lr = 5e-4;
     o.weight_decay = 5e-6;
@@ -26,7 +36,7 @@ AlgorithmOptions AlgorithmOptions::makeDefaults(const std::string& name) {
     // Table 8; the batch is ManiSkill-Learn's (the table gives none).
     o.batch_size = 64;
     o.lr = 5e-4;
-    o.weight_decay = 0;
+    o.weight_decay = points ? 5e-6 : 0;
   } else if (name == "sac") {
     // Table 6: Adam 3e-4, discount 0.95, minibatch 1024, tau 0.005.
     o.batch_size = 1024;
@@ -56,7 +66,9 @@ void AlgorithmOptions::writeYaml(YAML::Node& node) const {
   node["action_noise"] = action_noise;
   node["noise_clip"] = noise_clip;
   node["policy_delay"] = policy_delay;
+  node["bc_tanh"] = bc_tanh;
   node["init_temperature"] = init_temperature;
+  node["temperature_gradient_log"] = temperature_gradient_log;
   node["tune_temperature"] = tune_temperature;
   node["target_entropy_per_dim"] = target_entropy_per_dim;
   node["log_std_min"] = log_std_min;
@@ -82,6 +94,9 @@ AlgorithmOptions AlgorithmOptions::readYaml(const YAML::Node& node) {
   o.policy_delay = node["policy_delay"].as<int64_t>();
   // Absent from the checkpoints written before SAC: the defaults.
   o.init_temperature = node["init_temperature"].as<double>(o.init_temperature);
+  // Absent from the checkpoints written before these options: what they ran.
+  o.bc_tanh = node["bc_tanh"].as<bool>(false);
+  o.temperature_gradient_log = node["temperature_gradient_log"].as<bool>(node["init_temperature"].IsDefined());
   o.tune_temperature = node["tune_temperature"].as<bool>(o.tune_temperature);
   o.target_entropy_per_dim = node["target_entropy_per_dim"].as<double>(o.target_entropy_per_dim);
   o.log_std_min = node["log_std_min"].as<double>(o.log_std_min);
@@ -90,14 +105,18 @@ AlgorithmOptions AlgorithmOptions::readYaml(const YAML::Node& node) {
   return o;
 }
 
-TransitionBatch TransitionBatch::to(const torch::Device& device) const {
+TransitionBatch TransitionBatch::map(const std::function<torch::Tensor(const torch::Tensor&)>& f) const {
   TransitionBatch out;
-  out.obs = obs.to(device);
-  if (next_obs.state.defined()) out.next_obs = next_obs.to(device);
-  out.actions = actions.to(device);
-  if (rewards.defined()) out.rewards = rewards.to(device);
-  if (dones.defined()) out.dones = dones.to(device);
+  out.obs = obs.map(f);
+  if (next_obs.state.defined()) out.next_obs = next_obs.map(f);
+  out.actions = f(actions);
+  if (rewards.defined()) out.rewards = f(rewards);
+  if (dones.defined()) out.dones = f(dones);
   return out;
+}
+
+TransitionBatch TransitionBatch::to(const torch::Device& device, bool non_blocking) const {
+  return map([&](const torch::Tensor& t) { return t.to(device, non_blocking); });
 }
 
 // --- the base -----------------------------------------------------------------------------
@@ -256,16 +275,20 @@ class BehaviorCloning : public Algorithm {
   }
   bool needsNextObservations() const override { return false; }
   std::vector<std::string> getLossNames() const override { return {"loss"}; }
+  torch::Tensor policy(const ObservationBatch& obs) {
+    const torch::Tensor out = actor_->forward(obs, {});
+    return options_.bc_tanh ? torch::tanh(out) : out;
+  }
   std::vector<double> update(const TransitionBatch& batch, int64_t) override {
     actor_->train();
-    const torch::Tensor loss = torch::mse_loss(actor_->forward(batch.obs, {}), batch.actions);
+    const torch::Tensor loss = torch::mse_loss(policy(batch.obs), batch.actions);
     step(*optimizer_, loss);
     return {loss.item<double>()};
   }
   torch::Tensor act(const ObservationBatch& obs, at::Generator&) override {
     torch::NoGradGuard no_grad;
     actor_->eval();
-    return actor_->forward(obs, {});
+    return policy(obs);
   }
 
  private:
@@ -375,10 +398,25 @@ class Bcq : public Algorithm {
   torch::Tensor decode(const ObservationBatch& obs, const torch::Tensor& z) {
     return torch::tanh(decoder_->forward(obs, z));
   }
-  torch::Tensor sampleActions(const ObservationBatch& obs, c10::optional<at::Generator> generator) {
-    const torch::Tensor z = at::normal(0.0, 1.0, {obs.size(), latent_dim_}, generator,
-                                       obs.state.options()).clamp(-0.5, 0.5);
-    return decode(obs, z);
+  // The latents come from `generator` (the acting policy's, seeded per
+  // episode) or, without one (nullptr), libtorch's default generator of the
+  // observations' device. A generator of another device (the policy's CPU
+  // one beside networks on CUDA, which at::normal refuses: "Expected a
+  // 'cuda' device type for generator") draws on its own device and the
+  // draw is moved: the same seed gives the same latents on either device.
+  // (A pointer, not an optional: c10::optional is its own class in libtorch
+  // 1.13 and std::optional in 2.x.)
+  torch::Tensor sampleActions(const ObservationBatch& obs, at::Generator* generator) {
+    const torch::TensorOptions options = obs.state.options();
+    const std::vector<int64_t> size{obs.size(), latent_dim_};
+    torch::Tensor z;
+    if (generator == nullptr)
+      z = at::normal(0.0, 1.0, size, {}, options);
+    else if (generator->device() != options.device())
+      z = at::normal(0.0, 1.0, size, *generator, options.device(generator->device())).to(options.device());
+    else
+      z = at::normal(0.0, 1.0, size, *generator, options);
+    return decode(obs, z.clamp(-0.5, 0.5));
   }
   torch::Tensor perturb(Network* actor, const ObservationBatch& obs, const torch::Tensor& a) {
     if (actor == nullptr) return a;
@@ -404,7 +442,7 @@ class Bcq : public Algorithm {
       torch::NoGradGuard no_grad;
       const int64_t n = options_.train_samples;
       const ObservationBatch next = b.next_obs.repeatEach(n);
-      const torch::Tensor next_action = perturb(actor_target_.get(), next, sampleActions(next, c10::nullopt));
+      const torch::Tensor next_action = perturb(actor_target_.get(), next, sampleActions(next, nullptr));
       const torch::Tensor q1 = critic1_target_->forward(next, next_action);
       const torch::Tensor q2 = critic2_target_->forward(next, next_action);
       const torch::Tensor q = options_.lambda * torch::min(q1, q2) + (1 - options_.lambda) * torch::max(q1, q2);
@@ -421,7 +459,7 @@ class Bcq : public Algorithm {
       torch::Tensor sampled;
       {
         torch::NoGradGuard no_grad;
-        sampled = sampleActions(b.obs, c10::nullopt);
+        sampled = sampleActions(b.obs, nullptr);
       }
       const torch::Tensor actor_loss = -critic1_->forward(b.obs, perturb(actor_.get(), b.obs, sampled)).mean();
       step(*actor_optimizer_, actor_loss);
@@ -439,7 +477,7 @@ class Bcq : public Algorithm {
     for (auto& [name, network] : networks_) network->eval();
     const int64_t n = options_.eval_samples, b = obs.size();
     const ObservationBatch many = obs.repeatEach(n);
-    const torch::Tensor actions = perturb(actor_.get(), many, sampleActions(many, generator));
+    const torch::Tensor actions = perturb(actor_.get(), many, sampleActions(many, &generator));
     const torch::Tensor q = critic1_->forward(many, actions).view({b, n});
     const torch::Tensor best = std::get<1>(q.max(1));  // [B]
     const torch::Tensor rows = torch::arange(b, best.options()) * n + best;
@@ -515,8 +553,8 @@ class Sac : public Algorithm {
       step(*actor_optimizer_, actor_loss);
     }
     if (options_.tune_temperature) {
-      const torch::Tensor temperature_loss = -(log_temperature_ * (log_prob.detach() + target_entropy_)).mean();
-      step(*temperature_optimizer_, temperature_loss);
+      const torch::Tensor by = options_.temperature_gradient_log ? log_temperature_ : log_temperature_.exp();
+      step(*temperature_optimizer_, -(by * (log_prob.detach() + target_entropy_)).mean());
     }
     if ((iteration + 1) % options_.target_update_every == 0) {
       softUpdate(*critic1_target_, *critic1_, options_.tau);

@@ -58,11 +58,16 @@ CheckpointInfo parseInfo(const std::string& text, const std::string& path) {
   }
 }
 
-torch::serialize::InputArchive openArchive(const std::string& path) {
+// Every tensor comes back on `device` (libtorch maps the storages as it
+// reads them), whichever device it was saved from: without the map, a
+// checkpoint trained on CUDA kept its parameters there (InputArchive::read
+// hands a tensor of another device to set_data), beside CPU inputs, and
+// could not be read at all on a machine without CUDA.
+torch::serialize::InputArchive openArchive(const std::string& path, const torch::Device& device) {
   if (!std::filesystem::exists(path)) throw LearningError("no such checkpoint '" + path + "'");
   torch::serialize::InputArchive archive;
   try {
-    archive.load_from(path);
+    archive.load_from(path, device);
   } catch (const c10::Error& e) {
     throw LearningError("'" + path + "' is not a checkpoint libtorch can read (" +
                         std::string(e.what_without_backtrace()) + ")");
@@ -99,13 +104,13 @@ void saveCheckpoint(const std::string& path, const CheckpointInfo& info, const A
 }
 
 CheckpointInfo readCheckpointInfo(const std::string& path) {
-  torch::serialize::InputArchive archive = openArchive(path);
+  torch::serialize::InputArchive archive = openArchive(path, torch::kCPU);
   return parseInfo(readMeta(archive, path), path);
 }
 
 LoadedCheckpoint loadCheckpoint(const std::string& path, const torch::Device& device, bool with_optimizers,
                                 const std::vector<std::string>& extras) {
-  torch::serialize::InputArchive archive = openArchive(path);
+  torch::serialize::InputArchive archive = openArchive(path, device);
   LoadedCheckpoint out;
   out.info = parseInfo(readMeta(archive, path), path);
   out.algorithm = makeAlgorithm(out.info.algorithm, out.info.network, out.info.spec, device);
@@ -113,13 +118,31 @@ LoadedCheckpoint loadCheckpoint(const std::string& path, const torch::Device& de
     out.algorithm->load(archive, with_optimizers);
     for (const std::string& name : extras) {
       torch::Tensor t;
-      archive.read("extra." + name, t);
-      out.extras[name] = t;
+      if (!archive.try_read("extra." + name, t)) {
+        if (name == kCudaGeneratorExtra) continue;  // trained on the CPU
+        throw LearningError("'" + path + "' has no '" + name + "' to resume from");
+      }
+      out.extras[name] = t.to(torch::kCPU);  // generator states and counters: read on the CPU
     }
   } catch (const c10::Error& e) {
     throw LearningError("'" + path + "': " + e.what_without_backtrace());
   }
   return out;
+}
+
+void addGeneratorStates(std::map<std::string, torch::Tensor>& extras, const torch::Device& device) {
+  extras[kCpuGeneratorExtra] = at::detail::getDefaultCPUGenerator().get_state();
+  if (device.is_cuda()) extras[kCudaGeneratorExtra] = at::globalContext().defaultGenerator(device).get_state();
+}
+
+void restoreGeneratorStates(const std::map<std::string, torch::Tensor>& extras, const torch::Device& device) {
+  at::Generator cpu = at::detail::getDefaultCPUGenerator();  // shares the default's state
+  cpu.set_state(extras.at(kCpuGeneratorExtra));
+  const auto cuda = extras.find(kCudaGeneratorExtra);
+  if (device.is_cuda() && cuda != extras.end()) {
+    at::Generator generator = at::globalContext().defaultGenerator(device);
+    generator.set_state(cuda->second);
+  }
 }
 
 }  // namespace manibench::learning

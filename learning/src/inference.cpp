@@ -105,7 +105,7 @@ class TorchScriptPolicy : public InferencePolicy {
   torch::Device device_;
   ObservationSpec host_;
   std::string path_;
-  torch::jit::script::Module module_;
+  torch::jit::Module module_;  // not jit::script::Module: an alias kept only for compatibility
 };
 
 }  // namespace

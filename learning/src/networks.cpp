@@ -10,40 +10,28 @@ namespace manibench::learning {
 
 // --- batches ------------------------------------------------------------------------------
 
-ObservationBatch ObservationBatch::to(const torch::Device& device) const {
+ObservationBatch ObservationBatch::map(const std::function<torch::Tensor(const torch::Tensor&)>& f) const {
   ObservationBatch out;
-  out.state = state.to(device);
+  out.state = f(state);
   if (hasPoints()) {
-    out.xyz = xyz.to(device);
-    out.rgb = rgb.to(device);
-    out.seg = seg.to(device);
-    out.valid = valid.to(device);
+    out.xyz = f(xyz);
+    out.rgb = f(rgb);
+    out.seg = f(seg);
+    out.valid = f(valid);
   }
   return out;
+}
+
+ObservationBatch ObservationBatch::to(const torch::Device& device, bool non_blocking) const {
+  return map([&](const torch::Tensor& t) { return t.to(device, non_blocking); });
 }
 
 ObservationBatch ObservationBatch::repeatEach(int64_t n) const {
-  ObservationBatch out;
-  out.state = state.repeat_interleave(n, 0);
-  if (hasPoints()) {
-    out.xyz = xyz.repeat_interleave(n, 0);
-    out.rgb = rgb.repeat_interleave(n, 0);
-    out.seg = seg.repeat_interleave(n, 0);
-    out.valid = valid.repeat_interleave(n, 0);
-  }
-  return out;
+  return map([&](const torch::Tensor& t) { return t.repeat_interleave(n, 0); });
 }
 
 ObservationBatch ObservationBatch::select(const torch::Tensor& index) const {
-  ObservationBatch out;
-  out.state = state.index_select(0, index);
-  if (hasPoints()) {
-    out.xyz = xyz.index_select(0, index);
-    out.rgb = rgb.index_select(0, index);
-    out.seg = seg.index_select(0, index);
-    out.valid = valid.index_select(0, index);
-  }
-  return out;
+  return map([&](const torch::Tensor& t) { return t.index_select(0, index); });
 }
 
 torch::Tensor calcValidPoints(const torch::Tensor& xyz, const torch::Tensor& rgb,
@@ -87,6 +75,17 @@ void NetOptions::writeYaml(YAML::Node& node) const {
   node["ff"] = ff;
   node["dropout"] = dropout;
   node["transformer_head"] = transformer_head;
+  node["transformer_masks"] = transformer_masks;
+}
+
+NetOptions NetOptions::makeDefaults(const std::string& algorithm) {
+  NetOptions o;
+  if (algorithm == "bcq" || algorithm == "td3bc") {
+    o.width = 192;
+    o.layers = 2;
+    o.ff = 768;
+  }
+  return o;
 }
 
 NetOptions NetOptions::readYaml(const YAML::Node& node) {
@@ -106,6 +105,7 @@ NetOptions NetOptions::readYaml(const YAML::Node& node) {
   o.ff = node["ff"].as<int64_t>();
   o.dropout = node["dropout"].as<double>();
   o.transformer_head = node["transformer_head"].as<std::vector<int64_t>>();
+  o.transformer_masks = node["transformer_masks"].as<bool>(true);  // absent: written before the option
   return o;
 }
 
@@ -217,7 +217,14 @@ torch::Tensor PointNetImpl::forward(const torch::Tensor& xyz, const torch::Tenso
                                     const torch::Tensor& mask) {
   if (g_pointnet_definition) return forwardDefinition(xyz, rgb, seg, state, mask);
   const int64_t batch = xyz.size(0), points = xyz.size(1), masks = seg.size(2);
-  const int64_t most = std::max<int64_t>(1, int64_t(mask.sum(1).max().item<float>()));
+  // The gather's size is data (the fullest cloud's count), which a CUDA
+  // device would have to hand back to the host on every call (about 30
+  // syncs per BCQ or TD3+BC update): off the CPU every point stays, and the
+  // masked pooling below ignores the others, as the definition does. On
+  // the CPU the count costs nothing and the gather saves the per-point
+  // layers of the points outside the mask.
+  const int64_t most =
+      xyz.is_cpu() ? std::max<int64_t>(1, int64_t(mask.sum(1).max().item<float>())) : points;
   torch::Tensor gxyz = xyz, grgb = rgb, gseg = seg, gmask = mask;
   if (most < points) {
     // Members first, in their order; then as many rows as the fullest cloud.
@@ -402,11 +409,12 @@ TORCH_MODULE(AttentionPooling);
 class PnTransformerNetwork : public Network {
  public:
   PnTransformerNetwork(const NetOptions& o, const ObservationSpec& spec, int64_t extra, int64_t out)
-      : Network(calcInputStateDim(o, spec), extra, out), mask_count_(spec.mask_count) {
+      : Network(calcInputStateDim(o, spec), extra, out), mask_count_(spec.mask_count),
+        pointnet_masks_(o.transformer_masks ? spec.mask_count : 0) {
     const int64_t state_input = state_dim_ + extra;
     for (int64_t i = 0; i < mask_count_ + 2; ++i) {
       pointnets_.push_back(register_module("pointnet" + std::to_string(i),
-                                           PointNet(mask_count_, state_input, std::vector<int64_t>{o.width, o.width}, false)));
+                                           PointNet(pointnet_masks_, state_input, std::vector<int64_t>{o.width, o.width}, false)));
       globals_.push_back(register_module("global" + std::to_string(i),
                                          Mlp(o.width, std::vector<int64_t>{o.width, o.width}, false)));
     }
@@ -438,8 +446,9 @@ class PnTransformerNetwork : public Network {
     const std::vector<torch::Tensor> masks = calcPointMasks(obs);
     std::vector<torch::Tensor> tokens{state_mlp_->forward(s)};
     std::vector<torch::Tensor> present{torch::ones({obs.size()}, s.options())};
+    const torch::Tensor seg = obs.seg.slice(-1, 0, pointnet_masks_);
     for (std::size_t i = 0; i < masks.size(); ++i) {
-      tokens.push_back(globals_[i]->forward(pointnets_[i]->forward(obs.xyz, obs.rgb, obs.seg, s, masks[i])));
+      tokens.push_back(globals_[i]->forward(pointnets_[i]->forward(obs.xyz, obs.rgb, seg, s, masks[i])));
       present.push_back((masks[i].sum(1) > 0).to(torch::kFloat32));
     }
     return {torch::stack(tokens, 1), torch::stack(present, 1)};
@@ -459,6 +468,7 @@ class PnTransformerNetwork : public Network {
 
  private:
   int64_t mask_count_;
+  int64_t pointnet_masks_;  // the mask channels each PointNet sees (NetOptions::transformer_masks)
   std::vector<PointNet> pointnets_;
   std::vector<Mlp> globals_;
   Mlp state_mlp_{nullptr};

@@ -103,15 +103,14 @@ class SacTrainer {
   SacResult resume(int64_t steps) {
     const std::string newest = findNewestCheckpoint(dir_.string());
     if (newest.empty()) throw LearningError("'" + dir_.string() + "' has no checkpoint to resume from");
-    std::vector<std::string> extras = {"torch_generator", "counters", "log_row", "recent", "slots"};
+    std::vector<std::string> extras = {kCpuGeneratorExtra, kCudaGeneratorExtra, "counters", "log_row", "recent", "slots"};
     for (unsigned w = 0; w < options_.workers; ++w) extras.push_back("worker_state_" + std::to_string(w));
     LoadedCheckpoint loaded = loadCheckpoint(newest, device_, true, extras);
     loaded.info.spec.checkSame(spec_, "the checkpoint '" + newest + "'", "the environment");
     algorithm_ = std::move(loaded.algorithm);
     if (steps > 0) options_.steps = steps;
     writeOptions();
-    at::Generator generator = at::detail::getDefaultCPUGenerator();  // shares the default's state
-    generator.set_state(loaded.extras.at("torch_generator"));
+    restoreGeneratorStates(loaded.extras, device_);
     const torch::Tensor counters = loaded.extras.at("counters");
     env_steps_ = counters[0].item<int64_t>();
     updates_ = counters[1].item<int64_t>();
@@ -402,7 +401,7 @@ class SacTrainer {
     extras["recent"] = recent;
     extras["counters"] = torch::tensor({env_steps_, updates_, next_episode_, episodes_}, torch::kInt64);
     extras["log_row"] = row_.clone();
-    extras["torch_generator"] = at::detail::getDefaultCPUGenerator().get_state();
+    addGeneratorStates(extras, device_);
 
     // The buffer first, then the checkpoint that names it, then the older buffers.
     const fs::path folder = dir_ / "checkpoints";
@@ -418,10 +417,7 @@ class SacTrainer {
     info.training_yaml = yamlText(node);
     const fs::path path = fs::absolute(folder / checkpointName(env_steps_));
     saveCheckpoint(path.string(), info, *algorithm_, extras);
-    writeText(dir_ / "policy.yaml", "# manibench eval " + options_.environment_id +
-                                        " --policy torch_policy --policy-config " +
-                                        fs::absolute(dir_ / "policy.yaml").string() + "\ncheckpoint: '" +
-                                        path.string() + "'\n");
+    writePolicyConfig(dir_, options_.environment_id, path.string(), "cpu");
     for (const auto& entry : fs::directory_iterator(folder)) {
       const std::string name = entry.path().filename().string();
       if (name.rfind("replay_", 0) == 0 && name != replayName(env_steps_)) fs::remove(entry.path());

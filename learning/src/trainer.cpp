@@ -10,6 +10,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <future>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -39,6 +40,8 @@ void TrainOptions::writeYaml(YAML::Node& node) const {
   node["seed"] = seed;
   node["threads"] = threads;
   node["device"] = device;
+  node["eval_device"] = eval_device;
+  node["prefetch"] = prefetch;
   node["checkpoint_every"] = checkpoint_every;
   node["log_every"] = log_every;
   node["normalize_state"] = normalize_state;
@@ -68,6 +71,8 @@ TrainOptions TrainOptions::readYaml(const YAML::Node& node) {
   o.seed = node["seed"].as<uint64_t>();
   o.threads = node["threads"].as<int>();
   o.device = node["device"].as<std::string>();
+  o.eval_device = node["eval_device"].as<std::string>("cpu");  // absent before it was an option
+  o.prefetch = node["prefetch"].as<bool>(false);
   o.checkpoint_every = node["checkpoint_every"].as<int64_t>();
   o.log_every = node["log_every"].as<int64_t>();
   o.normalize_state = node["normalize_state"].as<bool>();
@@ -87,6 +92,56 @@ TrainOptions TrainOptions::readYaml(const YAML::Node& node) {
 
 namespace {
 
+// The training's batches, on its device. Without prefetching each is
+// gathered when the step asks for it. With it (always on CUDA; --prefetch
+// on the CPU, where it competes with the step for the cores) the next batch
+// is gathered in another thread while the current one trains, into pinned
+// memory on CUDA, and copied without blocking the host, so a GPU does not
+// wait for the CPU's gather between steps. The batches are the same either
+// way: the sampler is only ever called by one thread at a time, in order.
+class BatchFeed {
+ public:
+  BatchFeed(BatchSampler& sampler, const torch::Device& device, bool prefetch)
+      : sampler_(sampler), device_(device), prefetch_(prefetch || device.is_cuda()),
+        consumed_(sampler.getPosition()) {}
+  ~BatchFeed() {
+    if (ahead_.valid()) ahead_.wait();
+  }
+  BatchFeed(const BatchFeed&) = delete;
+  BatchFeed& operator=(const BatchFeed&) = delete;
+
+  TransitionBatch next() {
+    if (!prefetch_) {
+      TransitionBatch batch = sampler_.next();
+      consumed_ = sampler_.getPosition();
+      return batch.to(device_);
+    }
+    if (!ahead_.valid()) ahead_ = gatherAhead();
+    auto [batch, position] = ahead_.get();
+    consumed_ = position;
+    ahead_ = gatherAhead();
+    return batch.to(device_, /*non_blocking=*/device_.is_cuda());
+  }
+  // The sampler's position after the batches next() returned (what a
+  // checkpoint records: the one gathered ahead is gathered again on resume).
+  BatchSampler::Position getPosition() const { return consumed_; }
+
+ private:
+  std::future<std::pair<TransitionBatch, BatchSampler::Position>> gatherAhead() {
+    return std::async(std::launch::async, [this] {
+      TransitionBatch batch = sampler_.next();
+      if (device_.is_cuda()) batch = batch.map([](const torch::Tensor& t) { return t.pin_memory(); });
+      return std::make_pair(std::move(batch), sampler_.getPosition());
+    });
+  }
+
+  BatchSampler& sampler_;
+  torch::Device device_;
+  bool prefetch_;
+  BatchSampler::Position consumed_;
+  std::future<std::pair<TransitionBatch, BatchSampler::Position>> ahead_;
+};
+
 class Trainer {
  public:
   Trainer(const PluginRegistry& registry, const TrainOptions& options, const TrainHooks& hooks)
@@ -99,6 +154,10 @@ class Trainer {
       options_.network.kind = spec_.isPointCloud() ? NetKind::PnTransformer : NetKind::Mlp;
       options_.pick_network = false;
     }
+    const AlgorithmOptions for_mode = AlgorithmOptions::makeDefaults(options_.algorithm.name, spec_.mode);
+    if (options_.pick_lr) options_.algorithm.lr = for_mode.lr;
+    if (options_.pick_weight_decay) options_.algorithm.weight_decay = for_mode.weight_decay;
+    options_.pick_lr = options_.pick_weight_decay = false;
     if (options_.robot_frame) {
       options_.network.robot_frame = planRobotFrameInputs(spec_);
       options_.robot_frame = false;  // from now on the network's options carry it
@@ -154,15 +213,15 @@ class Trainer {
   TrainResult resume(int64_t iterations) {
     const std::string newest = findNewestCheckpoint(dir_.string());
     if (newest.empty()) throw LearningError("'" + dir_.string() + "' has no checkpoint to resume from");
-    LoadedCheckpoint loaded = loadCheckpoint(newest, device_, true, {"torch_generator", "sampler", "log_row"});
+    LoadedCheckpoint loaded =
+        loadCheckpoint(newest, device_, true, {kCpuGeneratorExtra, kCudaGeneratorExtra, "sampler", "log_row"});
     loaded.info.spec.checkSame(spec_, "the checkpoint '" + newest + "'", "the demonstrations");
     algorithm_ = std::move(loaded.algorithm);
     if (iterations > 0) options_.iterations = iterations;
     YAML::Node node;
     options_.writeYaml(node);
     writeText(dir_ / "train.yaml", yamlText(node));
-    at::Generator generator = at::detail::getDefaultCPUGenerator();  // shares the default's state
-    generator.set_state(loaded.extras.at("torch_generator"));
+    restoreGeneratorStates(loaded.extras, device_);
     sampler_ = std::make_unique<BatchSampler>(*dataset_, options_.algorithm.batch_size, options_.seed,
                                               algorithm_->needsNextObservations(), options_.network);
     const torch::Tensor s = loaded.extras.at("sampler");
@@ -198,15 +257,13 @@ class Trainer {
     YAML::Node node;
     options_.writeYaml(node);
     info.training_yaml = yamlText(node);
-    const BatchSampler::Position p = sampler_->getPosition();
+    const BatchSampler::Position p = feed_ ? feed_->getPosition() : sampler_->getPosition();
     const torch::Tensor sampler = torch::tensor({int64_t(p.epoch_seed), p.epoch, p.batch}, torch::kInt64);
     const fs::path path = fs::absolute(dir_ / "checkpoints" / checkpointName(iteration));
-    saveCheckpoint(path.string(), info, *algorithm_,
-                   {{"torch_generator", at::detail::getDefaultCPUGenerator().get_state()},
-                    {"sampler", sampler},
-                    {"log_row", log_row_}});
-    writeText(dir_ / "policy.yaml", "# manibench eval TASK --policy torch_policy --policy-config " +
-                                        (dir_ / "policy.yaml").string() + "\ncheckpoint: '" + path.string() + "'\n");
+    std::map<std::string, torch::Tensor> extras{{"sampler", sampler}, {"log_row", log_row_}};
+    addGeneratorStates(extras, device_);
+    saveCheckpoint(path.string(), info, *algorithm_, extras);
+    writePolicyConfig(dir_, "TASK", path.string(), options_.eval_device);
     last_checkpoint_ = path.string();
     return last_checkpoint_;
   }
@@ -241,12 +298,13 @@ class Trainer {
     std::ofstream log(dir_ / "log.csv", std::ios::app);
     TrainResult result;
     int64_t iteration = first;
+    feed_ = std::make_unique<BatchFeed>(*sampler_, device_, options_.prefetch);
     while (iteration < options_.iterations) {
       if (hooks_.should_stop && hooks_.should_stop()) {
         result.interrupted = true;
         break;
       }
-      const TransitionBatch batch = sampler_->next().to(device_);
+      const TransitionBatch batch = feed_->next();
       const std::vector<double> losses = algorithm_->update(batch, iteration);
       for (std::size_t i = 0; i < losses.size(); ++i) {
         if (!std::isfinite(losses[i]))
@@ -293,6 +351,7 @@ class Trainer {
   ObservationSpec spec_;
   std::unique_ptr<Algorithm> algorithm_;
   std::unique_ptr<BatchSampler> sampler_;
+  std::unique_ptr<BatchFeed> feed_;  // over sampler_, while the loop runs
   torch::Tensor log_row_;
   std::string last_checkpoint_;
 };

@@ -28,6 +28,13 @@ void writeText(const fs::path& path, const std::string& text) {
   fs::rename(temporary, path);
 }
 
+void writePolicyConfig(const fs::path& dir, const std::string& task, const std::string& checkpoint,
+                       const std::string& device) {
+  const fs::path path = fs::absolute(dir / "policy.yaml");
+  writeText(path, "# manibench eval " + task + " --policy torch_policy --policy-config " + path.string() +
+                      "\ncheckpoint: '" + checkpoint + "'\ndevice: " + device + "\n");
+}
+
 std::string checkpointName(int64_t iteration) {
   std::ostringstream name;
   name << "iter_" << std::setw(7) << std::setfill('0') << iteration << ".pt";

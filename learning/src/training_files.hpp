@@ -24,6 +24,11 @@ std::string formatNumber(double value);
 // Keeps the CSV's header and the rows whose first column is at most
 // `iteration` (a resumed run rewrites what came after its checkpoint).
 void truncateCsv(const std::filesystem::path& path, int64_t iteration);
+// DIR/policy.yaml: the torch_policy configuration of `checkpoint` on
+// `device` (what evaluation runs on; "cpu" unless the user asked), with a
+// comment line showing how to evaluate it on `task`.
+void writePolicyConfig(const std::filesystem::path& dir, const std::string& task, const std::string& checkpoint,
+                       const std::string& device);
 // DIR/train.yaml; a LearningError naming the file when it is missing or damaged.
 YAML::Node readTrainingYaml(const std::string& dir);
 

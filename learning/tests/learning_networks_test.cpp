@@ -4,6 +4,8 @@
 // PointNet against its definition, and checkpoints that restore exactly.
 #include <manibench/learning/algorithms.hpp>
 #include <manibench/learning/checkpoint.hpp>
+#include <manibench/learning/compute.hpp>
+#include <manibench/learning/inference.hpp>
 #include <manibench/learning/networks.hpp>
 #include <manibench/learning/robot_frame.hpp>
 
@@ -141,6 +143,12 @@ TEST(LearningNetworks, FastPointNetEqualsItsDefinition) {
   // And with every valid point (no gathering).
   EXPECT_TRUE(torch::allclose(pointnet->forward(b.xyz, b.rgb, b.seg, b.state, b.valid),
                               pointnet->forwardDefinition(b.xyz, b.rgb, b.seg, b.state, b.valid), 1e-5, 1e-5));
+  // On CUDA, the fixed-size path without a host sync: the same pooled features.
+  if (!torch::cuda::is_available()) return;
+  pointnet->to(torch::kCUDA);
+  const ObservationBatch c = b.to(torch::kCUDA);
+  EXPECT_TRUE(torch::allclose(pointnet->forward(c.xyz, c.rgb, c.seg, c.state, mask.to(torch::kCUDA)).cpu(), definition,
+                              1e-4, 1e-4));
 }
 
 // Which of the K + 3 tokens change when point `point` of cloud 0 changes colour.
@@ -216,7 +224,7 @@ TEST(LearningAlgorithms, EveryAlgorithmStepsAndActsOnEveryNetwork) {
       at::Generator generator = at::detail::createCPUGenerator(1);
       const torch::Tensor a = algorithm->act(batch.obs, generator);
       EXPECT_EQ(a.sizes(), (std::vector<int64_t>{4, 3}));
-      if (std::string(name) != "bc") EXPECT_LE(a.abs().max().item<float>(), 1.0f);
+      EXPECT_LE(a.abs().max().item<float>(), 1.0f);  // BC's too: tanh, as ManiSkill-Learn's
     }
 }
 
@@ -286,6 +294,167 @@ TEST(LearningCheckpoints, ACheckpointRestoresTheSameActions) {
   EXPECT_TRUE(torch::equal(algorithm->act(batch.obs, g1), loaded.algorithm->act(batch.obs, g2)));
   EXPECT_TRUE(torch::equal(loaded.extras.at("marker"), torch::arange(3)));
   std::remove(path.c_str());
+}
+
+// The parameters of every network of an algorithm, detached copies.
+std::vector<torch::Tensor> copyParameters(const Algorithm& algorithm) {
+  std::vector<torch::Tensor> all;
+  for (const auto& [name, network] : algorithm.getNetworks())
+    for (const torch::Tensor& p : network->parameters()) all.push_back(p.detach().clone());
+  return all;
+}
+
+// A checkpoint loads onto the device asked for, through the map at load
+// that a CUDA-trained checkpoint evaluated on the CPU takes (CPU to CPU
+// here; CUDA to CPU and back where this libtorch sees a GPU), optimizers,
+// extras (always on the CPU) and all.
+TEST(LearningCheckpoints, ACheckpointLoadsOntoTheDeviceAskedFor) {
+  const std::string path = (std::filesystem::temp_directory_path() / "manibench_device_test.pt").string();
+  const ObservationSpec spec = makeCloudSpec();
+  const AlgorithmOptions options = AlgorithmOptions::makeDefaults("td3bc");
+  std::vector<torch::Device> devices{torch::Device("cpu")};
+  if (torch::cuda::is_available()) devices.emplace_back("cuda");
+  for (const torch::Device& from : devices)
+    for (const torch::Device& to : devices) {
+      SCOPED_TRACE(from.str() + " -> " + to.str());
+      torch::manual_seed(0);
+      auto algorithm = makeAlgorithm(options, makeNet(NetKind::PointNet), spec, from);
+      const TransitionBatch batch = makeTransitions(4, spec);
+      for (int64_t i = 0; i < 2; ++i) algorithm->update(batch.to(from), i);
+      CheckpointInfo info;
+      info.algorithm = options;
+      info.network = makeNet(NetKind::PointNet);
+      info.spec = spec;
+      std::map<std::string, torch::Tensor> extras{{"marker", torch::arange(3).to(from)}};
+      addGeneratorStates(extras, from);
+      EXPECT_EQ(extras.count(kCudaGeneratorExtra), from.is_cuda() ? 1u : 0u);
+      saveCheckpoint(path, info, *algorithm, extras);
+      LoadedCheckpoint loaded = loadCheckpoint(path, to, true, {"marker", kCpuGeneratorExtra, kCudaGeneratorExtra});
+      for (const auto& [name, network] : loaded.algorithm->getNetworks()) {
+        // (The type: a tensor's device has an index, "cuda:0", where "cuda" has none.)
+        for (const torch::Tensor& p : network->parameters()) EXPECT_EQ(p.device().type(), to.type()) << name;
+        for (const torch::Tensor& b : network->buffers()) EXPECT_EQ(b.device().type(), to.type()) << name;
+      }
+      for (const auto& [name, tensor] : loaded.extras) EXPECT_TRUE(tensor.is_cpu()) << name;
+      EXPECT_EQ(loaded.extras.count(kCudaGeneratorExtra), from.is_cuda() ? 1u : 0u);
+      EXPECT_TRUE(torch::equal(loaded.extras.at("marker"), torch::arange(3)));
+      const std::vector<torch::Tensor> saved = copyParameters(*algorithm), read = copyParameters(*loaded.algorithm);
+      ASSERT_EQ(saved.size(), read.size());
+      for (std::size_t i = 0; i < saved.size(); ++i) EXPECT_TRUE(torch::equal(saved[i].cpu(), read[i].cpu())) << i;
+      if (from != to) continue;  // the target noise of the next step comes from another generator
+      // The optimizers' moments came along: one more step from either is the same step.
+      torch::manual_seed(5);
+      algorithm->update(batch.to(from), 3);
+      torch::manual_seed(5);
+      loaded.algorithm->update(batch.to(to), 3);
+      const std::vector<torch::Tensor> a = copyParameters(*algorithm), b = copyParameters(*loaded.algorithm);
+      // (CUDA's backward of a gather adds with atomics, in no fixed order.)
+      for (std::size_t i = 0; i < a.size(); ++i)
+        EXPECT_TRUE(from.is_cpu() ? torch::equal(a[i], b[i]) : torch::allclose(a[i], b[i], 1e-5, 1e-6)) << i;
+    }
+  std::remove(path.c_str());
+}
+
+// What the trainer's prefetching does on CUDA: pinned, copied without
+// blocking, then used; the batch arrives intact.
+TEST(LearningDevices, APinnedBatchCopiedWithoutBlockingArrivesIntact) {
+  if (!torch::cuda::is_available()) GTEST_SKIP() << "this libtorch sees no GPU";
+  const TransitionBatch batch = makeTransitions(4, makeCloudSpec());
+  const TransitionBatch pinned = batch.map([](const torch::Tensor& t) { return t.pin_memory(); });
+  const TransitionBatch there = pinned.to(torch::kCUDA, /*non_blocking=*/true);
+  EXPECT_TRUE(there.obs.xyz.is_cuda());
+  EXPECT_TRUE(torch::equal(there.obs.xyz.cpu(), batch.obs.xyz));
+  EXPECT_TRUE(torch::equal(there.next_obs.seg.cpu(), batch.next_obs.seg));
+  EXPECT_TRUE(torch::equal(there.actions.cpu(), batch.actions));
+}
+
+// The saved random state of every device in use sets it back.
+TEST(LearningCheckpoints, GeneratorStatesRestoreTheDraws) {
+  std::vector<torch::Device> devices{torch::Device("cpu")};
+  if (torch::cuda::is_available()) devices.emplace_back("cuda");
+  for (const torch::Device& device : devices) {
+    SCOPED_TRACE(device.str());
+    torch::manual_seed(3);
+    std::map<std::string, torch::Tensor> extras;
+    addGeneratorStates(extras, device);
+    const torch::Tensor cpu = torch::rand({5}), on_device = torch::rand({5}, torch::TensorOptions(device));
+    torch::manual_seed(4);
+    restoreGeneratorStates(extras, device);
+    EXPECT_TRUE(torch::equal(torch::rand({5}), cpu));
+    EXPECT_TRUE(torch::equal(torch::rand({5}, torch::TensorOptions(device)), on_device));
+  }
+}
+
+TEST(LearningDevices, ADeviceThisLibtorchCannotUseIsAClearError) {
+  EXPECT_EQ(parseDevice("cpu"), torch::Device(torch::kCPU));
+  EXPECT_THROW(parseDevice("gpu"), LearningError);
+  if (torch::cuda::is_available()) GTEST_SKIP() << "this libtorch sees a GPU";
+  try {
+    parseDevice("cuda");
+    FAIL() << "cuda was accepted without CUDA";
+  } catch (const LearningError& e) {
+    EXPECT_NE(std::string(e.what()).find("has no CUDA"), std::string::npos) << e.what();
+  }
+  InferenceOptions options;
+  options.checkpoint = "/nonexistent/checkpoint.pt";
+  options.device = "cuda";
+  EXPECT_THROW(loadInferencePolicy(options, makeCloudSpec()), LearningError);
+}
+
+// BCQ's acting samples come from the policy's generator, whichever device
+// its networks are on: the same seed, the same latents and actions.
+TEST(LearningAlgorithms, BcqSamplesWithTheActingGeneratorOnEveryDevice) {
+  const ObservationSpec spec = makeStateSpec();
+  AlgorithmOptions options = AlgorithmOptions::makeDefaults("bcq");
+  options.eval_samples = 20;
+  torch::manual_seed(0);
+  auto bcq = makeAlgorithm(options, makeNet(NetKind::Mlp), spec, torch::kCPU);
+  const ObservationBatch obs = makeStateBatch(3, spec);
+  at::Generator g1 = at::detail::createCPUGenerator(7), g2 = at::detail::createCPUGenerator(7),
+                g3 = at::detail::createCPUGenerator(8);
+  const torch::Tensor a = bcq->act(obs, g1);
+  EXPECT_TRUE(torch::equal(a, bcq->act(obs, g2)));
+  EXPECT_FALSE(torch::equal(a, bcq->act(obs, g3)));
+  if (!torch::cuda::is_available()) return;
+  for (const auto& [name, network] : bcq->getNetworks()) network->to(torch::kCUDA);
+  at::Generator g4 = at::detail::createCPUGenerator(7);
+  EXPECT_TRUE(torch::allclose(bcq->act(obs.to(torch::kCUDA), g4).cpu(), a, 1e-4, 1e-5));
+}
+
+// ManiSkill-Learn's settings are the defaults; what older checkpoints ran
+// reads back as they ran it.
+TEST(LearningAlgorithms, ManiSkillLearnsSettingsAndTheOlderOnes) {
+  const NetOptions offline = NetOptions::makeDefaults("td3bc"), bc = NetOptions::makeDefaults("bc");
+  EXPECT_EQ(std::vector<int64_t>({offline.layers, offline.width, offline.ff}), std::vector<int64_t>({2, 192, 768}));
+  EXPECT_EQ(std::vector<int64_t>({bc.layers, bc.width, bc.ff}), std::vector<int64_t>({6, 256, 1024}));
+  EXPECT_EQ(AlgorithmOptions::makeDefaults("td3bc", "pointcloud").weight_decay, 5e-6);
+  EXPECT_EQ(AlgorithmOptions::makeDefaults("bc", "state").weight_decay, 0);
+  EXPECT_EQ(AlgorithmOptions::makeDefaults("bc", "state").lr, 1e-3);
+  EXPECT_EQ(AlgorithmOptions::makeDefaults("bc", "pointcloud").lr, 3e-4);
+  YAML::Node a, n;
+  AlgorithmOptions::makeDefaults("sac").writeYaml(a);
+  makeNet(NetKind::PnTransformer).writeYaml(n);
+  EXPECT_TRUE(AlgorithmOptions::readYaml(a).bc_tanh);
+  EXPECT_FALSE(AlgorithmOptions::readYaml(a).temperature_gradient_log);
+  EXPECT_FALSE(NetOptions::readYaml(n).transformer_masks);
+  a.remove("bc_tanh");
+  a.remove("temperature_gradient_log");
+  n.remove("transformer_masks");
+  EXPECT_FALSE(AlgorithmOptions::readYaml(a).bc_tanh);
+  EXPECT_TRUE(AlgorithmOptions::readYaml(a).temperature_gradient_log);
+  EXPECT_TRUE(NetOptions::readYaml(n).transformer_masks);
+  // The transformer's PointNets see xyz, rgb and the state, not the K mask channels.
+  const ObservationSpec spec = makeCloudSpec();
+  NetOptions with = makeNet(NetKind::PnTransformer);
+  with.transformer_masks = true;
+  const int64_t k = spec.mask_count, width = with.width;
+  EXPECT_EQ(countParameters(*makeNetwork(with, spec, 0, 3)) -
+                countParameters(*makeNetwork(makeNet(NetKind::PnTransformer), spec, 0, 3)),
+            (k + 2) * k * width);
+  // SAC starts at alpha = 1 (log alpha = 0).
+  torch::manual_seed(0);
+  auto sac = makeAlgorithm(AlgorithmOptions::makeDefaults("sac"), makeNet(NetKind::Mlp), makeStateSpec(), torch::kCPU);
+  EXPECT_EQ(sac->update(makeTransitions(8, makeStateSpec()), 0)[2], 1.0);
 }
 
 TEST(LearningCheckpoints, FilesThatAreNotCheckpointsAreClearErrors) {

@@ -49,8 +49,12 @@ double readSuccessRate(const std::string& summary) {
   return nlohmann::json::parse(in)["overall"]["success_rate"].get<double>();
 }
 
+// The temperature as docs/learning-results.md measured these runs (before
+// ManiSkill-Learn's alpha = 1 and gradient with respect to alpha became
+// the defaults, 2026-11-28; not re-measured with those yet).
 const std::vector<std::string> kReachAgent = {"--workers", "1", "--batch-size", "256", "--hidden", "64,64",
-                                              "--random-steps", "1000", "--no-progress"};
+                                              "--random-steps", "1000", "--init-temperature", "0.2",
+                                              "--log-temperature-gradient", "--no-progress"};
 
 TEST_F(SacLong, SacReachesNinetyPercentOnReachWithinSixtyThousandSteps) {
   std::vector<std::string> train = {"train", "sac", "Reach_0-v0", "--steps", "60000", "--out", path("reach")};

@@ -59,18 +59,24 @@ Network:
                           poses and velocities in the robot base's frame
   --hidden N,N,...        mlp hidden layers (default 256,256,256)
   --point-layers N,N      pointnet per-point layers (default 256,512)
-  --width N               pn_transformer width (default 256)
-  --layers N              pn_transformer blocks (default 6)
+  --width N               pn_transformer width (default 256; bcq, td3bc: 192)
+  --layers N              pn_transformer blocks (default 6; bcq, td3bc: 2)
+  --ff N                  pn_transformer feed-forward (default 1024; bcq, td3bc: 768)
   --heads N               attention heads (default 4, of 32 each)
   --dropout P             pn_transformer dropout (default 0.1)
+  --transformer-masks     pn_transformer's PointNets also see the mask channels
+                          (ManiSkill-Learn's do not)
 Optimization:
   --iterations N          gradient steps (default 10000)
   --batch-size N          default 128 (bc), 64 (bcq: Table 7; td3bc)
-  --lr X                  Adam's rate: default 3e-4 (bc), 5e-4 (bcq, td3bc)
-  --weight-decay X        default 5e-6 (bc, bcq), 0 (td3bc)
+  --lr X                  Adam's rate: default 3e-4 (bc on point clouds), 1e-3 (bc on
+                          states), 5e-4 (bcq, td3bc)
+  --weight-decay X        ManiSkill-Learn's: 5e-6 on point clouds; state: 5e-6 (bcq), 0 (bc, td3bc)
+  --no-tanh               bc: the network's output as the action (default tanh of it)
   --seed S                initialization, batches, noise (default 0)
   --threads N             libtorch and OpenBLAS threads (default 1)
   --device cpu|cuda       cuda needs a libtorch built with it (default cpu)
+  --prefetch              gather the next batch while this one trains (always on cuda)
 Offline RL (bcq, td3bc; Tables 7 and 8):
   --gamma X  --tau X      discount (0.95), target smoothing (0.005)
   --alpha X               td3bc's BC weight alpha (0.02; 0 is BC)
@@ -90,6 +96,8 @@ Output and evaluation:
   --eval-workers N        evaluation workers (default 1)
   --eval-seed S           the evaluation's base seed (default 1000: not the
                           demonstrations' own episodes, made with seed 0)
+  --eval-device cpu|cuda  what DIR/policy.yaml runs the checkpoints on (default
+                          cpu, whatever --device trained them on)
   --no-progress           no progress line (shown only on a terminal)
   --resume DIR            continue the training in DIR from its newest checkpoint
 )";
@@ -148,6 +156,7 @@ ml::TrainOptions parseTrainOptions(const mb::cli::Arguments& args, int argc, cha
   if (args.positional.size() != 1) throw UsageError("name one algorithm: bc, bcq or td3bc", kUsage);
   ml::TrainOptions o;
   o.algorithm = ml::AlgorithmOptions::makeDefaults(args.positional[0]);
+  o.network = ml::NetOptions::makeDefaults(args.positional[0]);
   if (!args.repeated.count("demos")) throw UsageError("no --demos FILE.h5", kUsage);
   for (const std::string& d : args.repeated.at("demos"))
     for (const std::string& path : splitList(d)) o.data.paths.push_back(fs::absolute(path).string());
@@ -158,6 +167,7 @@ ml::TrainOptions parseTrainOptions(const mb::cli::Arguments& args, int argc, cha
   if (has("cache-gb"))
     o.data.cache_bytes = uint64_t(parseNumber(value("cache-gb"), "--cache-gb") * double(uint64_t(1) << 30));
   o.normalize_state = has("normalize-state");
+  o.prefetch = has("prefetch");
   o.data.executed_actions = has("executed-actions");
   if (has("net")) o.network.kind = ml::parseNetKind(value("net"));
   o.pick_network = !has("net");
@@ -170,11 +180,16 @@ ml::TrainOptions parseTrainOptions(const mb::cli::Arguments& args, int argc, cha
   if (has("width")) o.network.width = parseInteger(value("width"), "--width", 1);
   if (has("layers")) o.network.layers = parseInteger(value("layers"), "--layers", 0);
   if (has("heads")) o.network.heads = parseInteger(value("heads"), "--heads", 1);
+  if (has("ff")) o.network.ff = parseInteger(value("ff"), "--ff", 1);
+  o.network.transformer_masks = has("transformer-masks");
   if (has("dropout")) o.network.dropout = parseNumber(value("dropout"), "--dropout");
   if (has("iterations")) o.iterations = parseInteger(value("iterations"), "--iterations", 1);
   if (has("batch-size")) o.algorithm.batch_size = parseInteger(value("batch-size"), "--batch-size", 1);
   if (has("lr")) o.algorithm.lr = parseNumber(value("lr"), "--lr");
   if (has("weight-decay")) o.algorithm.weight_decay = parseNumber(value("weight-decay"), "--weight-decay");
+  o.pick_weight_decay = !has("weight-decay");
+  o.pick_lr = !has("lr");
+  o.algorithm.bc_tanh = !has("no-tanh");
   if (has("seed")) o.seed = uint64_t(parseInteger(value("seed"), "--seed", 0));
   if (has("threads")) o.threads = int(parseInteger(value("threads"), "--threads", 1));
   if (has("device")) o.device = value("device");
@@ -197,6 +212,7 @@ ml::TrainOptions parseTrainOptions(const mb::cli::Arguments& args, int argc, cha
     throw UsageError("--eval-split takes train or test", kUsage);
   if (has("eval-objects")) o.eval_objects = splitList(value("eval-objects"));
   if (has("eval-episodes")) o.eval_episodes = uint32_t(parseInteger(value("eval-episodes"), "--eval-episodes", 1));
+  if (has("eval-device")) o.eval_device = ml::parseDevice(value("eval-device")).str();
   if (has("eval-seed")) o.eval_seed = uint64_t(parseInteger(value("eval-seed"), "--eval-seed", 0));
   if (has("eval-workers")) o.eval_workers = unsigned(parseInteger(value("eval-workers"), "--eval-workers", 1));
   std::string command = "manibench train";
@@ -208,13 +224,13 @@ ml::TrainOptions parseTrainOptions(const mb::cli::Arguments& args, int argc, cha
 int run(int argc, char** argv) {
   if (ml::programs::isSacCommand(argc, argv)) return ml::programs::runSacCommand(argc, argv);
   const std::vector<std::string> valued = {
-      "demos", "objects", "per-object", "cache-gb", "net", "history", "action-history", "hidden", "point-layers", "width", "layers", "heads",
+      "demos", "objects", "per-object", "cache-gb", "net", "history", "action-history", "hidden", "point-layers", "width", "layers", "heads", "ff",
       "dropout", "iterations", "batch-size", "lr", "weight-decay", "seed", "threads", "device", "gamma", "tau",
       "alpha", "action-noise", "noise-clip", "policy-delay", "phi", "lambda", "train-samples", "eval-samples",
       "out", "checkpoint-every", "log-every", "eval-every", "eval-task", "eval-split", "eval-objects",
-      "eval-episodes", "eval-workers", "eval-seed", "resume"};
+      "eval-episodes", "eval-workers", "eval-seed", "eval-device", "resume"};
   const mb::cli::Arguments args =
-      mb::cli::parseArguments(argc, argv, 2, valued, {"normalize-state", "step-input", "robot-frame", "executed-actions", "no-progress"}, kUsage, {"demos"});
+      mb::cli::parseArguments(argc, argv, 2, valued, {"normalize-state", "step-input", "robot-frame", "executed-actions", "no-progress", "no-tanh", "transformer-masks", "prefetch"}, kUsage, {"demos"});
   if (args.help) {
     std::cout << kUsage;
     return 0;

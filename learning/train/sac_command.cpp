@@ -53,8 +53,11 @@ Training:
   --target-update-every N gradient steps between target updates (default 1)
   --updates-per-step X    gradient steps per env step (default 1, Table 6)
   --hidden N,N,...        hidden layers of every network (default 256,256,256)
-  --init-temperature X    the entropy temperature's start (default 0.2)
+  --init-temperature X    the entropy temperature's start (default 1, ManiSkill-Learn's
+                          log alpha = 0; with --fixed-temperature 0.2, its alpha)
   --fixed-temperature     do not tune it
+  --log-temperature-gradient  tune it by the gradient with respect to log alpha
+                          (manibench before 2026-11-28) instead of alpha (ManiSkill-Learn)
   --target-entropy X      per action dimension (default -1: -|A| in all)
   --random-steps N        uniform random actions first (default 4000)
   --learning-starts N     transitions before the first gradient step (default 1024)
@@ -104,7 +107,8 @@ const std::vector<std::string> kValued = {
     "gamma", "tau", "target-update-every", "updates-per-step", "hidden", "init-temperature", "target-entropy",
     "random-steps", "learning-starts", "seed", "threads", "device", "out", "checkpoint-every", "log-every",
     "worker-timeout", "eval-every", "eval-episodes", "eval-seed", "resume"};
-const std::vector<std::string> kFlags = {"early-done", "no-early-done", "fixed-temperature", "no-progress"};
+const std::vector<std::string> kFlags = {"early-done", "no-early-done", "fixed-temperature",
+                                         "log-temperature-gradient", "no-progress"};
 
 SacOptions parseSacOptions(const mb::cli::Arguments& args, const char* usage) {
   auto has = [&](const std::string& key) { return args.options.count(key) > 0; };
@@ -132,8 +136,10 @@ SacOptions parseSacOptions(const mb::cli::Arguments& args, const char* usage) {
   if (has("target-update-every")) o.algorithm.target_update_every = integer("target-update-every", 1);
   if (has("updates-per-step")) o.updates_per_step = number("updates-per-step");
   if (has("hidden")) o.network.mlp_hidden = parseLayers(value("hidden"), "--hidden", usage);
-  if (has("init-temperature")) o.algorithm.init_temperature = number("init-temperature");
   o.algorithm.tune_temperature = !has("fixed-temperature");
+  if (!o.algorithm.tune_temperature) o.algorithm.init_temperature = 0.2;
+  if (has("init-temperature")) o.algorithm.init_temperature = number("init-temperature");
+  o.algorithm.temperature_gradient_log = has("log-temperature-gradient");
   if (has("target-entropy")) {
     try {
       o.algorithm.target_entropy_per_dim = std::stod(value("target-entropy"));

@@ -26,6 +26,11 @@ struct AlgorithmOptions {
   int64_t batch_size = 128;
   double lr = 3e-4;
   double weight_decay = 0;
+  // BC's action is tanh(network output), as ManiSkill-Learn's
+  // DeterministicHead (and TD3+BC's actor, BCQ's decoder, SAC's squashed
+  // Gaussian). Off: the output as it is (the checkpoints written before
+  // this option, which read back with it off).
+  bool bc_tanh = true;
   // Offline RL (BCQ, TD3+BC).
   double gamma = 0.95;
   double tau = 0.005;
@@ -44,19 +49,27 @@ struct AlgorithmOptions {
   double noise_clip = 0.5;
   int64_t policy_delay = 2;
   // SAC (Table 6; the table is silent on the entropy terms, these are
-  // ManiSkill-Learn's): the initial temperature, whether it is tuned
-  // towards the target entropy (per action dimension: -1 gives the usual
-  // -|A|), the log std's clamp, and the target networks' update interval
-  // in gradient steps (Table 6: every step).
-  double init_temperature = 0.2;
+  // ManiSkill-Learn's): the initial temperature (ManiSkill-Learn's SAC
+  // starts its tuned temperature at log alpha = 0, alpha = 1, whatever
+  // its configuration's alpha says), whether it is tuned towards the target
+  // entropy (per action dimension: -1 gives the usual -|A|) by a loss
+  // alpha * -(log pi + target) differentiated with respect to alpha, as
+  // ManiSkill-Learn's (`temperature_gradient_log`: with respect to log
+  // alpha instead, as Haarnoja et al.'s code and manibench before this
+  // option), the log std's clamp, and the target networks' update
+  // interval in gradient steps (Table 6: every step).
+  double init_temperature = 1.0;
+  bool temperature_gradient_log = false;
   bool tune_temperature = true;
   double target_entropy_per_dim = -1.0;
   double log_std_min = -20, log_std_max = 2;
   int64_t target_update_every = 1;
 
   // The tables' values (and ManiSkill-Learn's where the tables are
-  // silent) for `name`; throws LearningError for an unknown name.
-  static AlgorithmOptions makeDefaults(const std::string& name);
+  // silent) for `name` on observations of `mode` (BC's learning rate and the
+  // weight decay are ManiSkill-Learn's for the mode); throws LearningError
+  // for an unknown name.
+  static AlgorithmOptions makeDefaults(const std::string& name, const std::string& mode = "state");
   void writeYaml(YAML::Node& node) const;
   static AlgorithmOptions readYaml(const YAML::Node& node);
 };
@@ -68,7 +81,9 @@ struct TransitionBatch {
   torch::Tensor actions;  // [B, A], clipped to [-1, 1]
   torch::Tensor rewards;  // [B]
   torch::Tensor dones;    // [B]
-  TransitionBatch to(const torch::Device& device) const;
+  // `f` applied to each tensor it holds (ObservationBatch::map).
+  TransitionBatch map(const std::function<torch::Tensor(const torch::Tensor&)>& f) const;
+  TransitionBatch to(const torch::Device& device, bool non_blocking = false) const;
 };
 
 class Algorithm {

@@ -35,6 +35,18 @@ struct CheckpointInfo {
 void saveCheckpoint(const std::string& path, const CheckpointInfo& info, const Algorithm& algorithm,
                     const std::map<std::string, torch::Tensor>& extras);
 
+// The extras that hold libtorch's random states: the CPU generator's
+// always, the CUDA device's when training ran on one (absent otherwise;
+// loadCheckpoint skips it when asked for and missing).
+inline constexpr const char* kCpuGeneratorExtra = "torch_generator";
+inline constexpr const char* kCudaGeneratorExtra = "cuda_generator";
+// Adds the default generators' states of the devices in use (the CPU and
+// `device`) to `extras`, for a resume that continues bit for bit.
+void addGeneratorStates(std::map<std::string, torch::Tensor>& extras, const torch::Device& device);
+// Sets the default generators from what addGeneratorStates saved (the
+// CUDA state only when `device` is CUDA and the checkpoint has one).
+void restoreGeneratorStates(const std::map<std::string, torch::Tensor>& extras, const torch::Device& device);
+
 // The description alone. Throws LearningError naming the file when it is
 // not a manibench checkpoint (a TorchScript file, say) or of another format.
 CheckpointInfo readCheckpointInfo(const std::string& path);
@@ -44,8 +56,10 @@ struct LoadedCheckpoint {
   std::unique_ptr<Algorithm> algorithm;
   std::map<std::string, torch::Tensor> extras;  // those asked for
 };
-// The algorithm rebuilt from the description, its networks loaded (and the
-// optimizers and `extras` when resuming).
+// The algorithm rebuilt from the description on `device`, its networks
+// loaded onto it whichever device they were saved from (and the optimizers
+// and `extras`, on the CPU, when resuming). A missing extra is a
+// LearningError, except kCudaGeneratorExtra.
 LoadedCheckpoint loadCheckpoint(const std::string& path, const torch::Device& device, bool with_optimizers,
                                 const std::vector<std::string>& extras = {});
 

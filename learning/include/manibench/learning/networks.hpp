@@ -13,6 +13,7 @@
 #include <torch/torch.h>
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -33,7 +34,11 @@ struct ObservationBatch {
 
   int64_t size() const { return state.size(0); }
   bool hasPoints() const { return xyz.defined(); }
-  ObservationBatch to(const torch::Device& device) const;
+  // `f` applied to each tensor it holds.
+  ObservationBatch map(const std::function<torch::Tensor(const torch::Tensor&)>& f) const;
+  // On `device`; `non_blocking`: a copy from pinned memory to CUDA returns
+  // before it completes (the device's stream orders it before later work).
+  ObservationBatch to(const torch::Device& device, bool non_blocking = false) const;
   // Row i repeated n times in a row (rows i*n .. i*n+n-1): BCQ's action samples.
   ObservationBatch repeatEach(int64_t n) const;
   // Rows `index` (a 1-D int64 tensor).
@@ -78,6 +83,17 @@ struct NetOptions {
   int64_t ff = 1024;
   double dropout = 0.1;
   std::vector<int64_t> transformer_head{128};
+  // Whether the transformer's PointNets also see each point's mask
+  // channels. ManiSkill-Learn's pop them (each PointNet already sees one
+  // mask's points; xyz, rgb and the agent state go in); on: the checkpoints
+  // written before this option, which read back with it on.
+  bool transformer_masks = false;
+
+  // ManiSkill-Learn's sizes for `algorithm`'s networks: BC's pn_transformer
+  // as above; BCQ's and TD3+BC's (its offline-RL configurations) 2 blocks
+  // of width 192 and feed-forward 768, which also sets their cost (BCQ
+  // runs six such networks, four on 10x repeated clouds).
+  static NetOptions makeDefaults(const std::string& algorithm);
 
   // Whether the state input is more than the current state vector.
   bool hasExtraStateInputs() const {

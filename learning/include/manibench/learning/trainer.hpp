@@ -5,7 +5,7 @@
 //   DIR/log.csv               iteration, seconds, each loss (averaged since the previous row), it/s
 //   DIR/eval.csv              iteration, split, episodes, successes, success_rate
 //   DIR/checkpoints/iter_N.pt every --checkpoint-every iterations, at the end and on a stop
-//   DIR/policy.yaml           `checkpoint: <the newest>`: what --policy-config takes
+//   DIR/policy.yaml           `checkpoint: <the newest>`, `device: <eval_device>`: what --policy-config takes
 //   DIR/environment.yaml      the demonstrations' environment configuration (--config takes it)
 //   DIR/eval/iter_N/          each evaluation's results (manibench eval --out)
 //
@@ -33,11 +33,23 @@ struct TrainOptions {
   // network.kind was not chosen: mlp for state demonstrations,
   // pn_transformer for point clouds.
   bool pick_network = false;
+  // algorithm.lr, algorithm.weight_decay were not chosen: ManiSkill-Learn's
+  // for the demonstrations' observation mode (AlgorithmOptions::makeDefaults).
+  bool pick_lr = false;
+  bool pick_weight_decay = false;
   DatasetOptions data;
   int64_t iterations = 10000;  // gradient steps in all
   uint64_t seed = 0;
   int threads = 1;
   std::string device = "cpu";
+  // The device policy.yaml names for evaluating the checkpoints (the
+  // torch_policy plugin runs inside the environment's process, one
+  // observation at a time: the CPU unless asked, whatever trained it).
+  std::string eval_device = "cpu";
+  // Gather the next batch in another thread while the current one trains:
+  // always on CUDA; on the CPU off unless asked (the gather then competes
+  // with the step for the cores). The weights are the same either way.
+  bool prefetch = false;
   int64_t checkpoint_every = 1000;
   int64_t log_every = 100;
   bool normalize_state = false;  // (s - mean) / std per feature, from the demonstrations
