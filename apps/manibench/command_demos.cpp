@@ -27,7 +27,7 @@
 namespace manibench::cli {
 namespace {
 
-const char* kDemosUsage = R"(usage: manibench demos generate|replay|convert|info ...
+const char* kDemosUsage = R"(usage: manibench demos generate|merge|replay|convert|info ...
 
   generate TASK --policy NAME|PATH.so --out FILE.h5 [options]
       Runs the policy on the split's objects in worker processes (as eval
@@ -543,7 +543,7 @@ int commandDemos(int argc, char** argv) {
     std::cout << kDemosUsage;
     return 0;
   }
-  if (sub.empty()) throw UsageError("demos needs a command: generate, replay, convert or info", kDemosUsage);
+  if (sub.empty()) throw UsageError("demos needs a command: generate, merge, replay, convert or info", kDemosUsage);
   for (int i = 3; i < argc; ++i)
     if (std::string(argv[i]) == "--help" || std::string(argv[i]) == "-h") {
       std::cout << kDemosUsage;

@@ -33,10 +33,11 @@ Commands:
   render TASK --out DIR     camera images, masks and point clouds as PNG/PLY
   eval TASK --policy NAME   evaluate a policy on a split's objects: success
                             rates per object, CSV and JSON (docs/evaluation.md)
-  demos generate|replay|convert|info
+  demos generate|merge|replay|convert|info
                             demonstrations: a policy's successful episodes in
-                            HDF5, replayed bit for bit, converted to another
-                            observation mode (docs/demonstrations.md)
+                            HDF5, merged from shards, replayed bit for bit,
+                            converted to another observation mode
+                            (docs/demonstrations.md)
   objects TASK              object ids of a split (--split train|test)
   config [TASK]             print the merged YAML configuration
   demo                      list the plugins, then evaluate the cabinet expert
