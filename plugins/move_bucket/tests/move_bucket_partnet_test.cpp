@@ -103,16 +103,22 @@ TEST(MoveBucketPartNet, ErrorsNameTheFileAndTheProblem) {
       mb::testing::catchMessage<manibench::sdk::Error>([&] { bk::loadPartNetBucket(dir, "1", kScale); }),
       {dir + "/1/mobility.urdf", "rim's inside"});
   std::filesystem::remove_all(dir);
-  // The task refuses a folder that is not one.
-  mb::ConfigSources sources;
-  sources.overrides = {"task.partnet_dir=/no/such/folder"};
+  // The task refuses a folder that is not one, and a negative scale (0 is
+  // v1's own: calcBucketScale).
+  auto makeEnvironment = [](std::vector<std::string> overrides) {
+    mb::ConfigSources sources;
+    sources.overrides = std::move(overrides);
+    const mb::ConfigNode config =
+        mb::loadTaskConfig(mb::testing::getBuildTreeRegistry(), "MoveBucket-v0", sources);
+    mb::Environment env(mb::testing::getBuildTreeRegistry(), "MoveBucket-v0", mb::calcEnvironmentOptions(config));
+  };
+  mb::testing::expectMentions(
+      mb::testing::catchMessage<std::exception>([&] { makeEnvironment({"task.partnet_dir=/no/such/folder"}); }),
+      {"task.partnet_dir", "/no/such/folder"});
   mb::testing::expectMentions(mb::testing::catchMessage<std::exception>([&] {
-                                const mb::ConfigNode config = mb::loadTaskConfig(mb::testing::getBuildTreeRegistry(),
-                                                                                 "MoveBucket-v0", sources);
-                                mb::Environment env(mb::testing::getBuildTreeRegistry(), "MoveBucket-v0",
-                                                    mb::calcEnvironmentOptions(config));
+                                makeEnvironment({"task.partnet_dir=" + kFixture, "task.partnet_scale=-0.3"});
                               }),
-                              {"task.partnet_dir", "/no/such/folder"});
+                              {"task.partnet_scale must be positive (or 0: ManiSkill v1's)"});
 }
 
 std::unique_ptr<mb::Environment> makePartNetEnv(std::vector<std::string> overrides = {}) {
