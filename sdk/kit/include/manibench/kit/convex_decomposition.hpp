@@ -362,6 +362,7 @@ inline std::vector<Mesh> decompose(const Mesh& mesh, const DecompositionOptions&
   hacd.SetAddNeighboursDistPoints(false);
   if (!hacd.Compute(false, false) || hacd.GetNClusters() == 0)
     throw Error("convex decomposition: HACD found no pieces", MB_INVALID_ARGUMENT);
+  const double reach = options.concavity * diagonal;  // how far HACD lets a hull lie from the surface
   std::vector<Mesh> pieces;
   for (std::size_t c = 0; c < hacd.GetNClusters(); ++c) {
     std::vector<HACD::Vec3<HACD::Real>> hull_points(hacd.GetNPointsCH(c));
@@ -377,7 +378,6 @@ inline std::vector<Mesh> decompose(const Mesh& mesh, const DecompositionOptions&
     // real buckets: 4 concavities gave 130-331 pieces and 315 env steps/s,
     // 8 118-233 and 400, 16 fewer again but the expert's grip 25/40
     // instead of 31/40.
-    const double reach = options.concavity * diagonal;
     if (options.min_coverage > 0 && detail::calcCoverage(piece, solid, reach) < options.min_coverage) {
       const std::vector<uint32_t> inside = detail::findInside(piece, solid, 1e-6 * diagonal);
       if (!inside.empty()) {
