@@ -32,6 +32,59 @@ std::uint64_t pairKey(int a, int b) {
   return static_cast<std::uint64_t>(a) << 32 | static_cast<std::uint32_t>(b);
 }
 
+// The anchor of `feature` among the pair's previous ones [begin, end), if
+// one lies within `match_distance` of where the point is now on B.
+const FrictionAnchor* findAnchor(const std::vector<FrictionAnchor>& previous, std::size_t begin,
+                                 std::size_t end, std::int32_t feature, const Vec3& on_b,
+                                 double match_distance) {
+  for (std::size_t k = begin; k < end; ++k)
+    if (previous[k].feature == feature &&
+        (previous[k].on_b - on_b).normSqr() < match_distance * match_distance)
+      return &previous[k];
+  return nullptr;
+}
+
+// One contact point's force law, as the linearization needs it.
+struct PointLaw {
+  double k, kt, ct;  // normal stiffness, friction spring and damper (weighted)
+  double c, depth, approach, limit;
+};
+
+// The point's linearization for the implicit stepper. Normal: fn n with
+// fn = k d (1 + 1.5 c ddot), d falling by n.x. Tangential: -kt stretch -
+// ct slip while it sticks; sliding (|ft| past the limit), the capped force
+// turns with them but keeps its size. `ft` is the uncapped tangential force.
+void fillCoupling(const Vec3& at, const Vec3& n, const PointLaw& law, const Vec3& ft,
+                  PointCoupling& point) {
+  const double ft_norm = ft.norm();
+  const bool sliding = ft_norm > law.limit;
+  point.point = Eigen::Vector3d(at[0], at[1], at[2]);
+  const Eigen::Vector3d normal_axis(n[0], n[1], n[2]);
+  const Eigen::Matrix3d normal = normal_axis * normal_axis.transpose();
+  Eigen::Matrix3d tangent = Eigen::Matrix3d::Identity() - normal;
+  double tangent_scale = 1;
+  if (sliding && ft_norm > 0) {
+    const Eigen::Vector3d direction(ft[0] / ft_norm, ft[1] / ft_norm, ft[2] / ft_norm);
+    tangent -= direction * direction.transpose();
+    tangent_scale = law.limit / ft_norm;
+  }
+  const double k = law.k, kt = law.kt, ct = law.ct, limit = law.limit;
+  const double approach = law.approach;
+  point.damping = (1.5 * k * law.c * law.depth) * normal + (tangent_scale * ct) * tangent;
+  point.stiffness = (k * (1 + 1.5 * law.c * approach)) * normal + (tangent_scale * kt) * tangent;
+  if (sliding && ft_norm > 0) {
+    const Eigen::Matrix3d full_tangent = Eigen::Matrix3d::Identity() - normal;
+    point.sliding = true;
+    point.stick_force = Eigen::Vector3d(ft[0], ft[1], ft[2]);
+    point.slide_force = (limit / ft_norm) * point.stick_force;
+    point.tangent_damping = ct * full_tangent;
+    point.tangent_stiffness = kt * full_tangent;
+    point.stick_damping = (1.5 * k * law.c * law.depth) * normal + point.tangent_damping;
+    point.stick_stiffness = (k * (1 + 1.5 * law.c * approach)) * normal + point.tangent_stiffness;
+    point.limit = limit;
+  }
+}
+
 }  // namespace
 
 std::ostream& operator<<(std::ostream& out, const FrictionAnchorSet& set) {
@@ -232,6 +285,40 @@ void ContactForce::ensureShapeBox(int i) const {
   shapes_[i].geometry.calcBoundingBox(X_GS_[i], lo_[i], hi_[i]);
 }
 
+// Exactly the pairs whose current boxes overlap (a plane: whose box reaches
+// below it) go on to the narrow phase.
+bool ContactForce::areBoxesTouching(int ia, int ib) const {
+  ensureShapeBox(ia);
+  ensureShapeBox(ib);
+  const bool a_is_plane = shapes_[ia].geometry.kind == ShapeKind::HalfSpace;
+  if (a_is_plane || shapes_[ib].geometry.kind == ShapeKind::HalfSpace) {
+    const int h = a_is_plane ? ia : ib, i = a_is_plane ? ib : ia;
+    const Vec3 n = X_GS_[h].z();
+    return calcLowestAlong(n, lo_[i], hi_[i]) < SimTK::dot(X_GS_[h].p(), n);
+  }
+  return !(lo_[ib][0] > hi_[ia][0] || lo_[ia][0] > hi_[ib][0] || lo_[ib][1] > hi_[ia][1] ||
+           lo_[ia][1] > hi_[ib][1] || lo_[ib][2] > hi_[ia][2] || lo_[ia][2] > hi_[ib][2]);
+}
+
+// The pair's combined material, its stiffnesses capped so that no point of
+// `points` oscillates above law_.max_frequency on the pair's share of mass.
+ContactForce::PairMaterial ContactForce::calcPairMaterial(const ContactShape& a,
+                                                          const ContactShape& b,
+                                                          std::size_t points) const {
+  PairMaterial material = combine(a.material, b.material);
+  material.friction_stiffness = law_.stiffness;
+  material.friction_damping = law_.damping;
+  const double inverse_mass = a.inverse_mass + b.inverse_mass;
+  if (law_.max_frequency > 0 && inverse_mass > 0) {
+    const double share = 1 / (inverse_mass * std::max<double>(4, static_cast<double>(points)));
+    const double w = law_.max_frequency;
+    material.k = std::min(material.k, share * w * w);
+    material.friction_stiffness = std::min(material.friction_stiffness, share * w * w);
+    material.friction_damping = std::min(material.friction_damping, share * w);
+  }
+  return material;
+}
+
 double ContactForce::evaluate(const SimTK::State& state, Mode mode,
                               SimTK::Vector_<SpatialVec>* body_forces,
                               std::vector<Report>* reports) const {
@@ -254,34 +341,15 @@ double ContactForce::evaluate(const SimTK::State& state, Mode mode,
   double energy = 0;
 
   for (const auto& [ia, ib] : candidates_) {
-    // Exactly the pairs whose current boxes overlap go on.
-    ensureShapeBox(ia);
-    ensureShapeBox(ib);
-    const bool a_is_plane = shapes_[ia].geometry.kind == ShapeKind::HalfSpace;
-    if (a_is_plane || shapes_[ib].geometry.kind == ShapeKind::HalfSpace) {
-      const int h = a_is_plane ? ia : ib, i = a_is_plane ? ib : ia;
-      const Vec3 n = X_GS_[h].z();
-      if (!(calcLowestAlong(n, lo_[i], hi_[i]) < SimTK::dot(X_GS_[h].p(), n))) continue;
-    } else if (lo_[ib][0] > hi_[ia][0] || lo_[ia][0] > hi_[ib][0] || lo_[ib][1] > hi_[ia][1] ||
-               lo_[ia][1] > hi_[ib][1] || lo_[ib][2] > hi_[ia][2] || lo_[ia][2] > hi_[ib][2]) {
-      continue;
-    }
+    if (!areBoxesTouching(ia, ib)) continue;
     narrow_.calcContacts(shapes_[ia].geometry, X_GS_[ia], shapes_[ib].geometry, X_GS_[ib],
                          manifold_);
     if (manifold_.empty()) continue;
     const ContactShape& a = shapes_[ia];
     const ContactShape& b = shapes_[ib];
-    PairMaterial material = combine(a.material, b.material);
-    double friction_stiffness = law_.stiffness, friction_damping = law_.damping;
-    const double inverse_mass = a.inverse_mass + b.inverse_mass;
-    if (law_.max_frequency > 0 && inverse_mass > 0) {
-      const double share =
-          1 / (inverse_mass * std::max<double>(4, static_cast<double>(manifold_.size())));
-      const double w = law_.max_frequency;
-      material.k = std::min(material.k, share * w * w);
-      friction_stiffness = std::min(friction_stiffness, share * w * w);
-      friction_damping = std::min(friction_damping, share * w);
-    }
+    const PairMaterial material = calcPairMaterial(a, b, manifold_.size());
+    const double friction_stiffness = material.friction_stiffness;
+    const double friction_damping = material.friction_damping;
     const SimTK::MobilizedBody& body_a = matter_.getMobilizedBody(a.body);
     const SimTK::MobilizedBody& body_b = matter_.getMobilizedBody(b.body);
     const Transform& X_GA = body_a.getBodyTransform(state);
@@ -299,13 +367,8 @@ double ContactForce::evaluate(const SimTK::State& state, Mode mode,
     for (const ContactPoint& c : manifold_) {
       const Vec3 n(c.normal);
       const Vec3 on_b = ~X_GB * c.point;
-      const FrictionAnchor* anchor = nullptr;
-      for (std::size_t k = cursor; k < end; ++k)
-        if (previous[k].feature == c.feature &&
-            (previous[k].on_b - on_b).normSqr() < law_.match_distance * law_.match_distance) {
-          anchor = &previous[k];
-          break;
-        }
+      const FrictionAnchor* anchor =
+          findAnchor(previous, cursor, end, c.feature, on_b, law_.match_distance);
       // Tangential stretch of the anchor spring.
       Vec3 stretch(0);
       if (anchor != nullptr) {
@@ -339,36 +402,11 @@ double ContactForce::evaluate(const SimTK::State& state, Mode mode,
       Vec3 new_stretch = stretch;
       const bool sliding = ft_norm > limit;
       if (linearize) {
-        // Normal: fn n with fn = k d (1 + 1.5 c ddot), d falling by n.x.
-        // Tangential: -kt stretch - ct slip while it sticks; sliding, the
-        // capped force turns with them but keeps its size.
         PointCoupling& point = linearization_.emplace_back();
         point.body_a = a.body;
         point.body_b = b.body;
-        point.point = Eigen::Vector3d(c.point[0], c.point[1], c.point[2]);
-        const Eigen::Vector3d normal_axis(n[0], n[1], n[2]);
-        const Eigen::Matrix3d normal = normal_axis * normal_axis.transpose();
-        Eigen::Matrix3d tangent = Eigen::Matrix3d::Identity() - normal;
-        double tangent_scale = 1;
-        if (sliding && ft_norm > 0) {
-          const Eigen::Vector3d direction(ft[0] / ft_norm, ft[1] / ft_norm, ft[2] / ft_norm);
-          tangent -= direction * direction.transpose();
-          tangent_scale = limit / ft_norm;
-        }
-        point.damping = (1.5 * k * material.c * c.depth) * normal + (tangent_scale * ct) * tangent;
-        point.stiffness = (k * (1 + 1.5 * material.c * approach)) * normal +
-                          (tangent_scale * kt) * tangent;
-        if (sliding && ft_norm > 0) {
-          const Eigen::Matrix3d full_tangent = Eigen::Matrix3d::Identity() - normal;
-          point.sliding = true;
-          point.stick_force = Eigen::Vector3d(ft[0], ft[1], ft[2]);
-          point.slide_force = (limit / ft_norm) * point.stick_force;
-          point.tangent_damping = ct * full_tangent;
-          point.tangent_stiffness = kt * full_tangent;
-          point.stick_damping = (1.5 * k * material.c * c.depth) * normal + point.tangent_damping;
-          point.stick_stiffness = (k * (1 + 1.5 * material.c * approach)) * normal + point.tangent_stiffness;
-          point.limit = limit;
-        }
+        fillCoupling(c.point, n, PointLaw{k, kt, ct, material.c, c.depth, approach, limit}, ft,
+                     point);
       }
       if (sliding) {
         // Sliding: cap the force, and move the anchor so that the spring
@@ -385,22 +423,9 @@ double ContactForce::evaluate(const SimTK::State& state, Mode mode,
         if (a.body != SimTK::GroundIndex)
           (*body_forces)[a.body] -= SpatialVec(SimTK::cross(c.point - X_GA.p(), f), f);
       }
-      if (next != nullptr) {
-        FrictionAnchor saved;
-        saved.pair = key;
-        saved.feature = c.feature;
-        saved.on_b = on_b;
-        saved.on_a = ~X_GA * (c.point - new_stretch);
-        next->push_back(saved);
-      }
-      if (reports != nullptr) {
-        Report r;
-        r.shape_a = ia;
-        r.shape_b = ib;
-        r.point = c.point;
-        r.force_on_b = f;
-        reports->push_back(r);
-      }
+      if (next != nullptr)
+        next->push_back(FrictionAnchor{key, c.feature, ~X_GA * (c.point - new_stretch), on_b});
+      if (reports != nullptr) reports->push_back(Report{ia, ib, c.point, f});
     }
     if (next != nullptr)
       std::sort(

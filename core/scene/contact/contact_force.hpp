@@ -124,6 +124,7 @@ class ContactForce : public SimTK::Force::Custom::Implementation, public Implici
  private:
   struct PairMaterial {
     double k, c, mu_static, mu_dynamic, mu_viscous;
+    double friction_stiffness = 0, friction_damping = 0;  // the anchor spring's, per point
   };
   enum class Mode { Apply, Report, Energy };
   // Broad phase, narrow phase and force law; what happens to the result
@@ -139,6 +140,9 @@ class ContactForce : public SimTK::Force::Custom::Implementation, public Implici
   void calcGrownBox(int i, const SimTK::Transform& X_GS) const;
   // The shape's pose and exact bounding box at the current evaluation.
   void ensureShapeBox(int shape) const;
+  bool areBoxesTouching(int a, int b) const;
+  PairMaterial calcPairMaterial(const ContactShape& a, const ContactShape& b,
+                                std::size_t points) const;
   bool isPairAllowed(int i, int j) const;
   static PairMaterial combine(const ContactMaterial& a, const ContactMaterial& b);
 
