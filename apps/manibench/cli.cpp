@@ -200,22 +200,57 @@ std::string resolvePolicy(mb::PluginRegistry& registry, const std::string& polic
   return policies.front();
 }
 
-std::string readPolicyConfig(const Arguments& args) {
-  const auto it = args.options.find("policy-config");
-  if (it == args.options.end()) return "";
-  std::ifstream in(it->second);
-  if (!in) throw std::runtime_error("cannot read the policy configuration '" + it->second + "'");
+namespace {
+
+bool isPythonPolicy(const std::string& policy) {
+  return policy.size() > 3 && policy.compare(policy.size() - 3, 3, ".py") == 0;
+}
+
+std::string readTextFile(const std::string& path, const std::string& what) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read the " + what + " '" + path + "'");
   std::stringstream text;
   text << in.rdbuf();
   return text.str();
 }
 
+// The `python` policy plugin's configuration that runs the file.
 std::string makePythonPolicyConfig(const std::string& path) {
-  if (!std::ifstream(path)) throw std::runtime_error("cannot read the policy file '" + path + "'");
+  readTextFile(path, "policy file");
   std::string quoted;
   for (char c : std::filesystem::absolute(path).string())
     quoted += c == '\'' ? std::string("''") : std::string(1, c);  // YAML single quotes
   return "file: '" + quoted + "'\n";
+}
+
+}  // namespace
+
+PolicyChoice choosePolicy(mb::PluginRegistry& registry, const Arguments& args, const char* usage,
+                          const std::string& fallback) {
+  std::string policy = valueOr(args, "policy", fallback);
+  if (policy.empty()) throw UsageError("--policy NAME|PATH.so|PATH.py is needed", usage);
+  PolicyChoice choice;
+  const auto config_file = args.options.find("policy-config");
+  if (config_file != args.options.end()) {
+    choice.config = readTextFile(config_file->second, "policy configuration");
+    choice.notes.push_back("--policy-config " + config_file->second);
+    choice.files.push_back(config_file->second);
+  }
+  if (isPythonPolicy(policy)) {
+    // The `python` plugin's embedded interpreter starts where the policy
+    // runs (in an evaluation, each worker, after the fork).
+    if (config_file != args.options.end())
+      throw UsageError("--policy FILE.py takes no --policy-config (name the file in a "
+                       "configuration for --policy python instead)", usage);
+    choice.config = makePythonPolicyConfig(policy);
+    choice.notes.push_back("--policy " + policy);
+    choice.files.push_back(policy);
+    policy = "python";
+  }
+  choice.name = resolvePolicy(registry, policy);
+  const mb::PluginEntry& entry = registry.getEntry(mb::PluginKind::Policy, choice.name);
+  choice.files.push_back(registry.getLibraries()[entry.library].path);
+  return choice;
 }
 
 void applySandboxOptions(const Arguments& args, mb::EvaluationOptions& options,
@@ -247,10 +282,6 @@ void applySandboxOptions(const Arguments& args, mb::EvaluationOptions& options,
   if (reads != args.repeated.end())
     for (const std::string& path : reads->second) paths.push_back(std::filesystem::absolute(path).string());
   options.policy_read_paths = paths;
-}
-
-bool isPythonPolicy(const std::string& policy) {
-  return policy.size() > 3 && policy.compare(policy.size() - 3, 3, ".py") == 0;
 }
 
 std::string joinCommand(int argc, char** argv) {
