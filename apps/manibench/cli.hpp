@@ -108,8 +108,10 @@ std::string resolvePolicy(mb::PluginRegistry& registry, const std::string& polic
 // --policy and --policy-config: the one resolution of every command that
 // runs a policy on a task (run, eval, bench, render, demos generate, view).
 // --policy is a registered NAME, a library PATH.so (or any path with a /)
-// to load, or a Python file PATH.py: a policy class run by the `python`
-// policy plugin (docs/python.md), which then takes no --policy-config.
+// to load, a Python file PATH.py: a policy class run by the `python`
+// policy plugin (docs/python.md), or a `manibench train` checkpoint
+// PATH.pt run by `torch_policy` (docs/learning.md; where the learning
+// module is built). A file of those two takes no --policy-config.
 struct PolicyChoice {
   std::string name;                // the registered policy
   std::string config;              // the YAML its create gets ("" when none)
@@ -126,7 +128,11 @@ inline constexpr const char* kPolicyUsage =
     R"(  --policy NAME|PATH.so   policy plugin by name, or a library file to load
   --policy PATH.py        a Python policy class (act(obs), optional reset()),
                           run by the `python` policy plugin (docs/python.md)
-  --policy-config FILE    YAML handed to the policy's create (not with PATH.py)
+  --policy PATH.pt        a `manibench train` checkpoint, run by the
+                          `torch_policy` plugin (docs/learning.md; give the
+                          training's --config DIR/environment.yaml too)
+  --policy-config FILE    YAML handed to the policy's create (not with PATH.py
+                          or PATH.pt)
 )";
 
 // The policy sandbox's options, shared by eval and demos generate

@@ -2,7 +2,9 @@
 eval, bench, render, demos generate, view): one resolution (cli.hpp's
 choosePolicy) hands the file to the `python` policy plugin. Each test runs
 a small Python policy and checks that what happened came from it: the
-actions recorded are the ones it computes, or it counted its own calls."""
+actions recorded are the ones it computes, or it counted its own calls.
+`--policy FILE.pt` (a `manibench train` checkpoint, through torch_policy)
+is checked where the learning module is built."""
 import csv
 import json
 import os
@@ -167,3 +169,29 @@ def test_view(tmp_path, policy, display):
         assert f.meta["policy"].startswith("python (") and len(f) >= 1
         for trajectory in f:
             assert_actions_are_the_policys(trajectory["obs"][:-1], trajectory["actions"])
+
+
+def test_a_checkpoint_runs_through_torch_policy(tmp_path):
+    if "torch_policy" not in manibench("list"):
+        pytest.skip("this build has no learning module (libtorch)")
+    demos_file, training = tmp_path / "reach.h5", tmp_path / "bc"
+    manibench("demos", "generate", "Reach-v0", "--policy", "reach_expert", "--objects", "0,1", "--no-progress",
+              "--out", demos_file)
+    manibench("train", "bc", "--demos", demos_file, "--out", training, "--iterations", "20", "--batch-size", "16")
+    checkpoint = training / "checkpoints" / "iter_0000020.pt"
+    environment = training / "environment.yaml"
+    traces = {}
+    for name, policy in {"file": ["--policy", checkpoint],
+                         "configured": ["--policy", "torch_policy", "--policy-config", training / "policy.yaml"],
+                         "zero": ["--policy", "zero"]}.items():
+        traces[name] = tmp_path / f"{name}.csv"
+        manibench("run", "Reach-v0", *policy, "--config", environment, "--no-early-stop", "--trace", traces[name])
+    # The file is the checkpoint torch_policy runs (and not nothing).
+    assert traces["file"].read_text() == traces["configured"].read_text()
+    assert traces["file"].read_text() != traces["zero"].read_text()
+    out = tmp_path / "results"
+    manibench("eval", "Reach-v0", "--policy", checkpoint, "--config", environment, "--objects", "8",
+              "--episodes-per-object", "1", "--no-progress", "--out", out)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["policy"]["name"] == "torch_policy" and f"--policy {checkpoint}" in summary["configuration"]
+    assert summary["episodes_run"] == 1 and summary["failures"] == {}
