@@ -200,22 +200,66 @@ std::string resolvePolicy(mb::PluginRegistry& registry, const std::string& polic
   return policies.front();
 }
 
-std::string readPolicyConfig(const Arguments& args) {
-  const auto it = args.options.find("policy-config");
-  if (it == args.options.end()) return "";
-  std::ifstream in(it->second);
-  if (!in) throw std::runtime_error("cannot read the policy configuration '" + it->second + "'");
+namespace {
+
+std::string readTextFile(const std::string& path, const std::string& what) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read the " + what + " '" + path + "'");
   std::stringstream text;
   text << in.rdbuf();
   return text.str();
 }
 
-std::string makePythonPolicyConfig(const std::string& path) {
-  if (!std::ifstream(path)) throw std::runtime_error("cannot read the policy file '" + path + "'");
+bool hasExtension(const std::string& path, const std::string& extension) {
+  return path.size() > extension.size() &&
+         path.compare(path.size() - extension.size(), extension.size(), extension) == 0;
+}
+
+// `key: 'PATH'` (absolute, YAML single-quoted): the configuration of the
+// plugin that runs the file, which must be readable.
+std::string makeFileConfig(const std::string& key, const std::string& path) {
+  readTextFile(path, "policy file");
   std::string quoted;
   for (char c : std::filesystem::absolute(path).string())
-    quoted += c == '\'' ? std::string("''") : std::string(1, c);  // YAML single quotes
-  return "file: '" + quoted + "'\n";
+    quoted += c == '\'' ? std::string("''") : std::string(1, c);
+  return key + ": '" + quoted + "'\n";
+}
+
+}  // namespace
+
+PolicyChoice choosePolicy(mb::PluginRegistry& registry, const Arguments& args, const char* usage,
+                          const std::string& fallback) {
+  std::string policy = valueOr(args, "policy", fallback);
+  if (policy.empty()) throw UsageError("--policy NAME|PATH.so|PATH.py|PATH.pt is needed", usage);
+  PolicyChoice choice;
+  const auto config_file = args.options.find("policy-config");
+  if (config_file != args.options.end()) {
+    choice.config = readTextFile(config_file->second, "policy configuration");
+    choice.notes.push_back("--policy-config " + config_file->second);
+    choice.files.push_back(config_file->second);
+  }
+  // A file another plugin runs: a Python policy class (the `python`
+  // plugin's embedded interpreter starts where the policy runs: in an
+  // evaluation, each worker, after the fork), or a `manibench train`
+  // checkpoint (torch_policy, the learning module's).
+  const bool python = hasExtension(policy, ".py"), checkpoint = hasExtension(policy, ".pt");
+  if (python || checkpoint) {
+    const std::string plugin = python ? "python" : "torch_policy";
+    if (config_file != args.options.end())
+      throw UsageError("--policy " + policy + " takes no --policy-config (name the file in a configuration for "
+                       "--policy " + plugin + " instead)", usage);
+    if (registry.findEntry(mb::PluginKind::Policy, plugin) == nullptr)
+      throw std::runtime_error("--policy " + policy + " runs through the `" + plugin + "` policy plugin, which " +
+                               (python ? "this build lacks (libpython)" : "this build lacks (the learning module, libtorch)"));
+    choice.config = makeFileConfig(python ? "file" : "checkpoint", policy);
+    choice.notes.push_back("--policy " + policy);
+    choice.files.push_back(policy);
+    policy = plugin;
+  }
+  choice.name = resolvePolicy(registry, policy);
+  const mb::PluginEntry& entry = registry.getEntry(mb::PluginKind::Policy, choice.name);
+  choice.files.push_back(registry.getLibraries()[entry.library].path);
+  return choice;
 }
 
 void applySandboxOptions(const Arguments& args, mb::EvaluationOptions& options,
@@ -247,10 +291,6 @@ void applySandboxOptions(const Arguments& args, mb::EvaluationOptions& options,
   if (reads != args.repeated.end())
     for (const std::string& path : reads->second) paths.push_back(std::filesystem::absolute(path).string());
   options.policy_read_paths = paths;
-}
-
-bool isPythonPolicy(const std::string& policy) {
-  return policy.size() > 3 && policy.compare(policy.size() - 3, 3, ".py") == 0;
 }
 
 std::string joinCommand(int argc, char** argv) {

@@ -92,9 +92,6 @@ std::unique_ptr<mb::Environment> makeEnvironment(const mb::PluginRegistry& regis
                                                  const mb::ConfigSources& sources,
                                                  bool stop_on_success);
 void printSegments(const std::vector<mb::sdk::Segment>& segments);
-// The YAML of --policy-config FILE handed to the policy's create ("" when
-// not given); an unreadable file is an error naming it.
-std::string readPolicyConfig(const Arguments& args);
 // The controller `policy` names (ABI 1.4's mb_policy_descriptor.controller)
 // becomes the first --set control.controller=NAME, unless --controller or a
 // --set of that key is given; a --controller, or a --config file's
@@ -105,13 +102,38 @@ void applyPolicyController(const mb::PluginRegistry& registry, const std::string
 // --video-size WxH (even, 16 to 8192), default 640x480; a UsageError with
 // `usage` otherwise. Shared by run, render and demos replay.
 std::pair<int, int> parseVideoSize(const Arguments& args, const char* usage);
-// Resolves --policy: a registered name, or a library path to load first.
+// Resolves a policy name or a library path to load first (its one policy).
 std::string resolvePolicy(mb::PluginRegistry& registry, const std::string& policy);
-// --policy FILE.py: whether `policy` names a Python file, and the `python`
-// policy plugin's configuration that runs it (an unreadable file is an
-// error naming it).
-bool isPythonPolicy(const std::string& policy);
-std::string makePythonPolicyConfig(const std::string& path);
+
+// --policy and --policy-config: the one resolution of every command that
+// runs a policy on a task (run, eval, bench, render, demos generate, view).
+// --policy is a registered NAME, a library PATH.so (or any path with a /)
+// to load, a Python file PATH.py: a policy class run by the `python`
+// policy plugin (docs/python.md), or a `manibench train` checkpoint
+// PATH.pt run by `torch_policy` (docs/learning.md; where the learning
+// module is built). A file of those two takes no --policy-config.
+struct PolicyChoice {
+  std::string name;                // the registered policy
+  std::string config;              // the YAML its create gets ("" when none)
+  std::vector<std::string> notes;  // where that YAML came from: "--policy-config FILE", "--policy FILE.py"
+  std::vector<std::string> files;  // its own files (configuration, script, library): readable from the sandbox
+};
+// `fallback` is the policy without --policy (bench's random); none is a
+// UsageError. Unreadable files, unknown names and libraries that do not
+// load are errors before anything is built.
+PolicyChoice choosePolicy(mb::PluginRegistry& registry, const Arguments& args, const char* usage,
+                          const std::string& fallback = "");
+// The --policy and --policy-config lines of the commands' help.
+inline constexpr const char* kPolicyUsage =
+    R"(  --policy NAME|PATH.so   policy plugin by name, or a library file to load
+  --policy PATH.py        a Python policy class (act(obs), optional reset()),
+                          run by the `python` policy plugin (docs/python.md)
+  --policy PATH.pt        a `manibench train` checkpoint, run by the
+                          `torch_policy` plugin (docs/learning.md; give the
+                          training's --config DIR/environment.yaml too)
+  --policy-config FILE    YAML handed to the policy's create (not with PATH.py
+                          or PATH.pt)
+)";
 
 // The policy sandbox's options, shared by eval and demos generate
 // (docs/evaluation.md, "Sandbox"): the flag and the help text.

@@ -12,7 +12,7 @@ namespace manibench::cli {
 
 namespace {
 
-const char* kBenchUsage = R"(usage: manibench bench TASK [options]
+const std::string kBenchUsageText = R"(usage: manibench bench TASK [options]
 
 Measures environment steps per second: episodes of TASK on the split's
 objects (in turn, seeds 0, 1, ...) until --steps environment steps have run.
@@ -31,9 +31,9 @@ iterations and Jacobians; evaluations of the equations of motion), which
 does not depend on the load of the machine.
 
 Options:
-  --policy NAME|PATH.so   policy acting (default random)
-  --policy-config FILE    YAML handed to the policy's create (a trained
-                          network: --policy torch_policy, docs/learning.md)
+)" + std::string(kPolicyUsage) + R"(                          without --policy: random; a trained network:
+                          --policy torch_policy --policy-config FILE
+                          (docs/learning.md)
   --obs MODE              observation mode: state (default), pointcloud or rgbd
                           (the visual modes render every camera at every step)
   --steps N               environment steps to time (default 2000)
@@ -42,6 +42,7 @@ Options:
                           one the policy names, e.g. an expert's mobile_panda_ee)
   --config FILE, --set KEY=VALUE   configuration layers, as for run
 )";
+const char* const kBenchUsage = kBenchUsageText.c_str();
 
 }  // namespace
 
@@ -61,14 +62,14 @@ int commandBench(int argc, char** argv) {
 
   mb::PluginRegistry registry;
   loadPlugins(registry);
-  const std::string policy_name = resolvePolicy(registry, valueOr(args, "policy", "random"));
-  registry.getEntry(mb::PluginKind::Policy, policy_name);
+  const PolicyChoice choice = choosePolicy(registry, args, kBenchUsage, "random");
+  const std::string& policy_name = choice.name;
   applyPolicyController(registry, policy_name, args, sources, kBenchUsage);
   const std::unique_ptr<mb::Environment> env =
       makeEnvironment(registry, args.positional[0], sources, true);
   const std::vector<std::string> objects = env->listObjects(split);
   if (objects.empty()) throw std::runtime_error("the " + split + " split has no objects");
-  mb::PolicyInstance policy(registry, policy_name, readPolicyConfig(args), env->calcPolicyLayout());
+  mb::PolicyInstance policy(registry, policy_name, choice.config, env->calcPolicyLayout());
 
   using Clock = std::chrono::steady_clock;
   std::chrono::duration<double> step_time{0}, reset_time{0}, first_reset_time{0};

@@ -22,6 +22,7 @@
 
 #include "cli.hpp"
 #include "mpi_ranks.hpp"
+#include "policy_run.hpp"
 #include "video.hpp"
 
 namespace manibench::cli {
@@ -29,9 +30,10 @@ namespace {
 
 const char* kDemosUsage = R"(usage: manibench demos generate|merge|replay|convert|info ...
 
-  generate TASK --policy NAME|PATH.so --out FILE.h5 [options]
-      Runs the policy on the split's objects in worker processes (as eval
-      does: same seeds, same isolation) and keeps the successful episodes,
+  generate TASK --policy NAME|PATH.so|PATH.py --out FILE.h5 [options]
+      Runs the policy (a plugin by name, a library, or a Python policy
+      class, as for eval) on the split's objects in worker processes (as
+      eval does: same seeds, same isolation) and keeps the successful episodes,
       each ending at its first success, until --per-object of every object.
       Ctrl-C (or SIGTERM/SIGHUP) stops and leaves a readable file with every
       trajectory finished so far.
@@ -43,7 +45,8 @@ const char* kDemosUsage = R"(usage: manibench demos generate|merge|replay|conver
         --seed S               base seed of the episode seeds (default 0)
         --obs MODE             observations recorded: state (default: the
                                configuration's), pointcloud or rgbd
-        --policy-config FILE   YAML handed to the policy's create
+        --policy-config FILE   YAML handed to the policy's create (not with
+                               PATH.py)
         --action-noise SIGMA   add Gaussian noise of this standard deviation
                                to every action before it is executed (seeded
                                by the episode); the file keeps the executed
@@ -101,44 +104,21 @@ std::string onePositional(const Arguments& args, const std::string& what) {
   return args.positional[0];
 }
 
-// generate's options but the policy, the sandbox and the configuration.
+// generate's own options (the policy, the configuration and the options
+// eval takes too are policy_run.hpp's).
 GenerationOptions parseGenerationOptions(const Arguments& args, const std::string& task) {
   GenerationOptions options;
   EvaluationOptions& evaluation = options.evaluation;
   evaluation.task = task;
-  evaluation.split = parseSplit(args, "train", kDemosUsage);
-  evaluation.seed = parseSeed(valueOr(args, "seed", "0"), kDemosUsage);
-  evaluation.workers = unsigned(std::min<uint64_t>(parseCount(args, "workers", 1), 256));
+  parseWorkerOptions(args, "train", kDemosUsage, evaluation);
   if (args.options.count("action-noise")) {
     char* end = nullptr;
     evaluation.action_noise = std::strtod(args.options.at("action-noise").c_str(), &end);
     if (*end || !(evaluation.action_noise >= 0) || !std::isfinite(evaluation.action_noise))
       throw UsageError("--action-noise needs a non-negative number", kDemosUsage);
   }
-  for (const char* option : {"step-timeout", "env-timeout"})
-    if (args.options.count(option)) {
-      char* end = nullptr;
-      const double seconds = std::strtod(args.options.at(option).c_str(), &end);
-      if (*end || !(seconds > 0)) throw UsageError(std::string("--") + option + " needs a positive number", kDemosUsage);
-      (std::string(option) == "step-timeout" ? evaluation.step_timeout : evaluation.environment_timeout) = seconds;
-    }
-  if (args.options.count("objects")) {
-    try {
-      evaluation.objects = parseIdList(args.options.at("objects"));
-    } catch (const InvalidArgument& e) {
-      throw UsageError(e.what(), kDemosUsage);
-    }
-  }
   options.per_object = uint32_t(parseCount(args, "per-object", 1));
   options.max_attempts = uint32_t(parseCount(args, "max-attempts", 10 * uint64_t(options.per_object)));
-  if (args.options.count("policy-config")) {
-    std::ifstream in(args.options.at("policy-config"));
-    if (!in) throw std::runtime_error("cannot read the policy configuration '" + args.options.at("policy-config") + "'");
-    std::stringstream text;
-    text << in.rdbuf();
-    evaluation.policy_config = text.str();
-  }
-
   if (args.options.count("shard")) {
     try {
       parseShard(args.options.at("shard"), options.shard, options.shards);
@@ -197,6 +177,64 @@ int reportGeneration(const GenerationResult& result, const GenerationOptions& op
   return 0;
 }
 
+// Where this process writes: the file, or (resumed, or trajectories
+// arriving from ranks in any order) a part that is merged into it in the
+// run's order; another rank writes a scratch file of its own.
+std::string choosePartPath(const std::string& out, bool resume, const PolicyRun& run) {
+  if (resume) return out + ".rest.h5";
+  if (run.mpi && run.writer) return out + ".unordered.h5";
+  if (run.writer) return out;
+  const char* tmp = std::getenv("TMPDIR");
+  return std::string(tmp && *tmp ? tmp : "/tmp") + "/manibench-demos-rank" + std::to_string(run.mpi->getRank()) +
+         "-" + std::to_string(getpid()) + ".h5";
+}
+
+// What the file records of its making.
+DemoFileInfo describeGeneration(const PluginRegistry& registry, const PolicyRun& run, const std::string& task,
+                                const std::string& policy, int argc, char** argv) {
+  DemoFileInfo info;
+  info.manibench_version = getManibenchVersion();
+  info.task = run.task_id.task;
+  info.environment_id = task;
+  info.config = formatConfig(run.config);
+  info.plugins = describePlugins(registry);
+  const LoadedLibrary& library = registry.getLibraries()[registry.getEntry(PluginKind::Policy, policy).library];
+  info.policy = policy + " (" + library.path + ", version " + library.version + ")";
+  info.created = formatUtcNow();
+  info.command = joinCommand(argc, argv);
+  return info;
+}
+
+void setProgressHook(const PolicyRun& run, GenerationHooks& hooks) {
+  if (run.progress_bar)
+    hooks.on_progress = [](const GenerationProgress& p) {
+      std::string details = ", " + std::to_string(p.episodes) + " episodes";
+      if (p.failures) details += ", " + std::to_string(p.failures) + " failed";
+      drawProgressBar(p.kept, p.wanted, "trajectories", details, p.elapsed);
+    };
+  if (run.progress_lines)
+    hooks.on_progress = [lines = ProgressLines()](const GenerationProgress& p) mutable {
+      if (!lines.isDue(p.elapsed, p.kept >= p.wanted)) return;
+      std::cerr << "progress: " << p.kept << " of " << p.wanted << " trajectories (every rank), " << p.episodes
+                << " episodes here, " << formatDuration(p.elapsed) << " elapsed\n";
+    };
+}
+
+// A rank but 0: its trajectories go to rank 0; exit status 0 (as eval's).
+int generateOnOtherRank(const PluginRegistry& registry, const GenerationOptions& options, const PolicyRun& run,
+                        const std::string& path, const DemoFileInfo& info, const GenerationHooks& hooks,
+                        RankedGeneration& ranked) {
+  try {
+    const GenerationResult part = generateDemonstrations(registry, options, run.factory, path, info, hooks);
+    ranked.finish(formatGenerationResult(part, options.per_object, options.max_attempts));
+  } catch (const std::exception& e) {
+    std::cerr << "manibench: rank " << run.mpi->getRank() << ": " << e.what() << "\n";
+    ranked.fail(e.what());
+  }
+  for (const std::string& file : {path, getDemoJsonPath(path)}) std::filesystem::remove(file);
+  return 0;
+}
+
 int generate(int argc, char** argv) {
   const Arguments args = parseArguments(
       argc, argv, 3,
@@ -209,66 +247,25 @@ int generate(int argc, char** argv) {
   if (!args.options.count("out")) throw UsageError("demos generate needs --out FILE.h5", kDemosUsage);
   const std::string task = args.positional[0];
   const std::string out = args.options.at("out");
-
   GenerationOptions options = parseGenerationOptions(args, task);
   EvaluationOptions& evaluation = options.evaluation;
 
   PluginRegistry registry;
   loadPlugins(registry);
-  evaluation.policy = resolvePolicy(registry, args.options.at("policy"));
-  const PluginEntry& policy = registry.getEntry(PluginKind::Policy, evaluation.policy);
-  {
-    std::vector<std::string> policy_files = {registry.getLibraries()[policy.library].path};
-    if (args.options.count("policy-config")) policy_files.push_back(args.options.at("policy-config"));
-    applySandboxOptions(args, evaluation, policy_files, kDemosUsage);
-  }
-  const TaskId task_id = resolveTaskId(registry, task);
-  ConfigSources sources = getConfigSources(args, parseObservationMode(args, kDemosUsage));
-  for (const std::string& file : sources.files) evaluation.config_notes.push_back("--config " + file);
-  for (const std::string& set : sources.overrides) evaluation.config_notes.push_back("--set " + set);
-  applyPolicyController(registry, evaluation.policy, args, sources, kDemosUsage);
-  const ConfigNode config = loadTaskConfig(registry, task, sources);
-  const EnvironmentOptions environment = calcEnvironmentOptions(config);  // bad values fail here
-  // Under mpirun the ranks share the objects; rank 0 alone writes the file.
-  std::unique_ptr<MpiRanks> mpi;
-  if (MpiRanks::isStartedByMpi()) mpi = std::make_unique<MpiRanks>();
-  const bool writer = !mpi || mpi->getRank() == 0;
-  const bool resume = writer && args.options.count("resume") && std::filesystem::exists(out);
-  if ((options.shards > 1 || resume || mpi) && evaluation.objects.empty()) {
+  const PolicyRun run = preparePolicyRun(registry, args, task, kDemosUsage, evaluation);
+  const bool resume = run.writer && args.options.count("resume") && std::filesystem::exists(out);
+  if ((options.shards > 1 || resume || run.mpi) && evaluation.objects.empty()) {
     // A share of the objects, or those left, is taken from the whole list,
     // which the file records: the split's, as the workers will see it.
-    const TaskInstance probe(registry, task_id.task, environment.task_config);
-    evaluation.objects = task_id.isFixed()
-                             ? selectFixedObjects(task_id, probe.listObjects("train"), probe.listObjects("test"))
-                             : probe.listObjects(evaluation.split);
+    const TaskInstance probe(registry, run.task_id.task, run.environment.task_config);
+    evaluation.objects = run.task_id.isFixed() ? selectFixedObjects(run.task_id, probe.listObjects("train"),
+                                                                    probe.listObjects("test"))
+                                               : probe.listObjects(evaluation.split);
   }
-  // Where this process writes: the file, or (resumed, or trajectories
-  // arriving from ranks in any order) a part that is merged into it in the
-  // run's order; another rank writes a scratch file of its own.
-  std::string path = out;
+  const std::string path = choosePartPath(out, resume, run);
+  const DemoFileInfo info = describeGeneration(registry, run, task, evaluation.policy, argc, argv);
   if (resume) {
     for (const std::string& object : findDoneObjects(out)) options.done_objects.insert(object);
-    path = out + ".rest.h5";
-  } else if (mpi && writer) {
-    path = out + ".unordered.h5";
-  } else if (!writer) {
-    const char* tmp = std::getenv("TMPDIR");
-    path = std::string(tmp && *tmp ? tmp : "/tmp") + "/manibench-demos-rank" + std::to_string(mpi->getRank()) +
-           "-" + std::to_string(getpid()) + ".h5";
-  }
-
-  DemoFileInfo info;
-  info.manibench_version = getManibenchVersion();
-  info.task = task_id.task;
-  info.environment_id = task;
-  info.config = formatConfig(config);
-  info.plugins = describePlugins(registry);
-  const LoadedLibrary& policy_library = registry.getLibraries()[policy.library];
-  info.policy = evaluation.policy + " (" + policy_library.path + ", version " + policy_library.version + ")";
-  info.created = formatUtcNow();
-  info.command = joinCommand(argc, argv);
-
-  if (resume) {
     // Another run's file is an error before anything runs.
     DemoFileInfo expected = info;
     expected.generation = formatGeneration(options, evaluation.objects, options.max_attempts);
@@ -276,50 +273,17 @@ int generate(int argc, char** argv) {
     if (!difference.empty())
       throw std::runtime_error("--resume: " + out + " is of another generation (" + difference + " here)");
   }
-  const EnvironmentFactory factory = [&registry, task, sources] {
-    return makeEnvironment(registry, task, sources, true);
-  };
-  const bool progress = writer && !args.options.count("no-progress") && isatty(STDERR_FILENO);
   GenerationHooks hooks;
-  if (progress)
-    hooks.on_progress = [](const GenerationProgress& p) {
-      std::string details = ", " + std::to_string(p.episodes) + " episodes";
-      if (p.failures) details += ", " + std::to_string(p.failures) + " failed";
-      drawProgressBar(p.kept, p.wanted, "trajectories", details, p.elapsed);
-    };
-  if (mpi && writer && !progress && !args.options.count("no-progress"))
-    hooks.on_progress = [last = -1.0](const GenerationProgress& p) mutable {
-      if (p.elapsed - last < 10 && p.kept < p.wanted) return;
-      last = p.elapsed;
-      std::cerr << "progress: " << p.kept << " of " << p.wanted << " trajectories (every rank), " << p.episodes
-                << " episodes here, " << formatDuration(p.elapsed) << " elapsed\n";
-    };
-  hooks.should_stop = [] { return StopSignals::isRequested(); };
+  setProgressHook(run, hooks);
   std::optional<StopSignals> stop_signals(std::in_place);
   std::optional<RankedGeneration> ranked;
-  if (mpi) {
-    ranked.emplace(*mpi);
-    ranked->prepare(options, hooks, hooks.should_stop);
-  }
-  if (!writer) {
-    try {
-      const GenerationResult part = generateDemonstrations(registry, options, factory, path, info, hooks);
-      ranked->finish(formatGenerationResult(part, options.per_object,
-                                            options.max_attempts));
-    } catch (const std::exception& e) {
-      std::cerr << "manibench: rank " << mpi->getRank() << ": " << e.what() << "\n";
-      ranked->fail(e.what());
-    }
-    for (const std::string& file : {path, getDemoJsonPath(path)}) std::filesystem::remove(file);
-    return 0;
-  }
+  shareAmongRanks(run, options, hooks, ranked);
+  if (!run.writer) return generateOnOtherRank(registry, options, run, path, info, hooks, *ranked);
   std::cout << "generating " << options.per_object << " trajectory(ies) per object of " << task << " ("
-            << evaluation.split << " split) with policy " << evaluation.policy << ", "
-            << evaluation.workers << " worker(s)"
-            << (mpi ? ", " + std::to_string(mpi->getSize()) + " MPI rank(s)" : std::string()) << ", into " << out
-            << "\n"
+            << evaluation.split << " split) with policy " << evaluation.policy << ", " << evaluation.workers
+            << " worker(s)" << (run.mpi ? ", " + std::to_string(run.mpi->getSize()) + " MPI rank(s)" : std::string())
+            << ", into " << out << "\n"
             << std::flush;
-  GenerationResult result;
   std::size_t own = 0;
   for (std::size_t i = 0; i < evaluation.objects.size(); ++i)
     own += i % options.shards == options.shard && !options.done_objects.count(evaluation.objects[i]);
@@ -327,9 +291,9 @@ int generate(int argc, char** argv) {
     std::cout << out << " has every object of its run: nothing to resume\n";
     return 0;
   }
-  result = generateDemonstrations(registry, options, factory, path, info, hooks);
+  GenerationResult result = generateDemonstrations(registry, options, run.factory, path, info, hooks);
   stop_signals.reset();
-  if (progress) std::cerr << "\n";
+  if (run.progress_bar) std::cerr << "\n";
   if (ranked)
     for (const std::string& error : ranked->getErrors()) std::cerr << "manibench: " << error << "\n";
   if (path != out) result.trajectories = mergeParts(out, path, resume, info, options);

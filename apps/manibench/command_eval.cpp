@@ -18,6 +18,7 @@
 
 #include "cli.hpp"
 #include "mpi_ranks.hpp"
+#include "policy_run.hpp"
 
 namespace manibench::cli {
 
@@ -39,11 +40,7 @@ Options:
   --task TASK             the task (or give it as the first word); a fixed-object
                           id <Task>_<object>-v<N> (e.g. Reach_3-v0) evaluates
                           only those objects, whatever --split says
-  --policy NAME|PATH.so   policy plugin by name, or a library file to load
-  --policy PATH.py        a Python policy class (act(obs), optional reset()),
-                          run by the `python` policy plugin (docs/python.md)
-  --policy-config FILE    YAML handed to the policy's create
-  --obs MODE              observation mode: state, pointcloud or rgbd
+)" + std::string(kPolicyUsage) + R"(  --obs MODE              observation mode: state, pointcloud or rgbd
                           (default: the configuration's observation.mode)
   --split train|test      objects to evaluate on (default test)
   --objects ID,ID,...     only these objects of the split
@@ -84,29 +81,11 @@ difference.
 )";
 const char* const kEvalUsage = kEvalUsageText.c_str();
 
-double parsePositive(const std::string& text, const std::string& option) {
-  try {
-    std::size_t used = 0;
-    const double value = std::stod(text, &used);
-    if (used == text.size() && std::isfinite(value) && value > 0) return value;
-  } catch (const std::exception&) {
-  }
-  throw UsageError(option + " needs a positive number, got '" + text + "'", kEvalUsage);
-}
-
 // One line, redrawn in place on the terminal.
 void drawProgress(const EvaluationProgress& p) {
   std::string details = ", " + std::to_string(p.successes) + " successful";
   if (p.failures) details += ", " + std::to_string(p.failures) + " failed";
   drawProgressBar(p.done, p.total, "episodes", details, p.elapsed);
-}
-
-std::string readTextFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot read the policy configuration '" + path + "'");
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 bool sameResults(const EvaluationResult& a, const EvaluationResult& b) {
@@ -116,20 +95,16 @@ bool sameResults(const EvaluationResult& a, const EvaluationResult& b) {
   return x.str() == y.str();
 }
 
-}  // namespace
+// Under mpirun: a line now and then (Slurm's log keeps them too).
+void printProgressLine(const EvaluationProgress& p) {
+  static ProgressLines lines;
+  if (!lines.isDue(p.elapsed, p.done >= p.total)) return;
+  std::cerr << "progress: " << p.done << " of " << p.total << " episodes (every rank), " << p.successes
+            << " successful, " << formatDuration(p.elapsed) << " elapsed\n";
+}
 
-// The options that need no plugin: the episode list, workers, timeouts,
-// the shard.
-EvaluationOptions parseEvaluationOptions(const Arguments& args, const std::string& task) {
-  EvaluationOptions options;
-  options.task = task;
-  options.split = parseSplit(args, "test", kEvalUsage);
-  options.seed = parseSeed(valueOr(args, "seed", "0"), kEvalUsage);
-  const uint64_t workers = parseSeed(valueOr(args, "workers", "1"), kEvalUsage, "--workers");
-  if (workers < 1 || workers > 256) throw UsageError("--workers must be 1 to 256", kEvalUsage);
-  options.workers = unsigned(workers);
-  options.step_timeout = parsePositive(valueOr(args, "step-timeout", "10"), "--step-timeout");
-  options.environment_timeout = parsePositive(valueOr(args, "env-timeout", "300"), "--env-timeout");
+// eval's own options: the episode list (levels, the shard).
+void parseEpisodeList(const Arguments& args, EvaluationOptions& options) {
   try {
     if (args.options.count("levels")) {
       if (args.options.count("episodes-per-object"))
@@ -142,22 +117,10 @@ EvaluationOptions parseEvaluationOptions(const Arguments& args, const std::strin
         throw UsageError("--episodes-per-object must be 1 to 1000000", kEvalUsage);
       for (uint64_t level = 0; level < n; ++level) options.levels.push_back(level);
     }
-    if (args.options.count("objects")) options.objects = parseIdList(args.options.at("objects"));
     if (args.options.count("shard")) parseShard(args.options.at("shard"), options.shard, options.shards);
   } catch (const InvalidArgument& e) {
     throw UsageError(e.what(), kEvalUsage);
   }
-  return options;
-}
-
-// Under mpirun stderr is a pipe, not the terminal: a line now and then
-// (Slurm's log keeps them too).
-void printProgressLine(const EvaluationProgress& p) {
-  static double last = -1;
-  if (p.elapsed - last < 10 && p.done < p.total) return;
-  last = p.elapsed;
-  std::cerr << "progress: " << p.done << " of " << p.total << " episodes (every rank), " << p.successes
-            << " successful, " << formatDuration(p.elapsed) << " elapsed\n";
 }
 
 // A rank but 0: runs its part, sends each record to rank 0, prints nothing
@@ -203,6 +166,90 @@ int mergeEvaluations(int argc, char** argv) {
   return 0;
 }
 
+// The journal of --out; with --resume, what it holds is not run again.
+void prepareJournal(const Arguments& args, const std::string& out_dir, EvaluationOptions& options) {
+  options.journal_path = (std::filesystem::path(out_dir) / kJournalFileName).string();
+  if (!args.options.count("resume") || !std::filesystem::exists(options.journal_path)) return;
+  const EvaluationJournal journal = readJournal(options.journal_path);
+  options.resumed = journal.result.episodes;
+  options.resumed_header = journal.header;
+  std::cout << "resuming: " << options.resumed.size() << " episode(s) done in " << options.journal_path << "\n";
+}
+
+void printEvaluationStart(const EvaluationOptions& options, const PolicyRun& run) {
+  std::cout << "evaluating policy " << options.policy << " on " << options.task << " ("
+            << (run.task_id.isFixed() ? "its fixed objects" : options.split + " split") << "), "
+            << options.levels.size() << " level(s) per object, seed " << options.seed << ", " << options.workers
+            << " worker(s)"
+            << (options.shards > 1
+                    ? ", shard " + std::to_string(options.shard + 1) + "/" + std::to_string(options.shards)
+                    : std::string())
+            << (run.mpi ? ", " + std::to_string(run.mpi->getSize()) + " MPI rank(s)" : std::string())
+            << ", the policy "
+            << (options.sandbox_policy ? "sandboxed (" + describeSandbox() + ")"
+                                       : std::string("in the workers (--trusted-policy)"))
+            << "\n"
+            << std::flush;
+}
+
+// The evaluation; with --benchmark, first with one worker into `baseline`
+// (a run stopped then is the result, and the benchmark is off).
+EvaluationResult runEvaluation(const PluginRegistry& registry, const EvaluationOptions& options,
+                               const PolicyRun& run, const EvaluationHooks& hooks, bool& benchmark,
+                               EvaluationResult& baseline) {
+  if (benchmark) {
+    EvaluationOptions one = options;
+    one.workers = 1;
+    std::cout << "benchmark: first with 1 worker, then with " << options.workers << "\n" << std::flush;
+    one.journal_path.clear();
+    baseline = evaluatePolicy(registry, one, run.factory, hooks);
+    if (run.progress_bar) std::cerr << "\n";
+    if (baseline.interrupted) {
+      benchmark = false;
+      return baseline;
+    }
+  }
+  EvaluationResult result = evaluatePolicy(registry, options, run.factory, hooks);
+  if (run.progress_bar) std::cerr << "\n";
+  return result;
+}
+
+// The table, the files, the exit status.
+int reportEvaluation(const EvaluationOptions& options, const EvaluationResult& result, bool benchmark,
+                     const EvaluationResult& baseline, const std::string& out_dir,
+                     const std::vector<std::string>& rank_errors) {
+  std::cout << "policy " << options.policy << " (" << result.policy_library << ", version "
+            << result.policy_library_version << "), controller " << result.task.controller << ", observation "
+            << toString(result.task.observation_mode) << "\n\n";
+  printEvaluationTable(std::cout, result);
+  std::cout << "\n"
+            << result.episodes.size() << " of " << result.planned.size() << " episodes in " << std::fixed
+            << std::setprecision(2) << result.seconds << " s (" << std::setprecision(1)
+            << (result.seconds > 0 ? result.episodes.size() / result.seconds : 0) << " episodes/s, "
+            << options.workers << " worker(s), " << result.worker_restarts << " worker restart(s))\n";
+  if (benchmark) {
+    std::cout << "benchmark: 1 worker " << std::setprecision(2) << baseline.seconds << " s, " << options.workers
+              << " workers " << result.seconds << " s, speedup "
+              << (result.seconds > 0 ? baseline.seconds / result.seconds : 0) << "x; results "
+              << (sameResults(baseline, result) ? "identical" : "DIFFER") << "\n";
+  }
+  std::cout.unsetf(std::ios::fixed);
+  for (const std::string& error : rank_errors) std::cerr << "manibench: " << error << "\n";
+  for (const std::string& path : writeEvaluationFiles(out_dir, result)) std::cout << "wrote " << path << "\n";
+  if (result.interrupted) {
+    std::cerr << "manibench: evaluation stopped (" << result.stop_reason << "): " << result.episodes.size()
+              << " of " << result.planned.size() << " episodes; partial results written\n";
+    return result.stop_reason == "interrupted" ? 130 : 1;
+  }
+  if (benchmark && !sameResults(baseline, result)) {
+    std::cerr << "manibench: the runs with 1 and " << options.workers << " workers gave different results\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
 int commandEval(int argc, char** argv) {
   if (argc > 2 && std::string(argv[2]) == "merge") return mergeEvaluations(argc, argv);
   const Arguments args =
@@ -223,153 +270,34 @@ int commandEval(int argc, char** argv) {
   if (!args.positional.empty()) task = args.positional[0];
   if (task.empty()) throw UsageError("eval needs a TASK", kEvalUsage);
   if (!args.options.count("policy"))
-    throw UsageError("eval needs --policy NAME|PATH.so", kEvalUsage);
-
-  EvaluationOptions options = parseEvaluationOptions(args, task);
-
-  ConfigSources sources = getConfigSources(args, parseObservationMode(args, kEvalUsage));
-  for (const std::string& file : sources.files) options.config_notes.push_back("--config " + file);
-  for (const std::string& set : sources.overrides) options.config_notes.push_back("--set " + set);
-  if (args.options.count("policy-config")) {
-    options.policy_config = readTextFile(args.options.at("policy-config"));
-    options.config_notes.push_back("--policy-config " + args.options.at("policy-config"));
-  }
-  // A Python file is the `python` policy plugin's configuration (its
-  // embedded interpreter starts in each worker, after the fork).
-  std::string policy_arg = args.options.at("policy");
-  std::vector<std::string> policy_files;
-  if (args.options.count("policy-config")) policy_files.push_back(args.options.at("policy-config"));
-  if (isPythonPolicy(policy_arg) || policy_arg.find('/') != std::string::npos)
-    policy_files.push_back(policy_arg);
-  if (isPythonPolicy(policy_arg)) {
-    if (args.options.count("policy-config"))
-      throw UsageError("--policy FILE.py takes no --policy-config (name the file in a "
-                       "configuration for --policy python instead)", kEvalUsage);
-    options.policy_config = makePythonPolicyConfig(policy_arg);
-    options.config_notes.push_back("--policy " + policy_arg);
-    policy_arg = "python";
-  }
+    throw UsageError("eval needs --policy NAME|PATH.so|PATH.py", kEvalUsage);
+  EvaluationOptions options;
+  options.task = task;
+  parseWorkerOptions(args, "test", kEvalUsage, options);
+  parseEpisodeList(args, options);
   const std::string out_dir = valueOr(args, "out", "results");
+  bool benchmark = args.options.count("benchmark") != 0;
 
-  // Everything that can be checked here fails before any worker starts: the
-  // policy library (loader errors), the names, the configuration.
+  // Everything that can be checked here fails before any worker starts.
   PluginRegistry registry;
   loadPlugins(registry);
-  options.policy = resolvePolicy(registry, policy_arg);
-  const PluginEntry& policy_entry = registry.getEntry(PluginKind::Policy, options.policy);
-  applyPolicyController(registry, options.policy, args, sources, kEvalUsage);
-  policy_files.push_back(registry.getLibraries()[policy_entry.library].path);
-  applySandboxOptions(args, options, policy_files, kEvalUsage);
-  const TaskId task_id = resolveTaskId(registry, task);
-  {
-    const ConfigNode config = loadTaskConfig(registry, task, sources);
-    const EnvironmentOptions environment = calcEnvironmentOptions(config);
-    // A fixed-object id whose objects do not exist fails here, not in every
-    // worker.
-    if (task_id.isFixed()) {
-      const TaskInstance probe(registry, task_id.task, environment.task_config);
-      selectFixedObjects(task_id, probe.listObjects("train"), probe.listObjects("test"));
-    }
-  }
-  const EnvironmentFactory factory = [&registry, task, sources] {
-    return makeEnvironment(registry, task, sources, true);
-  };
-
-  // Under mpirun: the ranks share the episodes; rank 0 alone prints and
-  // writes.
-  std::unique_ptr<MpiRanks> mpi;
-  if (MpiRanks::isStartedByMpi()) mpi = std::make_unique<MpiRanks>();
-  const bool writer = !mpi || mpi->getRank() == 0;
-  bool benchmark = args.options.count("benchmark") != 0;
-  if (benchmark && mpi) throw UsageError("--benchmark runs without mpirun", kEvalUsage);
-  if (writer) {
-    options.journal_path = (std::filesystem::path(out_dir) / kJournalFileName).string();
-    if (args.options.count("resume") && std::filesystem::exists(options.journal_path)) {
-      const EvaluationJournal journal = readJournal(options.journal_path);
-      options.resumed = journal.result.episodes;
-      options.resumed_header = journal.header;
-      std::cout << "resuming: " << options.resumed.size() << " episode(s) done in "
-                << options.journal_path << "\n";
-    }
-  }
-
-  const bool progress = writer && !args.options.count("no-progress") && isatty(STDERR_FILENO);
+  const PolicyRun run = preparePolicyRun(registry, args, task, kEvalUsage, options);
+  if (benchmark && run.mpi) throw UsageError("--benchmark runs without mpirun", kEvalUsage);
+  if (run.writer) prepareJournal(args, out_dir, options);
   EvaluationHooks hooks;
-  if (progress) hooks.on_progress = drawProgress;
-  if (mpi && writer && !progress && !args.options.count("no-progress")) hooks.on_progress = printProgressLine;
-  hooks.should_stop = [] { return StopSignals::isRequested(); };
+  if (run.progress_bar) hooks.on_progress = drawProgress;
+  if (run.progress_lines) hooks.on_progress = printProgressLine;
   std::optional<StopSignals> stop_signals(std::in_place);
   std::optional<RankedEvaluation> ranked;
-  if (mpi) {
-    ranked.emplace(*mpi);
-    ranked->prepare(options, hooks, hooks.should_stop);
-  }
-  if (!writer) return runOtherRank(registry, options, factory, hooks, *ranked, mpi->getRank());
+  shareAmongRanks(run, options, hooks, ranked);
+  if (!run.writer) return runOtherRank(registry, options, run.factory, hooks, *ranked, run.mpi->getRank());
 
-  std::cout << "evaluating policy " << options.policy << " on " << task << " ("
-            << (task_id.isFixed() ? "its fixed objects" : options.split + " split") << "), " << options.levels.size() << " level(s) per object, seed " << options.seed
-            << ", " << options.workers << " worker(s)"
-            << (options.shards > 1 ? ", shard " + std::to_string(options.shard + 1) + "/" +
-                                         std::to_string(options.shards)
-                                   : std::string())
-            << (mpi ? ", " + std::to_string(mpi->getSize()) + " MPI rank(s)" : std::string())
-            << ", the policy "
-            << (options.sandbox_policy ? "sandboxed (" + describeSandbox() + ")"
-                                       : std::string("in the workers (--trusted-policy)"))
-            << "\n"
-            << std::flush;
-  EvaluationResult baseline, result;
-  if (benchmark) {
-    EvaluationOptions one = options;
-    one.workers = 1;
-    std::cout << "benchmark: first with 1 worker, then with " << options.workers << "\n"
-              << std::flush;
-    one.journal_path.clear();
-    baseline = evaluatePolicy(registry, one, factory, hooks);
-    if (progress) std::cerr << "\n";
-    if (baseline.interrupted) {
-      benchmark = false;
-      result = baseline;
-    }
-  }
-  if (!result.interrupted) result = evaluatePolicy(registry, options, factory, hooks);
-  if (progress) std::cerr << "\n";
+  printEvaluationStart(options, run);
+  EvaluationResult baseline;
+  const EvaluationResult result = runEvaluation(registry, options, run, hooks, benchmark, baseline);
   stop_signals.reset();
-
-  std::cout << "policy " << options.policy << " (" << result.policy_library << ", version "
-            << result.policy_library_version << "), controller " << result.task.controller
-            << ", observation " << toString(result.task.observation_mode) << "\n\n";
-  printEvaluationTable(std::cout, result);
-  std::cout << "\n"
-            << result.episodes.size() << " of " << result.planned.size() << " episodes in "
-            << std::fixed << std::setprecision(2) << result.seconds << " s ("
-            << std::setprecision(1)
-            << (result.seconds > 0 ? result.episodes.size() / result.seconds : 0) << " episodes/s, "
-            << options.workers << " worker(s), " << result.worker_restarts
-            << " worker restart(s))\n";
-  if (benchmark) {
-    std::cout << "benchmark: 1 worker " << std::setprecision(2) << baseline.seconds << " s, "
-              << options.workers << " workers " << result.seconds << " s, speedup "
-              << (result.seconds > 0 ? baseline.seconds / result.seconds : 0) << "x; results "
-              << (sameResults(baseline, result) ? "identical" : "DIFFER") << "\n";
-  }
-  std::cout.unsetf(std::ios::fixed);
-  if (ranked)
-    for (const std::string& error : ranked->getErrors()) std::cerr << "manibench: " << error << "\n";
-  for (const std::string& path : writeEvaluationFiles(out_dir, result))
-    std::cout << "wrote " << path << "\n";
-  if (result.interrupted) {
-    std::cerr << "manibench: evaluation stopped (" << result.stop_reason
-              << "): " << result.episodes.size() << " of " << result.planned.size()
-              << " episodes; partial results written\n";
-    return result.stop_reason == "interrupted" ? 130 : 1;
-  }
-  if (benchmark && !sameResults(baseline, result)) {
-    std::cerr << "manibench: the runs with 1 and " << options.workers
-              << " workers gave different results\n";
-    return 1;
-  }
-  return 0;
+  return reportEvaluation(options, result, benchmark, baseline, out_dir,
+                          ranked ? ranked->getErrors() : std::vector<std::string>());
 }
 
 }  // namespace manibench::cli

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,7 +25,7 @@
 namespace manibench::cli {
 namespace {
 
-const char* kRenderUsage = R"(usage: manibench render TASK --out DIR [options]
+const std::string kRenderUsageText = R"(usage: manibench render TASK --out DIR [options]
 
 Resets TASK, renders its cameras (the configuration's `cameras`), each at
 its own size (they may differ, in either --obs mode), and writes into DIR,
@@ -50,10 +51,13 @@ Options:
   --obs pointcloud|rgbd   what the --video policy observes; pointcloud also
                           makes pointcloud.ply that observation (default rgbd)
   --video FILE.mp4        record an episode (needs --policy)
-  --policy NAME|PATH.so   policy acting in the recorded episode
+)" + std::string(kPolicyUsage) + R"(                          the policy acting in the recorded episode
   --video-size WxH        video frame size (default 640x480)
+  --controller NAME       override the task's default controller (default: the
+                          one the policy names)
   --config FILE, --set KEY=VALUE   configuration layers, as for run
 )";
+const char* const kRenderUsage = kRenderUsageText.c_str();
 
 std::string fileName(const std::string& name) {
   std::string out = name;
@@ -81,11 +85,9 @@ void writeCamera(const std::filesystem::path& dir, const CameraImages& image, co
   }
 }
 
-void recordVideo(PluginRegistry& registry, Environment& env, const std::string& policy_arg,
-                 const std::string& object, uint64_t seed, const std::string& path, int width,
-                 int height) {
-  const std::string policy_name = resolvePolicy(registry, policy_arg);
-  PolicyInstance policy(registry, policy_name, "", env.calcPolicyLayout());
+void recordVideo(const PluginRegistry& registry, Environment& env, const PolicyChoice& choice,
+                 const std::string& object, uint64_t seed, const std::string& path, int width, int height) {
+  PolicyInstance policy(registry, choice.name, choice.config, env.calcPolicyLayout());
   EpisodeVideo video(env, path, width, height);
   // A frame of every state a policy sees, then of the last one.
   EpisodeHooks hooks;
@@ -97,7 +99,7 @@ void recordVideo(PluginRegistry& registry, Environment& env, const std::string& 
   video.record();
   video.close();
   std::cout << "wrote " << path << ": " << video.getFrameCount() << " frames, "
-            << env.getElapsedSteps() << " steps of policy " << policy_name << "\n";
+            << env.getElapsedSteps() << " steps of policy " << choice.name << "\n";
 }
 
 }  // namespace
@@ -105,7 +107,9 @@ void recordVideo(PluginRegistry& registry, Environment& env, const std::string& 
 int commandRender(int argc, char** argv) {
   const Arguments args = parseArguments(
       argc, argv, 2,
-      {"out", "seed", "object", "split", "obs", "video", "policy", "video-size", "config", "set"}, {},
+      {"out", "seed", "object", "split", "obs", "video", "policy", "policy-config", "video-size", "controller",
+       "config", "set"},
+      {},
       kRenderUsage);
   if (args.help) {
     std::cout << kRenderUsage;
@@ -120,7 +124,7 @@ int commandRender(int argc, char** argv) {
   const uint64_t seed = parseSeed(valueOr(args, "seed", "0"), kRenderUsage);
   const std::string video = valueOr(args, "video", "");
   if (!video.empty() && !args.options.count("policy"))
-    throw UsageError("--video needs --policy NAME", kRenderUsage);
+    throw UsageError("--video needs --policy NAME|PATH.so|PATH.py", kRenderUsage);
   const auto [video_width, video_height] = parseVideoSize(args, kRenderUsage);
 
   // The environment's own observation mode: the files come from
@@ -135,7 +139,14 @@ int commandRender(int argc, char** argv) {
 
   PluginRegistry registry;
   loadPlugins(registry);
-  const ConfigSources sources = getConfigSources(args, env_mode);
+  ConfigSources sources = getConfigSources(args, env_mode);
+  // The --video policy, resolved (and its controller configured) before
+  // anything is built.
+  std::optional<PolicyChoice> policy;
+  if (!video.empty()) {
+    policy = choosePolicy(registry, args, kRenderUsage);
+    applyPolicyController(registry, policy->name, args, sources, kRenderUsage);
+  }
   const std::unique_ptr<Environment> env =
       makeEnvironment(registry, args.positional[0], sources, /*stop_on_success=*/true);
   const std::string object = args.options.count("object")
@@ -165,8 +176,7 @@ int commandRender(int argc, char** argv) {
             << observer.updRenderer().getTriangleCount() << " triangles; "
             << observer.updRenderer().getDeviceInfo().gl_renderer << "\nwrote " << dir.string() << "\n";
   if (!video.empty())
-    recordVideo(registry, *env, args.options.at("policy"), object, seed, video, video_width,
-                video_height);
+    recordVideo(registry, *env, *policy, object, seed, video, video_width, video_height);
   return 0;
 }
 

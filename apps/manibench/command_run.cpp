@@ -13,14 +13,13 @@ namespace manibench::cli {
 
 namespace {
 
-const char* kRunUsage = R"(usage: manibench run TASK --policy NAME|PATH.so [options]
+const std::string kRunUsageText = R"(usage: manibench run TASK --policy NAME|PATH.so|PATH.py [options]
 
 TASK is a task name or a fixed-object id <Task>_<object>-v<N> such as
 Reach_3-v0 or OpenCabinetDrawer_1000-v0 (the object is drawn from its own).
 
 Options:
-  --policy NAME|PATH.so   policy plugin by name, or a library file to load
-  --seed S                episode seed (default 0)
+)" + std::string(kPolicyUsage) + R"(  --seed S                episode seed (default 0)
   --object ID             object id (default: drawn from the split by the seed)
   --split train|test      split to draw the object from (default train)
   --controller NAME       override the task's default controller (default: the
@@ -39,6 +38,7 @@ Options:
   --config FILE           a YAML configuration layer; repeatable, later wins
   --set KEY=VALUE         one key, e.g. --set physics.accuracy=0.001; repeatable
 )";
+const char* const kRunUsage = kRunUsageText.c_str();
 
 // Column names of a layout: segment[i] (segment alone when it has one value).
 void appendColumns(std::vector<std::string>& columns, const std::string& prefix,
@@ -88,12 +88,12 @@ class TraceWriter {
   Eigen::VectorXd observation_;
 };
 
-int runOne(mb::PluginRegistry& registry, const std::string& task_name, const std::string& policy_arg,
-           const std::string& policy_config, uint64_t seed, const std::string& object_arg, const std::string& split,
-           const Arguments& args, bool stop_on_success, const std::string& trace_path,
+int runOne(mb::PluginRegistry& registry, const std::string& task_name, uint64_t seed, const std::string& object_arg,
+           const std::string& split, const Arguments& args, bool stop_on_success, const std::string& trace_path,
            const std::string& video_path) {
-  const std::string policy_name = resolvePolicy(registry, policy_arg);
-  registry.getEntry(mb::PluginKind::Policy, policy_name);  // fail before building anything
+  // The policy fails before anything is built.
+  const PolicyChoice choice = choosePolicy(registry, args, kRunUsage);
+  const std::string& policy_name = choice.name;
   mb::ConfigSources sources = getConfigSources(args, parseObservationMode(args, kRunUsage));
   applyPolicyController(registry, policy_name, args, sources, kRunUsage);
   const std::unique_ptr<mb::Environment> env_owner =
@@ -102,7 +102,7 @@ int runOne(mb::PluginRegistry& registry, const std::string& task_name, const std
   const std::string object =
       object_arg.empty() ? chooseObject(env.listObjects(split), seed, split) : object_arg;
   env.reset(object, seed);
-  mb::PolicyInstance policy(registry, policy_name, policy_config, env.calcPolicyLayout());
+  mb::PolicyInstance policy(registry, policy_name, choice.config, env.calcPolicyLayout());
   std::cout << "task " << task_name << ", policy " << policy_name << ", controller "
             << env.getControllerDescription().name << "\n";
   // A policy's failure is named by where it happened, as the environment's
@@ -166,7 +166,7 @@ int commandRun(int argc, char** argv) {
     return 0;
   }
   if (args.positional.size() != 1) throw UsageError("run needs exactly one TASK", kRunUsage);
-  if (!args.options.count("policy")) throw UsageError("run needs --policy NAME", kRunUsage);
+  if (!args.options.count("policy")) throw UsageError("run needs --policy NAME|PATH.so|PATH.py", kRunUsage);
   const std::string split = parseSplit(args, "train", kRunUsage);
   // A bad --obs or --video-size fails before the plugins load.
   parseObservationMode(args, kRunUsage);
@@ -174,8 +174,7 @@ int commandRun(int argc, char** argv) {
   const uint64_t seed = parseSeed(valueOr(args, "seed", "0"), kRunUsage);
   mb::PluginRegistry registry;
   loadPlugins(registry);
-  return runOne(registry, args.positional[0], args.options.at("policy"), readPolicyConfig(args), seed,
-                valueOr(args, "object", ""), split, args,
+  return runOne(registry, args.positional[0], seed, valueOr(args, "object", ""), split, args,
                 !args.options.count("no-early-stop"), valueOr(args, "trace", ""), valueOr(args, "video", ""));
 }
 

@@ -59,7 +59,10 @@ TASK is a task name (a random object of the split each episode) or a
 fixed-object id <Task>_<object>-v<N>, e.g. OpenCabinetDrawer_1000-v0.
 Run `manibench <command> --help` for a command's options. info, run, bench,
 render, eval, objects and config take --config FILE and --set KEY=VALUE
-(docs/configuration.md).
+(docs/configuration.md). The commands that run a policy (run, bench, render
+--video, eval, demos generate, view) take --policy NAME, a library PATH.so,
+a Python policy class PATH.py (docs/python.md) or a checkpoint PATH.pt
+(docs/learning.md).
 Plugins are searched in $MANIBENCH_PLUGIN_PATH, ~/.local/lib/manibench/plugins,
 then lib/manibench/plugins of this program's own installation (or build tree).
 )";

@@ -19,7 +19,7 @@ using namespace manibench::viewer;
 
 namespace {
 
-const char* kViewUsage = R"(usage: manibench view TASK [options]                 drive the robot by keyboard
+const std::string kViewUsageText = R"(usage: manibench view TASK [options]                 drive the robot by keyboard
        manibench view TASK --policy NAME|PATH.so|PATH.py    watch a policy
        manibench view --replay FILE.h5 [--trajectory traj_N] watch a demonstration
 
@@ -41,8 +41,7 @@ Options:
                           for the mobile Panda robots when driving by keyboard)
   --obs MODE              observation mode: state, pointcloud or rgbd
   --config FILE, --set KEY=VALUE   configuration layers, as for run
-  --policy NAME|PATH.so|PATH.py    a policy plugin, or a Python policy class
-  --policy-config FILE    YAML handed to the policy's create
+)" + std::string(cli::kPolicyUsage) + R"(                          the policy gets the controller it names, as in run
   --record FILE.h5        every episode driven (or watched) with at least one
                           step into a demonstration file (docs/demonstrations.md;
                           policy `teleop` when driving), replayable with
@@ -58,6 +57,7 @@ Options:
                           and quit; no vsync
   --no-vsync              do not wait for the display's refresh
 )";
+const char* const kViewUsage = kViewUsageText.c_str();
 
 using cli::UsageError;
 
@@ -128,8 +128,9 @@ ViewerOptions parseViewerOptions(const cli::Arguments& args, const SessionOption
   return options;
 }
 
-// --policy (a name, a library, a Python file) or, without one, the
-// controller teleoperation needs.
+// --policy (a name, a library, a Python file; as every command that runs a
+// policy: cli::choosePolicy) with the controller it names or, without one,
+// the controller teleoperation needs.
 void choosePolicy(PluginRegistry& registry, const cli::Arguments& args, SessionOptions& session) {
   if (session.mode == SessionMode::Replay) return;
   if (!args.options.count("policy")) {
@@ -137,16 +138,10 @@ void choosePolicy(PluginRegistry& registry, const cli::Arguments& args, SessionO
     return;
   }
   session.mode = SessionMode::Policy;
-  std::string policy = args.options.at("policy");
-  session.policy_config = cli::readPolicyConfig(args);
-  if (cli::isPythonPolicy(policy)) {
-    if (args.options.count("policy-config"))
-      throw UsageError("--policy FILE.py takes no --policy-config", kViewUsage);
-    session.policy_config = cli::makePythonPolicyConfig(policy);
-    policy = "python";
-  }
-  session.policy = cli::resolvePolicy(registry, policy);
-  registry.getEntry(PluginKind::Policy, session.policy);
+  const cli::PolicyChoice choice = cli::choosePolicy(registry, args, kViewUsage);
+  session.policy = choice.name;
+  session.policy_config = choice.config;
+  cli::applyPolicyController(registry, session.policy, args, session.sources, kViewUsage);
 }
 
 // --camera NAME: its index among the task's cameras.
