@@ -295,7 +295,7 @@ int generate(int argc, char** argv) {
                 << " episodes here, " << formatDuration(p.elapsed) << " elapsed\n";
     };
   hooks.should_stop = [] { return StopSignals::isRequested(); };
-  std::optional<StopSignals> stop_signals(std::in_place);
+  const StopSignals stop_signals;
   std::optional<RankedGeneration> ranked;
   if (mpi) {
     ranked.emplace(*mpi);
@@ -328,7 +328,8 @@ int generate(int argc, char** argv) {
     return 0;
   }
   result = generateDemonstrations(registry, options, factory, path, info, hooks);
-  stop_signals.reset();
+  // stop_signals lives until the files are written: a second signal must
+  // not kill the merge of what was kept.
   if (progress) std::cerr << "\n";
   if (ranked)
     for (const std::string& error : ranked->getErrors()) std::cerr << "manibench: " << error << "\n";

@@ -298,7 +298,7 @@ int commandEval(int argc, char** argv) {
   if (progress) hooks.on_progress = drawProgress;
   if (mpi && writer && !progress && !args.options.count("no-progress")) hooks.on_progress = printProgressLine;
   hooks.should_stop = [] { return StopSignals::isRequested(); };
-  std::optional<StopSignals> stop_signals(std::in_place);
+  const StopSignals stop_signals;
   std::optional<RankedEvaluation> ranked;
   if (mpi) {
     ranked.emplace(*mpi);
@@ -334,7 +334,11 @@ int commandEval(int argc, char** argv) {
   }
   if (!result.interrupted) result = evaluatePolicy(registry, options, factory, hooks);
   if (progress) std::cerr << "\n";
-  stop_signals.reset();
+  // The files first, while a stop signal still only sets a flag: a second
+  // SIGTERM (mpirun's, Slurm's) or a stdout that blocks must not cost the
+  // episodes the journal has. Under mpirun the files have to be in place
+  // within Open MPI's grace between SIGTERM and SIGKILL (1 s by default).
+  const std::vector<std::string> written = writeEvaluationFiles(out_dir, result);
 
   std::cout << "policy " << options.policy << " (" << result.policy_library << ", version "
             << result.policy_library_version << "), controller " << result.task.controller
@@ -356,8 +360,7 @@ int commandEval(int argc, char** argv) {
   std::cout.unsetf(std::ios::fixed);
   if (ranked)
     for (const std::string& error : ranked->getErrors()) std::cerr << "manibench: " << error << "\n";
-  for (const std::string& path : writeEvaluationFiles(out_dir, result))
-    std::cout << "wrote " << path << "\n";
+  for (const std::string& path : written) std::cout << "wrote " << path << "\n";
   if (result.interrupted) {
     std::cerr << "manibench: evaluation stopped (" << result.stop_reason
               << "): " << result.episodes.size() << " of " << result.planned.size()
