@@ -54,7 +54,9 @@ class Pool {
     for (unsigned i = 0; i < count; ++i) new (&slots_[i]) Slot();
   }
   ~Pool() {
-    for (std::size_t i = 0; i < workers_.size(); ++i) processes_.stop(i, true);
+    // The workers go before the slots they write.
+    for (std::size_t i = 0; i < workers_.size(); ++i) processes_.kill(i);
+    for (std::size_t i = 0; i < workers_.size(); ++i) processes_.stop(i, false);
     munmap(slots_, sizeof(Slot) * workers_.size());
   }
   Pool(const Pool&) = delete;
@@ -384,9 +386,11 @@ void Coordinator::run() {
   }
 
   // Idle workers leave at end of stream; busy ones (an interrupted run) are
-  // killed.
+  // killed, all at once before any is waited for: under mpirun the files
+  // must be written within Open MPI's grace after SIGTERM.
   for (std::size_t i = 0; i < workers.size(); ++i)
-    pool_.stop(i, result_.interrupted || workers[i].episode >= 0);
+    if (result_.interrupted || workers[i].episode >= 0) pool_.processes().kill(i);
+  for (std::size_t i = 0; i < workers.size(); ++i) pool_.stop(i, false);
   takeRemote();
   if (!result_.interrupted && records_.size() < result_.planned.size() && options_.ranks > 1 &&
       options_.rank == 0) {

@@ -112,7 +112,10 @@ WorkerPool::WorkerPool(std::size_t count, Body body, ChildOptions options)
     : body_(std::move(body)), options_(std::move(options)), workers_(count) {}
 
 WorkerPool::~WorkerPool() {
-  for (std::size_t i = 0; i < workers_.size(); ++i) stop(i, true);
+  // All killed before any is waited for: one slow to go does not hold the
+  // others' kill back.
+  for (std::size_t i = 0; i < workers_.size(); ++i) kill(i);
+  for (std::size_t i = 0; i < workers_.size(); ++i) stop(i, false);
 }
 
 void WorkerPool::start(std::size_t i) {
