@@ -31,27 +31,6 @@ std::string formatSeconds(double seconds) {
   return out.str();
 }
 
-// The zygote's control socket carries single bytes (requests for a worker).
-bool writeAll(int fd, const void* data, std::size_t size) {
-  const auto* p = static_cast<const uint8_t*>(data);
-  while (size > 0) {
-    const ssize_t n = ::send(fd, p, size, MSG_NOSIGNAL);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;
-    p += n;
-    size -= std::size_t(n);
-  }
-  return true;
-}
-
-bool readByte(int fd, char& byte) {
-  for (;;) {
-    const ssize_t n = ::read(fd, &byte, 1);
-    if (n < 0 && errno == EINTR) continue;
-    return n == 1;
-  }
-}
-
 // --- the worker process -------------------------------------------------------------------
 
 // The requests and answers, in the one wire format (<manibench/wire_format.hpp>):
@@ -114,7 +93,6 @@ std::string answer(Environment* env, const std::string& make_error, const std::s
 }
 
 int runWorker(int fd, const EnvironmentWorkers::Factory& factory) {
-  signal(SIGCHLD, SIG_DFL);
   std::unique_ptr<Environment> env;
   std::string make_error;
   try {
@@ -128,84 +106,30 @@ int runWorker(int fd, const EnvironmentWorkers::Factory& factory) {
   return 0;
 }
 
-// --- the zygote ---------------------------------------------------------------------------
-
-// Each byte read is a request for a worker; answered with the worker's pid
-// and its socket (SCM_RIGHTS), or pid 0 when the fork failed.
-int runZygote(int control, const EnvironmentWorkers::Factory& factory) {
-  signal(SIGCHLD, SIG_IGN);  // workers are reaped by the kernel
-  char request = 0;
-  while (readByte(control, request)) {
-    // Tied to the zygote, which leaves when the learner does.
-    ChildOptions options;
-    options.close_in_child = {control};
-    const Child child = spawnChild(options, [&factory](int fd) { return runWorker(fd, factory); });
-    pid_t pid = child.pid > 0 ? child.pid : 0;  // 0: none started
-    const int fd = child.fd;
-    msghdr message{};
-    iovec data{&pid, sizeof pid};
-    message.msg_iov = &data;
-    message.msg_iovlen = 1;
-    alignas(cmsghdr) char control_buffer[CMSG_SPACE(sizeof(int))] = {};
-    if (pid > 0) {
-      message.msg_control = control_buffer;
-      message.msg_controllen = sizeof control_buffer;
-      cmsghdr* c = CMSG_FIRSTHDR(&message);
-      c->cmsg_level = SOL_SOCKET;
-      c->cmsg_type = SCM_RIGHTS;
-      c->cmsg_len = CMSG_LEN(sizeof(int));
-      std::memcpy(CMSG_DATA(c), &fd, sizeof(int));
-    }
-    const bool sent = sendmsg(control, &message, MSG_NOSIGNAL) >= 0;
-    if (pid > 0) close(fd);
-    if (!sent) break;
-  }
-  return 0;
-}
-
 }  // namespace
 
 EnvironmentWorkers::EnvironmentWorkers(Factory factory, unsigned count) {
   if (count == 0) throw LearningError("at least one environment worker is needed");
-  // Ctrl-C and SIGTERM reach the whole process group: the learner stops
-  // the run and its workers with it (they read end of stream).
-  ChildOptions options;
-  options.ignore_termination = true;
-  const Child zygote = spawnChild(options, [&factory](int control) { return runZygote(control, factory); });
-  if (zygote.pid < 0) throw LearningError("cannot start the environment workers: " + zygote.error);
-  zygote_pid_ = zygote.pid;
-  zygote_fd_ = zygote.fd;
+  try {
+    zygote_ = std::make_unique<Zygote>([factory](int fd) { return runWorker(fd, factory); });
+  } catch (const std::runtime_error& e) {
+    throw LearningError(std::string("cannot start the environment workers: ") + e.what());
+  }
   for (unsigned i = 0; i < count; ++i) workers_.push_back(spawn());
 }
 
 EnvironmentWorkers::~EnvironmentWorkers() {
+  // The workers read end of stream and leave, then the zygote.
   for (Worker& w : workers_) close(w.fd);
-  close(zygote_fd_);
-  int status = 0;
-  while (waitpid(zygote_pid_, &status, 0) < 0 && errno == EINTR) {
-  }
+  zygote_.reset();
 }
 
 EnvironmentWorkers::Worker EnvironmentWorkers::spawn() {
-  const char request = 1;
-  pid_t pid = 0;
-  msghdr message{};
-  iovec data{&pid, sizeof pid};
-  message.msg_iov = &data;
-  message.msg_iovlen = 1;
-  alignas(cmsghdr) char control_buffer[CMSG_SPACE(sizeof(int))] = {};
-  message.msg_control = control_buffer;
-  message.msg_controllen = sizeof control_buffer;
-  ssize_t n = -1;
-  if (writeAll(zygote_fd_, &request, 1))
-    while ((n = recvmsg(zygote_fd_, &message, MSG_CMSG_CLOEXEC)) < 0 && errno == EINTR) {
-    }
-  const cmsghdr* c = n > 0 ? CMSG_FIRSTHDR(&message) : nullptr;
-  if (pid <= 0 || c == nullptr || c->cmsg_type != SCM_RIGHTS)
-    throw LearningError("cannot start an environment worker (the worker launcher has gone or could not fork)");
+  const Child child = zygote_->spawn();
+  if (child.pid < 0) throw LearningError("cannot start an environment worker (" + child.error + ")");
   Worker w;
-  std::memcpy(&w.fd, CMSG_DATA(c), sizeof(int));
-  w.pid = pid;
+  w.fd = child.fd;
+  w.pid = child.pid;
   return w;
 }
 

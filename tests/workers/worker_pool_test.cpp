@@ -126,6 +126,32 @@ TEST(WorkerPool, EchoesReportsADeathAndStartsAgain) {
   EXPECT_EQ(WEXITSTATUS(status), 3);
 }
 
+// The zygote forks workers on request, also after one died; its workers
+// leave when their channel closes.
+TEST(Zygote, StartsWorkersAndReplacesADeadOne) {
+  Zygote zygote([](int fd) {
+    std::string payload;
+    while (wire::receiveFrame(fd, payload)) wire::sendFrame(fd, makeText(readText(payload) + "!"));
+    return 0;
+  });
+  Child first = zygote.spawn();
+  ASSERT_GT(first.pid, 0) << first.error;
+  std::string payload;
+  ASSERT_TRUE(wire::sendFrame(first.fd, makeText("hi")));
+  ASSERT_TRUE(wire::receiveFrame(first.fd, payload));
+  EXPECT_EQ(readText(payload), "hi!");
+  kill(first.pid, SIGKILL);
+  EXPECT_FALSE(wire::receiveFrame(first.fd, payload));  // its end of stream
+  close(first.fd);
+  const Child second = zygote.spawn();
+  ASSERT_GT(second.pid, 0) << second.error;
+  EXPECT_NE(second.pid, first.pid);
+  ASSERT_TRUE(wire::sendFrame(second.fd, makeText("again")));
+  ASSERT_TRUE(wire::receiveFrame(second.fd, payload));
+  EXPECT_EQ(readText(payload), "again!");
+  close(second.fd);
+}
+
 // PR_SET_PDEATHSIG: a child's child dies with the child that started it.
 TEST(WorkerPool, AChildDiesWithItsParent) {
   int fds[2];

@@ -111,4 +111,31 @@ class WorkerPool {
   std::vector<Worker> workers_;
 };
 
+// A process forked early, before its parent has threads or state that must
+// not cross a fork (libtorch's GNU OpenMP pool: the children hang), that
+// forks the workers for it later, the first ones and the replacements: each
+// is started by spawnChild in the zygote and tied to it, and its channel is
+// handed to the parent (SCM_RIGHTS). The zygote and its workers ignore
+// SIGINT, SIGTERM and SIGHUP (they reach the whole process group; the
+// parent decides): when the parent closes a channel, or goes, they read
+// end of stream and leave.
+class Zygote {
+ public:
+  // Forks the zygote now; `body(fd)` runs in each worker. Throws
+  // std::runtime_error when it cannot.
+  explicit Zygote(std::function<int(int fd)> body);
+  // Closes the control socket and waits for the zygote to leave.
+  ~Zygote();
+  Zygote(const Zygote&) = delete;
+  Zygote& operator=(const Zygote&) = delete;
+
+  // A new worker: its pid and the parent's end of its channel, or pid -1
+  // and why (the zygote has gone or could not fork).
+  Child spawn();
+
+ private:
+  pid_t pid_ = -1;
+  int control_ = -1;
+};
+
 }  // namespace manibench

@@ -12,8 +12,8 @@
 // libtorch. The hand-over is one Unix stream socket per worker carrying
 // frames of the one wire format (<manibench/wire_format.hpp>): an action of
 // A doubles out, an observation, the reward and the flags back. The zygote
-// and the workers are started by spawnChild (<manibench/worker_pool.hpp>),
-// each tied to its parent (PR_SET_PDEATHSIG).
+// is the core's (Zygote, <manibench/worker_pool.hpp>); it and the workers
+// are tied to their parents (PR_SET_PDEATHSIG).
 //
 // When the learner goes, the zygote and the workers read end-of-file and
 // exit: nothing outlives the run.
@@ -31,6 +31,7 @@
 
 namespace manibench {
 class Environment;
+class Zygote;
 namespace wire {
 class Writer;
 }
@@ -99,8 +100,7 @@ class EnvironmentWorkers {
   void send(unsigned worker, const wire::Writer& message);
 
   double reply_timeout_ = 0;
-  int zygote_fd_ = -1;
-  pid_t zygote_pid_ = 0;
+  std::unique_ptr<Zygote> zygote_;  // core/workers' zygote: forks the workers
   std::vector<Worker> workers_;
 };
 
