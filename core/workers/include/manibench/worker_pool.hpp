@@ -12,7 +12,7 @@
 // policy after the fork, because EGL, llvmpipe's threads and GNU OpenMP's
 // pool do not survive one. A parent that has such state by the time it
 // forks (the learner, once libtorch runs) forks early a small process that
-// forks the workers for it (learning's zygote, with spawnChild too).
+// forks the workers for it (Zygote, below: learning's environment workers).
 #pragma once
 
 #include <manibench/wire_format.hpp>
