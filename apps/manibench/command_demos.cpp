@@ -275,7 +275,7 @@ int generate(int argc, char** argv) {
   }
   GenerationHooks hooks;
   setProgressHook(run, hooks);
-  std::optional<StopSignals> stop_signals(std::in_place);
+  const StopSignals stop_signals;
   std::optional<RankedGeneration> ranked;
   shareAmongRanks(run, options, hooks, ranked);
   if (!run.writer) return generateOnOtherRank(registry, options, run, path, info, hooks, *ranked);
@@ -292,7 +292,8 @@ int generate(int argc, char** argv) {
     return 0;
   }
   GenerationResult result = generateDemonstrations(registry, options, run.factory, path, info, hooks);
-  stop_signals.reset();
+  // stop_signals lives until the files are written: a second signal must
+  // not kill the merge of what was kept.
   if (run.progress_bar) std::cerr << "\n";
   if (ranked)
     for (const std::string& error : ranked->getErrors()) std::cerr << "manibench: " << error << "\n";

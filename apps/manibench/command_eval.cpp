@@ -218,6 +218,9 @@ EvaluationResult runEvaluation(const PluginRegistry& registry, const EvaluationO
 int reportEvaluation(const EvaluationOptions& options, const EvaluationResult& result, bool benchmark,
                      const EvaluationResult& baseline, const std::string& out_dir,
                      const std::vector<std::string>& rank_errors) {
+  // The files first: a stdout that blocks (mpirun's pipe) must not keep
+  // them from disk.
+  const std::vector<std::string> written = writeEvaluationFiles(out_dir, result);
   std::cout << "policy " << options.policy << " (" << result.policy_library << ", version "
             << result.policy_library_version << "), controller " << result.task.controller << ", observation "
             << toString(result.task.observation_mode) << "\n\n";
@@ -235,7 +238,7 @@ int reportEvaluation(const EvaluationOptions& options, const EvaluationResult& r
   }
   std::cout.unsetf(std::ios::fixed);
   for (const std::string& error : rank_errors) std::cerr << "manibench: " << error << "\n";
-  for (const std::string& path : writeEvaluationFiles(out_dir, result)) std::cout << "wrote " << path << "\n";
+  for (const std::string& path : written) std::cout << "wrote " << path << "\n";
   if (result.interrupted) {
     std::cerr << "manibench: evaluation stopped (" << result.stop_reason << "): " << result.episodes.size()
               << " of " << result.planned.size() << " episodes; partial results written\n";
@@ -287,7 +290,7 @@ int commandEval(int argc, char** argv) {
   EvaluationHooks hooks;
   if (run.progress_bar) hooks.on_progress = drawProgress;
   if (run.progress_lines) hooks.on_progress = printProgressLine;
-  std::optional<StopSignals> stop_signals(std::in_place);
+  const StopSignals stop_signals;
   std::optional<RankedEvaluation> ranked;
   shareAmongRanks(run, options, hooks, ranked);
   if (!run.writer) return runOtherRank(registry, options, run.factory, hooks, *ranked, run.mpi->getRank());
@@ -295,7 +298,11 @@ int commandEval(int argc, char** argv) {
   printEvaluationStart(options, run);
   EvaluationResult baseline;
   const EvaluationResult result = runEvaluation(registry, options, run, hooks, benchmark, baseline);
-  stop_signals.reset();
+  // stop_signals lives until the files are written (reportEvaluation writes
+  // them before it prints): a second SIGTERM (mpirun's, Slurm's) or a stdout
+  // that blocks must not cost the episodes the journal has. Under mpirun the
+  // files have to be in place within Open MPI's grace between SIGTERM and
+  // SIGKILL (1 s by default).
   return reportEvaluation(options, result, benchmark, baseline, out_dir,
                           ranked ? ranked->getErrors() : std::vector<std::string>());
 }

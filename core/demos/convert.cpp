@@ -1,17 +1,13 @@
-// Observation-mode conversion of a demonstration file in forked workers:
-// worker k converts trajectories k, k + W, ... into a part file of its own
-// (its own environment and EGL context, created after the fork), telling
-// the parent over a pipe which ones it finished; the parent then copies the
-// parts into the output in the input's order. A worker that dies costs only
-// the trajectories it had not finished.
-#include <fcntl.h>
-#include <poll.h>
-#include <signal.h>
-#include <sys/prctl.h>
-#include <sys/wait.h>
-#include <unistd.h>
+// Observation-mode conversion of a demonstration file in worker processes
+// (WorkerPool): worker k converts trajectories k, k + W, ... into a part
+// file of its own (its own environment and EGL context, created after the
+// fork), telling the parent over its channel which ones it finished; the
+// parent then copies the parts into the output in the input's order. A
+// worker that dies costs only the trajectories it had not finished.
 
 #include <manibench/demos.hpp>
+#include <manibench/wire_format.hpp>
+#include <manibench/worker_pool.hpp>
 
 #include <algorithm>
 #include <cerrno>
@@ -19,31 +15,22 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <iostream>
 #include <map>
-#include <sstream>
 
 namespace manibench {
 namespace {
 
-// One line per trajectory on the pipe: "ok INDEX" or "error INDEX WHY".
-void sendLine(int fd, const std::string& line) {
-  const std::string text = line + "\n";
-  std::size_t sent = 0;
-  while (sent < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + sent, text.size() - sent);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return;
-    sent += std::size_t(n);
-  }
+// What a worker tells the parent, one frame per trajectory (and one when it
+// cannot set up): the kind, the input index, why.
+enum Report : uint8_t { kConverted = 0, kFailed = 1, kFatal = 2 };
+
+void sendReport(int fd, Report kind, std::size_t index, const std::string& why) {
+  wire::Writer w;
+  w.u8(kind).u64(index).str(why);
+  wire::sendFrame(fd, w);
 }
 
-std::string oneLine(std::string text) {
-  std::replace(text.begin(), text.end(), '\n', ' ');
-  return text;
-}
-
-[[noreturn]] void runConversionWorker(const PluginRegistry& registry, const std::string& in_path,
+int runConversionWorker(const PluginRegistry& registry, const std::string& in_path,
                                       const std::string& part_path,
                                       const std::vector<std::string>& overrides,
                                       const std::vector<std::string>& names,
@@ -58,18 +45,17 @@ std::string oneLine(std::string text) {
       try {
         const Trajectory converted = convertTrajectory(*env, reader.read(names[index]));
         writer.append(converted);
-        sendLine(fd, "ok " + std::to_string(index));
+        sendReport(fd, kConverted, index, "");
       } catch (const std::exception& e) {
-        sendLine(fd, "error " + std::to_string(index) + " " + oneLine(e.what()));
+        sendReport(fd, kFailed, index, e.what());
       }
     }
     writer.close();
   } catch (const std::exception& e) {
-    sendLine(fd, "fatal " + oneLine(e.what()));
+    sendReport(fd, kFatal, 0, e.what());
     status = 1;
   }
-  std::fflush(nullptr);
-  _exit(status);
+  return status;
 }
 
 }  // namespace
@@ -101,97 +87,56 @@ ConversionResult convertDemonstrations(const PluginRegistry& registry, const std
   }
   workers = unsigned(std::min<std::size_t>(workers, std::max<std::size_t>(1, names.size())));
 
-  struct Child {
-    pid_t pid = -1;
-    int fd = -1;
-    std::string buffer, part, fatal;
+  struct Part {
+    std::string path, fatal;
     std::vector<std::size_t> done;  // input indices, in the order written to the part
   };
-  std::vector<Child> children(workers);
+  std::vector<Part> children(workers);
+  for (unsigned k = 0; k < workers; ++k) children[k].path = out_path + ".part" + std::to_string(k);
   ConversionResult result;
   std::map<std::size_t, std::string> errors;
-  std::cout.flush();
-  std::cerr.flush();
-  std::fflush(nullptr);
-  for (unsigned k = 0; k < workers; ++k) {
-    Child& c = children[k];
-    c.part = out_path + ".part" + std::to_string(k);
+  // Worker k converts trajectories k, k + W, ...; one that dies is not
+  // replaced: what it had not finished is not converted.
+  WorkerPool pool(workers, [&](std::size_t k, int fd) {
     std::vector<std::size_t> mine;
     for (std::size_t i = k; i < names.size(); i += workers) mine.push_back(i);
-    int fds[2];
-    if (pipe2(fds, O_CLOEXEC) != 0) throw DemoError(std::string("cannot create a pipe: ") + std::strerror(errno));
-    const pid_t parent = getpid();
-    const pid_t pid = fork();
-    if (pid < 0) throw DemoError(std::string("cannot fork a worker: ") + std::strerror(errno));
-    if (pid == 0) {
-      close(fds[0]);
-      prctl(PR_SET_PDEATHSIG, SIGKILL);
-      if (getppid() != parent) _exit(1);
-      signal(SIGINT, SIG_IGN);  // the parent decides
-      runConversionWorker(registry, in_path, c.part, overrides, names, mine, out_info, fds[1]);
+    return runConversionWorker(registry, in_path, children[k].path, overrides, names, mine, out_info, fd);
+  });
+  for (unsigned k = 0; k < workers; ++k) {
+    try {
+      pool.start(k);
+    } catch (const std::runtime_error& e) {
+      throw DemoError(e.what());
     }
-    close(fds[1]);
-    c.pid = pid;
-    c.fd = fds[0];
   }
 
   std::size_t finished = 0;
-  auto handleLine = [&](Child& c, const std::string& line) {
-    std::istringstream in(line);
-    std::string word;
-    std::size_t index = 0;
-    in >> word;
-    if (word == "fatal") {
-      c.fatal = line.substr(6);
+  const auto on_frame = [&](std::size_t k, const std::string& payload) {
+    wire::Reader in(payload);
+    const uint8_t kind = in.u8();
+    const std::size_t index = in.u64();
+    const std::string why = in.str();
+    if (kind == kFatal) {
+      children[k].fatal = why;
       return;
     }
-    in >> index;
     ++finished;
-    if (word == "ok") {
-      c.done.push_back(index);
-    } else {
-      std::string why;
-      std::getline(in, why);
-      errors[index] = why.empty() ? why : why.substr(1);
-    }
+    if (kind == kConverted)
+      children[k].done.push_back(index);
+    else
+      errors[index] = why;
     if (hooks.on_progress) hooks.on_progress(finished, names.size(), elapsed());
   };
+  const auto on_end = [&](std::size_t k) { pool.stop(k, false); };
   for (;;) {
     if (hooks.should_stop && hooks.should_stop() && !result.interrupted) {
       result.interrupted = true;
-      for (Child& c : children)
-        if (c.pid > 0) ::kill(c.pid, SIGKILL);
+      for (unsigned k = 0; k < workers; ++k) pool.kill(k);
     }
-    std::vector<pollfd> fds;
-    std::vector<Child*> owners;
-    for (Child& c : children)
-      if (c.fd >= 0) {
-        fds.push_back({c.fd, POLLIN, 0});
-        owners.push_back(&c);
-      }
-    if (fds.empty()) break;
-    if (poll(fds.data(), fds.size(), 200) < 0 && errno != EINTR)
-      throw DemoError(std::string("poll failed: ") + std::strerror(errno));
-    for (std::size_t k = 0; k < fds.size(); ++k) {
-      if (!(fds[k].revents & (POLLIN | POLLHUP | POLLERR))) continue;
-      Child& c = *owners[k];
-      char chunk[4096];
-      const ssize_t got = ::read(c.fd, chunk, sizeof(chunk));
-      if (got < 0 && errno == EINTR) continue;
-      if (got <= 0) {
-        close(c.fd);
-        c.fd = -1;
-        int status = 0;
-        while (waitpid(c.pid, &status, 0) < 0 && errno == EINTR) {
-        }
-        c.pid = -1;
-        continue;
-      }
-      c.buffer.append(chunk, std::size_t(got));
-      for (std::size_t end; (end = c.buffer.find('\n')) != std::string::npos;) {
-        handleLine(c, c.buffer.substr(0, end));
-        c.buffer.erase(0, end + 1);
-      }
+    try {
+      if (!pool.poll(200, on_frame, on_end)) break;
+    } catch (const std::runtime_error& e) {
+      throw DemoError(e.what());
     }
   }
 
@@ -201,10 +146,10 @@ ConversionResult convertDemonstrations(const PluginRegistry& registry, const std
   for (std::size_t k = 0; k < children.size(); ++k)
     for (std::size_t j = 0; j < children[k].done.size(); ++j) where[children[k].done[j]] = {k, j};
   std::string fatal;
-  for (const Child& c : children)
+  for (const Part& c : children)
     if (!c.fatal.empty() && fatal.empty()) fatal = c.fatal;
   if (where.empty() && !fatal.empty()) {
-    for (const Child& c : children) std::filesystem::remove(c.part);
+    for (const Part& c : children) std::filesystem::remove(c.path);
     throw DemoError("converting '" + in_path + "': " + fatal);
   }
   {
@@ -212,7 +157,7 @@ ConversionResult convertDemonstrations(const PluginRegistry& registry, const std
     DemoWriter writer(out_path, out_info, where.size());
     for (const auto& [index, at] : where) {
       try {
-        if (!parts[at.first]) parts[at.first] = std::make_unique<DemoReader>(children[at.first].part);
+        if (!parts[at.first]) parts[at.first] = std::make_unique<DemoReader>(children[at.first].path);
         writer.append(parts[at.first]->read("traj_" + std::to_string(at.second)));
         ++result.converted;
       } catch (const DemoError& e) {
@@ -221,9 +166,9 @@ ConversionResult convertDemonstrations(const PluginRegistry& registry, const std
     }
     writer.close();
   }
-  for (const Child& c : children) {
-    std::filesystem::remove(c.part);
-    std::filesystem::remove(getDemoJsonPath(c.part));
+  for (const Part& c : children) {
+    std::filesystem::remove(c.path);
+    std::filesystem::remove(getDemoJsonPath(c.path));
   }
   for (const auto& [index, why] : errors) result.failed.push_back(names[index] + ": " + why);
   if (!fatal.empty()) result.failed.push_back("a worker could not set up: " + fatal);

@@ -2,13 +2,8 @@
 // the episode list one episode at a time, collects the records, and turns a
 // worker's death or a call past its time limit into a failed episode and a
 // fresh worker, so that the evaluation goes on.
-#include <fcntl.h>
-#include <poll.h>
 #include <signal.h>
 #include <sys/mman.h>
-#include <sys/prctl.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -21,10 +16,11 @@
 #include <map>
 #include <set>
 #include <manibench/evaluation.hpp>
+#include <manibench/worker_pool.hpp>
 #include <sstream>
 
 #include "journal_writer.hpp"
-#include "wire_format.hpp"
+#include "messages.hpp"
 #include "worker.hpp"
 
 namespace manibench {
@@ -32,11 +28,9 @@ namespace {
 
 using namespace evaluation_detail;
 
-// The coordinator's view of one worker process.
+// The coordinator's view of one worker process (the process itself and its
+// channel are the WorkerPool's).
 struct Worker {
-  pid_t pid = -1;
-  int fd = -1;
-  std::string buffer;    // bytes received, not yet a whole message
   int64_t episode = -1;  // index of the episode it runs, -1 when idle
   bool ready = false;
   bool leaving = false;  // said it leaves after its episode: gets no other
@@ -44,10 +38,13 @@ struct Worker {
   std::string kill_message;
 };
 
-// The worker processes and their shared-memory slots.
+// The worker processes, their state here and their shared-memory slots.
 class Pool {
  public:
-  Pool(const WorkerContext& context, unsigned count) : context_(context), workers_(count) {
+  Pool(const WorkerContext& context, unsigned count)
+      : context_(context),
+        processes_(count, [this](std::size_t i, int fd) -> int { runWorker(fd, slots_[i], context_); }),
+        workers_(count) {
     void* memory = mmap(nullptr, sizeof(Slot) * count, PROT_READ | PROT_WRITE,
                         MAP_SHARED | MAP_ANONYMOUS, -1, 0);
     if (memory == MAP_FAILED)
@@ -57,81 +54,39 @@ class Pool {
     for (unsigned i = 0; i < count; ++i) new (&slots_[i]) Slot();
   }
   ~Pool() {
-    for (std::size_t i = 0; i < workers_.size(); ++i) stop(i, true);
+    // The workers go before the slots they write.
+    for (std::size_t i = 0; i < workers_.size(); ++i) processes_.kill(i);
+    for (std::size_t i = 0; i < workers_.size(); ++i) processes_.stop(i, false);
     munmap(slots_, sizeof(Slot) * workers_.size());
   }
   Pool(const Pool&) = delete;
   Pool& operator=(const Pool&) = delete;
 
   std::vector<Worker>& workers() { return workers_; }
+  WorkerPool& processes() { return processes_; }
   Slot& slot(std::size_t i) { return slots_[i]; }
 
   void start(std::size_t i) {
-    int fds[2];
-    if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, fds) != 0)
-      throw EvaluationError(std::string("cannot create a worker's socket: ") +
-                            std::strerror(errno));
     Slot& s = slots_[i];
     s.step.store(0);
     s.total_reward.store(0);
     enterPhase(s, kSetup);
-    // Buffered output would otherwise be written twice, once by the child.
-    std::cout.flush();
-    std::cerr.flush();
-    std::fflush(nullptr);
-    const pid_t parent = getpid();
-    const pid_t pid = fork();
-    if (pid < 0) {
-      close(fds[0]);
-      close(fds[1]);
-      throw EvaluationError(std::string("cannot fork a worker: ") + std::strerror(errno));
+    try {
+      processes_.start(i);
+    } catch (const std::runtime_error& e) {
+      throw EvaluationError(e.what());
     }
-    if (pid == 0) {
-      // The child keeps only its own end: another worker holding a socket
-      // would hide that worker's death (no end of stream).
-      close(fds[0]);
-      for (const Worker& w : workers_)
-        if (w.fd >= 0) close(w.fd);
-      prctl(PR_SET_PDEATHSIG, SIGKILL);
-      if (getppid() != parent) _exit(1);
-      // Ctrl-C reaches the whole process group; the coordinator decides.
-      signal(SIGINT, SIG_IGN);
-      signal(SIGPIPE, SIG_DFL);
-      try {
-        runWorker(fds[1], s, context_);
-      } catch (...) {
-        // Whatever escaped (not a std::exception): the coordinator records
-        // the exit status as a crash.
-      }
-      std::fflush(nullptr);
-      _exit(70);
-    }
-    close(fds[1]);
-    Worker& w = workers_[i];
-    w = Worker();
-    w.pid = pid;
-    w.fd = fds[0];
+    workers_[i] = Worker();
   }
 
   // Ends worker i (killing it when `kill`) and waits for it; the exit status.
-  int stop(std::size_t i, bool kill) {
-    Worker& w = workers_[i];
-    int status = 0;
-    if (w.fd >= 0) close(w.fd);  // a waiting worker reads end of stream and leaves
-    w.fd = -1;
-    if (w.pid > 0) {
-      if (kill) ::kill(w.pid, SIGKILL);
-      while (waitpid(w.pid, &status, 0) < 0 && errno == EINTR) {
-      }
-    }
-    w.pid = -1;
-    return status;
-  }
+  int stop(std::size_t i, bool kill) { return processes_.stop(i, kill); }
 
  private:
   WorkerContext context_;
-  std::vector<Worker> workers_;
   Slot* slots_ = nullptr;
+  WorkerPool processes_;
+  std::vector<Worker> workers_;
 };
 
 // The run's temporary folder, for the sandboxed policies' private folders
@@ -182,10 +137,8 @@ class Coordinator {
   void dispatch(std::size_t i);
   // Ends the run for `reason`; with nothing done there is nothing to keep.
   void stopRun(const std::string& reason);
-  // Reads what worker i sent, handles its whole messages, or its end.
-  void readFrom(std::size_t i);
-  // Handles one message of worker i; false when the worker was stopped.
-  bool handleMessage(std::size_t i, const std::string& payload);
+  // Handles one message of worker i, then gives it its next episode.
+  void handleMessage(std::size_t i, const std::string& payload);
   // Worker i's socket ended: record the episode it was running, restart it.
   void handleExit(std::size_t i);
   // Kills workers whose call is past its time limit; their end of stream
@@ -281,12 +234,14 @@ void Coordinator::plan(EvaluationTaskInfo info) {
 
 void Coordinator::dispatch(std::size_t i) {
   Worker& w = pool_.workers()[i];
-  if (!planned_ || !w.ready || w.leaving || w.episode >= 0 || next_ >= local_.size()) return;
+  if (!planned_ || !pool_.processes().isRunning(i) || !w.ready || w.leaving || w.episode >= 0 ||
+      next_ >= local_.size())
+    return;
   const EpisodeSpec& spec = result_.planned[local_[next_++]];
   w.episode = static_cast<int64_t>(spec.index);
   Writer m;
   transferRun(m.u8(kRun), spec);
-  sendMessage(w.fd, m);  // a dead worker is noticed by poll
+  pool_.processes().send(i, m);  // a dead worker is noticed by poll
 }
 
 void Coordinator::stopRun(const std::string& reason) {
@@ -295,7 +250,9 @@ void Coordinator::stopRun(const std::string& reason) {
   result_.stop_reason = reason;
 }
 
-bool Coordinator::handleMessage(std::size_t i, const std::string& payload) {
+void Coordinator::handleMessage(std::size_t i, const std::string& payload) {
+  // A stopped run reads no more: what is left is killed with its workers.
+  if (result_.interrupted) return;
   Worker& w = pool_.workers()[i];
   Reader in(payload);
   const uint8_t type = in.u8();
@@ -308,7 +265,7 @@ bool Coordinator::handleMessage(std::size_t i, const std::string& payload) {
     const std::string message = in.str();
     pool_.stop(i, true);
     stopRun("a worker could not set up: " + message);
-    return false;
+    return;
   } else if (type == kResult) {
     EpisodeRecord r;
     transferResult(in, r);
@@ -327,26 +284,11 @@ bool Coordinator::handleMessage(std::size_t i, const std::string& payload) {
     ++local_done_;
     record(std::move(r));
   }
-  return true;
-}
-
-void Coordinator::readFrom(std::size_t i) {
-  Worker& w = pool_.workers()[i];
-  char chunk[65536];
-  const ssize_t got = ::read(w.fd, chunk, sizeof(chunk));
-  if (got < 0 && errno == EINTR) return;
-  if (got <= 0) {
-    handleExit(i);
-    return;
-  }
-  w.buffer.append(chunk, static_cast<std::size_t>(got));
-  std::string payload;
-  while (takeMessage(w.buffer, payload))
-    if (!handleMessage(i, payload)) break;
-  if (w.fd >= 0) dispatch(i);
+  dispatch(i);
 }
 
 void Coordinator::handleExit(std::size_t i) {
+  if (result_.interrupted) return;
   Worker& w = pool_.workers()[i];
   const bool was_ready = w.ready;
   const int64_t episode = w.episode;
@@ -389,7 +331,7 @@ void Coordinator::killOverdue() {
   std::vector<Worker>& workers = pool_.workers();
   for (std::size_t i = 0; i < workers.size(); ++i) {
     Worker& w = workers[i];
-    if (w.pid <= 0 || w.kill_reason) continue;
+    if (!pool_.processes().isRunning(i) || w.kill_reason) continue;
     const Slot& s = pool_.slot(i);
     const uint32_t phase = s.phase.load();
     if (phase == kIdle) continue;
@@ -405,7 +347,7 @@ void Coordinator::killOverdue() {
             << limit << " s; the worker was killed";
     w.kill_reason = isPolicyPhase(phase) ? failure::kTimeout : failure::kEnvironmentTimeout;
     w.kill_message = message.str();
-    ::kill(w.pid, SIGKILL);
+    pool_.processes().kill(i);
   }
 }
 
@@ -413,23 +355,23 @@ void Coordinator::run() {
   std::vector<Worker>& workers = pool_.workers();
   for (std::size_t i = 0; i < workers.size(); ++i) pool_.start(i);
 
-  std::vector<pollfd> fds;
-  std::vector<std::size_t> owners;
+  const auto on_frame = [this](std::size_t i, const std::string& payload) { handleMessage(i, payload); };
+  const auto on_end = [this](std::size_t i) { handleExit(i); };
   while (!result_.interrupted && !(isLocalDone() && isRemoteDone())) {
     if (hooks_.should_stop && hooks_.should_stop()) {
       result_.interrupted = true;
       result_.stop_reason = "interrupted";
       break;
     }
-    fds.clear();
-    owners.clear();
-    for (std::size_t i = 0; i < workers.size(); ++i)
-      if (workers[i].fd >= 0) {
-        fds.push_back({workers[i].fd, POLLIN, 0});
-        owners.push_back(i);
-      }
     takeRemote();
-    if (fds.empty()) {
+    bool waited = false;
+    try {
+      waited = pool_.processes().poll(isLocalDone() ? 20 : 100, on_frame, on_end);
+    } catch (const std::runtime_error& e) {
+      if (dynamic_cast<const Error*>(&e)) throw;
+      throw EvaluationError(e.what());
+    }
+    if (!waited) {
       // Every worker is gone, none is started once this process's own
       // episodes are done: the other ranks' are awaited.
       if (isLocalDone()) {
@@ -439,19 +381,16 @@ void Coordinator::run() {
       stopRun("no worker left");
       break;
     }
-    const int ready = poll(fds.data(), fds.size(), isLocalDone() ? 20 : 100);
-    if (ready < 0 && errno != EINTR)
-      throw EvaluationError(std::string("poll failed: ") + std::strerror(errno));
-    for (std::size_t k = 0; ready > 0 && k < fds.size() && !result_.interrupted; ++k)
-      if (fds[k].revents & (POLLIN | POLLHUP | POLLERR)) readFrom(owners[k]);
     killOverdue();
     report(false);
   }
 
   // Idle workers leave at end of stream; busy ones (an interrupted run) are
-  // killed.
+  // killed, all at once before any is waited for: under mpirun the files
+  // must be written within Open MPI's grace after SIGTERM.
   for (std::size_t i = 0; i < workers.size(); ++i)
-    pool_.stop(i, result_.interrupted || workers[i].episode >= 0);
+    if (result_.interrupted || workers[i].episode >= 0) pool_.processes().kill(i);
+  for (std::size_t i = 0; i < workers.size(); ++i) pool_.stop(i, false);
   takeRemote();
   if (!result_.interrupted && records_.size() < result_.planned.size() && options_.ranks > 1 &&
       options_.rank == 0) {

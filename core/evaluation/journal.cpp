@@ -17,7 +17,7 @@
 #include <sstream>
 
 #include "journal_writer.hpp"
-#include "wire_format.hpp"
+#include "messages.hpp"
 
 namespace manibench {
 namespace {

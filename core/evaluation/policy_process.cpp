@@ -1,5 +1,7 @@
 #include "policy_process.hpp"
 
+#include <manibench/worker_pool.hpp>
+
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/mman.h>
@@ -101,14 +103,10 @@ void assignFrom(std::vector<T>& out, const std::byte* data, uint64_t count) {
   if (count) std::memcpy(out.data(), data, count * sizeof(T));
 }
 
-// The policy process's side: everything from the fork on. Never returns.
+// The policy process's side: everything from the fork on (spawnChild has
+// tied it to its worker and made its process group). Never returns.
 [[noreturn]] void servePolicy(const PolicyProcessSettings& settings, std::byte* block,
-                              std::size_t block_bytes, const std::string& private_dir,
-                              pid_t parent) {
-  prctl(PR_SET_PDEATHSIG, SIGKILL);
-  if (getppid() != parent) _exit(1);
-  setpgid(0, 0);
-  signal(SIGPIPE, SIG_DFL);
+                              std::size_t block_bytes, const std::string& private_dir) {
   auto& header = *reinterpret_cast<PolicyBlockHeader*>(block);
   char* message = reinterpret_cast<char*>(block + getMessageOffset());
   auto answer = [&](int32_t status, const std::string& text) {
@@ -273,18 +271,20 @@ SandboxedPolicy::SandboxedPolicy(const PolicyProcessSettings& settings) : settin
     munmap(block_, block_bytes_);
     throw;
   }
-  std::fflush(nullptr);
-  const pid_t parent = getpid();
-  pid_ = fork();
+  // No channel: the shared block is the policy's only way out; its own
+  // process group, which kill() ends whole.
+  ChildOptions options;
+  options.channel = false;
+  options.own_process_group = true;
+  const Child child = spawnChild(options, [this](int) -> int {
+    servePolicy(settings_, block_, block_bytes_, private_dir_);
+  });
+  pid_ = child.pid;
   if (pid_ < 0) {
-    const int error = errno;
     munmap(block_, block_bytes_);
     std::filesystem::remove(private_dir_);
-    throw EvaluationError("cannot fork the policy's process: " + std::string(std::strerror(error)));
+    throw EvaluationError("cannot start the policy's process (" + child.error + ")");
   }
-  if (pid_ == 0) servePolicy(settings_, block_, block_bytes_, private_dir_, parent);
-  // Its own process group (set on both sides: whichever runs first).
-  setpgid(pid_, pid_);
   try {
     call(0, settings_.create_timeout);
   } catch (...) {

@@ -16,7 +16,7 @@
 #include <optional>
 
 #include "policy_process.hpp"
-#include "wire_format.hpp"
+#include "messages.hpp"
 
 namespace manibench::evaluation_detail {
 
@@ -35,47 +35,6 @@ const char* getPhaseName(uint32_t phase) {
     default:
       return "idle";
   }
-}
-
-std::string describeSignal(int sig) {
-  const char* name = nullptr;
-  switch (sig) {
-    case SIGSEGV:
-      name = "SIGSEGV";
-      break;
-    case SIGABRT:
-      name = "SIGABRT";
-      break;
-    case SIGBUS:
-      name = "SIGBUS";
-      break;
-    case SIGFPE:
-      name = "SIGFPE";
-      break;
-    case SIGILL:
-      name = "SIGILL";
-      break;
-    case SIGKILL:
-      name = "SIGKILL";
-      break;
-    case SIGTERM:
-      name = "SIGTERM";
-      break;
-    case SIGTRAP:
-      name = "SIGTRAP";
-      break;
-    default:
-      break;
-  }
-  std::string text = "signal " + std::to_string(sig);
-  if (name) text += std::string(" (") + name + ", " + strsignal(sig) + ")";
-  return text;
-}
-
-std::string describeExit(int status) {
-  if (WIFSIGNALED(status)) return "killed by " + describeSignal(WTERMSIG(status));
-  if (WIFEXITED(status)) return "exited with status " + std::to_string(WEXITSTATUS(status));
-  return "stopped (wait status " + std::to_string(status) + ")";
 }
 
 int64_t getMonotonicNs() {
@@ -269,14 +228,14 @@ void runWorker(int fd, Slot& slot, const WorkerContext& context) {
       w.u8(kSetupError).str(e.what());
     }
     enterPhase(slot, kIdle);
-    sendMessage(fd, w);
+    wire::sendFrame(fd, w);
     if (!policy) {
       std::fflush(nullptr);
       _exit(0);
     }
   }
   std::string payload;
-  while (receiveMessage(fd, payload)) {
+  while (wire::receiveFrame(fd, payload)) {
     try {
       Reader in(payload);
       if (in.u8() != kRun) break;
@@ -293,7 +252,7 @@ void runWorker(int fd, Slot& slot, const WorkerContext& context) {
       // Whether this worker leaves after the episode (the coordinator then
       // hands the next episode to a fresh one, not to this one).
       w.u8(after == After::kLeave ? 1 : 0);
-      if (!sendMessage(fd, w) || after == After::kLeave) break;
+      if (!wire::sendFrame(fd, w) || after == After::kLeave) break;
       if (after == After::kNewPolicy) {
         enterPhase(slot, kSetup);
         policy.reset();
@@ -304,7 +263,7 @@ void runWorker(int fd, Slot& slot, const WorkerContext& context) {
       // Even a new policy could not be made: tell, and leave.
       Writer w;
       w.u8(kSetupError).str(e.what());
-      sendMessage(fd, w);
+      wire::sendFrame(fd, w);
       break;
     }
   }

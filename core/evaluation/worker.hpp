@@ -6,6 +6,7 @@
 #pragma once
 
 #include <manibench/evaluation.hpp>
+#include <manibench/worker_pool.hpp>
 
 #include <atomic>
 #include <cstdint>
@@ -34,10 +35,6 @@ static_assert(std::atomic<int64_t>::is_always_lock_free &&
               "the shared slots need lock-free atomics");
 
 int64_t getMonotonicNs();
-// "signal 11 (SIGSEGV, Segmentation fault)"
-std::string describeSignal(int sig);
-// "killed by signal 11 (...)", "exited with status 3": a wait status.
-std::string describeExit(int status);
 // Publishes `phase`, entered now.
 void enterPhase(Slot& slot, Phase phase);
 

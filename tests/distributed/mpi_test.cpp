@@ -10,7 +10,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <functional>
 #include <filesystem>
 #include <fstream>
 #include <manibench/demos.hpp>
@@ -165,6 +167,103 @@ TEST(Mpi, SigtermOnMpirunLeavesReadablePartialResults) {
   EXPECT_LT(episodes.size(), 400u);
   EXPECT_EQ(episodes.size(), countEpisodes(out / "journal.jsonl"));
 }
+
+// A stop signal at any moment keeps every episode the journal has: the
+// files say what it says, whatever the timing (issue 43: once, under load,
+// mpirun's SIGTERM left 15 journaled episodes and no files). Each run is
+// signalled at one point: as soon as the journal exists (before any episode
+// finished), mid-run, or when the files are being written (a second signal
+// for a single process, whose first one stopped the run; mpirun's SIGTERM
+// after a run that finished). The last point is sought by polling, so a run
+// may also be signalled just before or after it: the checks hold for all.
+enum class StopPoint { kJournalCreated, kMidRun, kWritingFiles };
+
+struct StopCase {
+  int ranks;  // 0: no mpirun
+  StopPoint point;
+};
+
+class StopAt : public ::testing::TestWithParam<StopCase> {};
+
+// The journal's episodes, by index (none when it was never created).
+std::vector<uint64_t> listJournaled(const fs::path& journal) {
+  std::vector<uint64_t> indices;
+  if (!fs::exists(journal)) return indices;
+  for (const EpisodeRecord& r : readJournal(journal.string()).result.episodes) indices.push_back(r.spec.index);
+  std::sort(indices.begin(), indices.end());
+  return indices;
+}
+
+TEST_P(StopAt, FilesAgreeWithTheJournal) {
+  const StopCase c = GetParam();
+  TempDir dir;
+  const fs::path out = dir / "run";
+  // Few episodes where the files are what is waited for, so the run ends.
+  const std::string levels = c.point == StopPoint::kWritingFiles && c.ranks > 0 ? "0-5" : "0-199";
+  std::vector<std::string> words = evalArguments(out, levels, "150");
+  if (c.ranks > 0) {
+    words = underMpirun(c.ranks, words);
+    words.insert(words.begin(), MANIBENCH_TEST_MPIRUN);
+  } else {
+    words.insert(words.begin(), MANIBENCH_TEST_CLI);
+  }
+  const pid_t pid = testing::startInBackground(words);
+  ASSERT_GT(pid, 0);
+  // Polls `ready` every `ms` milliseconds (0: as fast as it can), at most a
+  // minute: a loaded machine's startup is slow.
+  auto waitFor = [](const std::function<bool()>& ready, int ms) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (!ready() && std::chrono::steady_clock::now() < end)
+      std::this_thread::sleep_for(std::chrono::milliseconds(ms));
+  };
+  const fs::path journal = out / "journal.jsonl";
+  auto writing = [&] { return fs::exists(out / "summary.csv.partial") || fs::exists(out / "summary.csv"); };
+  switch (c.point) {
+    case StopPoint::kJournalCreated:
+      waitFor([&] { return fs::exists(journal); }, 1);
+      kill(pid, SIGTERM);
+      break;
+    case StopPoint::kMidRun:
+      waitFor([&] { return countEpisodes(journal) >= 4; }, 10);
+      kill(pid, SIGTERM);
+      break;
+    case StopPoint::kWritingFiles:
+      if (c.ranks == 0) {
+        waitFor([&] { return countEpisodes(journal) >= 4; }, 10);
+        kill(pid, SIGTERM);
+      }
+      waitFor(writing, 0);
+      kill(pid, SIGTERM);
+      break;
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  const std::vector<uint64_t> journaled = listJournaled(journal);
+  if (!fs::exists(journal)) {
+    EXPECT_FALSE(fs::exists(out / "summary.json"));
+    return;
+  }
+  const std::string json = readFile(out / "summary.json");
+  ASSERT_FALSE(json.empty()) << journaled.size() << " journaled episode(s) and no summary.json";
+  const std::size_t planned = c.ranks > 0 && c.point == StopPoint::kWritingFiles ? 12 : 400;
+  EXPECT_TRUE(contains(json, "\"episodes_planned\": " + std::to_string(planned))) << json;
+  EXPECT_TRUE(contains(json, journaled.size() < planned ? "\"complete\": false" : "\"complete\": true")) << json;
+  std::vector<uint64_t> reported;
+  for (const auto& row : readCsv(out / "episodes.csv")) reported.push_back(std::stoull(row.at("index")));
+  std::sort(reported.begin(), reported.end());
+  EXPECT_EQ(reported, journaled);
+}
+
+const StopCase kStopCases[] = {{0, StopPoint::kJournalCreated}, {0, StopPoint::kMidRun},
+                               {0, StopPoint::kWritingFiles},   {3, StopPoint::kJournalCreated},
+                               {3, StopPoint::kMidRun},         {3, StopPoint::kWritingFiles}};
+
+std::string nameStopCase(const ::testing::TestParamInfo<StopCase>& info) {
+  const char* point[] = {"JournalCreated", "MidRun", "WritingFiles"};
+  return std::string(info.param.ranks ? "Mpirun" : "Single") + point[int(info.param.point)];
+}
+
+INSTANTIATE_TEST_SUITE_P(Points, StopAt, ::testing::ValuesIn(kStopCases), nameStopCase);
 
 }  // namespace
 }  // namespace manibench

@@ -10,8 +10,10 @@
 // worker, the first ones and the replacements, is forked by the zygote and
 // its socket handed to the learner (SCM_RIGHTS). Workers never touch
 // libtorch. The hand-over is one Unix stream socket per worker carrying
-// length-prefixed messages: an action of A doubles out, an observation,
-// the reward and the flags back.
+// frames of the one wire format (<manibench/wire_format.hpp>): an action of
+// A doubles out, an observation, the reward and the flags back. The zygote
+// is the core's (Zygote, <manibench/worker_pool.hpp>); it and the workers
+// are tied to their parents (PR_SET_PDEATHSIG).
 //
 // When the learner goes, the zygote and the workers read end-of-file and
 // exit: nothing outlives the run.
@@ -29,7 +31,11 @@
 
 namespace manibench {
 class Environment;
+class Zygote;
+namespace wire {
+class Writer;
 }
+}  // namespace manibench
 
 namespace manibench::learning {
 
@@ -91,11 +97,10 @@ class EnvironmentWorkers {
     bool lost = false;  // a send failed: the process is gone (receive reports it)
   };
   Worker spawn();
-  void send(unsigned worker, const std::vector<uint8_t>& message);
+  void send(unsigned worker, const wire::Writer& message);
 
   double reply_timeout_ = 0;
-  int zygote_fd_ = -1;
-  pid_t zygote_pid_ = 0;
+  std::unique_ptr<Zygote> zygote_;  // core/workers' zygote: forks the workers
   std::vector<Worker> workers_;
 };
 
