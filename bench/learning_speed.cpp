@@ -16,7 +16,7 @@
 // torch_policy plugin acts, for BC (mlp, pointnet, pn_transformer), TD3+BC
 // and BCQ (pn_transformer) with ManiSkill-Learn's defaults, in ms per step,
 // and prints each action in hexadecimal floats (so two builds' actions can
-// be compared bit for bit: bench/inference_speed.sh).
+// be compared bit for bit: docs/learning-results.md, "Acting").
 #include <manibench/learning/algorithms.hpp>
 #include <manibench/learning/checkpoint.hpp>
 #include <manibench/learning/compute.hpp>
