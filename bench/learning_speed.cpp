@@ -12,9 +12,17 @@
 // networks' speed, not the loader's); `--checkpoint PATH` then saves the
 // network, loads it onto the CPU and prints how far the CPU's actions are
 // from the device's (the round trip of a checkpoint trained on a GPU).
+// `--act` times acting instead: one observation at a time, as the
+// torch_policy plugin acts, for BC (mlp, pointnet, pn_transformer), TD3+BC
+// and BCQ (pn_transformer) with ManiSkill-Learn's defaults, in ms per step,
+// and prints each action in hexadecimal floats (so two builds' actions can
+// be compared bit for bit: docs/learning-results.md, "Acting").
 #include <manibench/learning/algorithms.hpp>
 #include <manibench/learning/checkpoint.hpp>
 #include <manibench/learning/compute.hpp>
+#include <manibench/learning/inference.hpp>
+
+#include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
@@ -23,6 +31,7 @@
 #include <iostream>
 #include <map>
 #include <string>
+#include <vector>
 
 namespace ml = manibench::learning;
 
@@ -38,6 +47,8 @@ struct Options {
   int pairs = 0;
   std::string device = "cpu";
   std::string checkpoint;  // the round trip's file (empty: none)
+  bool act = false;
+  std::string only;  // --act: only this "algorithm/net" (empty: all five)
 };
 
 ml::ObservationSpec makeSpec(bool cloud) {
@@ -155,7 +166,58 @@ void roundTrip(const ml::Algorithm& algorithm, const ml::NetOptions& net, const 
               cpu.extras.count(ml::kCudaGeneratorExtra) ? "saved" : "absent", (a - b).abs().max().item<double>());
 }
 
+// ms per step at batch 1 of each network, through what the torch_policy
+// plugin runs (a checkpoint saved and loaded by loadInferencePolicy, which
+// sets the threads; no other process-wide setting), and its action.
+int runActing(const Options& o) {
+  const std::vector<std::pair<std::string, std::string>> all = {
+      {"bc", "mlp"}, {"bc", "pointnet"}, {"bc", "pn_transformer"}, {"td3bc", "pn_transformer"}, {"bcq", "pn_transformer"}};
+  const std::string path = "/tmp/manibench_act_bench_" + std::to_string(getpid()) + ".pt";
+  for (const auto& [algorithm, net_name] : all) {
+    if (!o.only.empty() && o.only != algorithm + "/" + net_name) continue;
+    torch::manual_seed(0);
+    ml::NetOptions net = ml::NetOptions::makeDefaults(algorithm);
+    net.kind = ml::parseNetKind(net_name);
+    const ml::ObservationSpec spec = makeSpec(net.kind != ml::NetKind::Mlp);
+    {
+      ml::CheckpointInfo info;
+      info.algorithm = ml::AlgorithmOptions::makeDefaults(algorithm, spec.mode);
+      info.network = net;
+      info.spec = spec;
+      auto trained = ml::makeAlgorithm(info.algorithm, net, spec, torch::kCPU);
+      ml::saveCheckpoint(path, info, *trained, {});
+    }
+    ml::InferenceOptions options;
+    options.checkpoint = path;
+    options.threads = o.threads;
+    const std::unique_ptr<ml::InferencePolicy> policy = ml::loadInferencePolicy(options, spec);
+    std::remove(path.c_str());
+    const ml::ObservationBatch one = makeBatch(spec, 1);
+    policy->reset(0);
+    for (int i = 0; i < 2; ++i) policy->act(one);
+    using clock = std::chrono::steady_clock;
+    int64_t acts = 0;
+    const auto start = clock::now();
+    double elapsed = 0;
+    while (elapsed < o.seconds || acts < 3) {
+      policy->act(one);
+      ++acts;
+      elapsed = std::chrono::duration<double>(clock::now() - start).count();
+    }
+    policy->reset(7);
+    const torch::Tensor action = policy->act(one).contiguous();
+    std::printf("act %s %s threads %d: %.3f ms per step (%lld steps), action", algorithm.c_str(), net_name.c_str(),
+                o.threads, 1e3 * elapsed / double(acts), (long long)acts);
+    const float* a = action.data_ptr<float>();
+    for (int64_t i = 0; i < action.numel(); ++i) std::printf(" %a", double(a[i]));
+    std::printf("\n");
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
 int run(const Options& o) {
+  if (o.act) return runActing(o);
   if (o.algorithm != "bc") return runActorCritic(o);
   ml::setUpTrainingCompute(o.threads);  // as the trainer: without kept memory PN+T ran 0.31 it/s here, with it 0.46 (one thread)
   ml::setPointNetDefinitionMode(o.definition);
@@ -216,11 +278,14 @@ int main(int argc, char** argv) {
     else if (a == "--pairs") o.pairs = std::stoi(next());
     else if (a == "--device") o.device = next();
     else if (a == "--checkpoint") o.checkpoint = next();
+    else if (a == "--act") o.act = true;
+    else if (a == "--only") o.only = next();
     else {
       std::cerr << "usage: manibench_learning_bench [--net mlp|pointnet|pn_transformer] [--batch N] "
                    "[--threads N] [--seconds S] [--definition] [--device cpu|cuda] [--checkpoint PATH]\n"
                    "       manibench_learning_bench --algorithm sac|td3bc|bcq [--net ...] [--batch N] [--threads N] "
-                   "[--seconds S] [--pairs N] [--device cpu|cuda]\n";
+                   "[--seconds S] [--pairs N] [--device cpu|cuda]\n"
+                   "       manibench_learning_bench --act [--only ALGORITHM/NET] [--threads N] [--seconds S]\n";
       return 2;
     }
   }

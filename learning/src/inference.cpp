@@ -32,6 +32,7 @@ class CheckpointPolicy : public InferencePolicy {
   }
   void reset(uint64_t seed) override {
     generator_.set_current_seed(seed);
+    c10::InferenceMode inference;  // the history holds act()'s tensors, which only it may change in place
     history_->reset();
     step_ = 0;
   }
@@ -40,6 +41,9 @@ class CheckpointPolicy : public InferencePolicy {
     if (obs.state.size(1) != loaded_.info.spec.state_dim)
       throw LearningError("the " + name_ + " takes a state of " + std::to_string(loaded_.info.spec.state_dim) +
                           " values; the observation has " + std::to_string(obs.state.size(1)));
+    // No autograd state at all (not even the version counters NoGradGuard
+    // keeps): the tensors made here never meet a gradient.
+    c10::InferenceMode inference;
     ObservationBatch input = obs;
     input.state = history_->makeInput(obs.state, step_);
     ++step_;
@@ -115,6 +119,13 @@ std::unique_ptr<InferencePolicy> loadInferencePolicy(const InferenceOptions& opt
     throw LearningError("the policy configuration names one of `checkpoint:` (a manibench checkpoint) "
                         "and `torchscript:` (a file written by torch.jit.save)");
   setComputeThreads(options.threads);
+  // A point-cloud network's activations are megabytes (BCQ's 100 sampled
+  // clouds: about 90 MB per layer), which glibc maps fresh and unmaps on
+  // every call: page faults and zeroing, not arithmetic, were most of an
+  // act (bench/learning_speed.cpp --act; docs/learning-results.md). Kept
+  // freed, the next call reuses them. Only the allocator's behaviour
+  // changes, not one computed value (the environment's physics included).
+  setKeepFreedMemory();
   if (!options.checkpoint.empty()) return std::make_unique<CheckpointPolicy>(options, host);
   return std::make_unique<TorchScriptPolicy>(options, host);
 }

@@ -134,16 +134,8 @@ class SacTrainer {
   }
 
   void checkOptions() const {
-    const SacOptions& o = options_;
-    if (o.out_dir.empty()) throw LearningError("no output directory (--out DIR)");
-    if (o.steps <= 0 || o.replay_size <= 0 || o.checkpoint_every <= 0 || o.log_every <= 0)
-      throw LearningError("--steps, --replay-size, --checkpoint-every and --log-every must be positive");
-    if (o.workers == 0) throw LearningError("--workers must be at least 1");
-    if (!(o.worker_timeout >= 0)) throw LearningError("--worker-timeout must be at least 0 (0: none)");
-    if (o.network.kind != NetKind::Mlp) throw LearningError("SAC trains in the state mode: --net mlp");
-    if (o.eval_every < 0 || (o.eval_every > 0 && o.eval_episodes == 0))
-      throw LearningError("--eval-every must be at least 0 and --eval-episodes at least 1");
-    if (o.eval_every > 0 && !hooks_.evaluate) throw LearningError("--eval-every: this program cannot evaluate");
+    options_.check();
+    if (options_.eval_every > 0 && !hooks_.evaluate) throw LearningError("--eval-every: this program cannot evaluate");
   }
 
   EnvironmentOptions makeEnvironmentOptions(const PluginRegistry& registry) const {
@@ -548,15 +540,7 @@ SacResult trainSac(const PluginRegistry& registry, const SacOptions& options, co
 }
 
 SacResult resumeSac(const PluginRegistry& registry, const std::string& dir, int64_t steps, const SacHooks& hooks) {
-  SacOptions options;
-  const YAML::Node node = readTrainingYaml(dir);
-  try {
-    options = SacOptions::readYaml(node);
-  } catch (const YAML::Exception& e) {
-    throw LearningError("'" + (fs::path(dir) / "train.yaml").string() + "': " + e.what());
-  }
-  options.out_dir = dir;
-  SacTrainer trainer(registry, options, hooks);
+  SacTrainer trainer(registry, readRunDirectory<SacOptions>(dir), hooks);
   return trainer.resume(steps);
 }
 

@@ -23,13 +23,14 @@ namespace fs = std::filesystem;
 
 // --- options ------------------------------------------------------------------------------
 
+void TrainOptions::check() const {
+  checkRun();
+  if (iterations <= 0) throw LearningError("--iterations must be positive");
+}
+
 void TrainOptions::writeYaml(YAML::Node& node) const {
-  node["out_dir"] = out_dir;
-  YAML::Node a, n, d, e;
-  algorithm.writeYaml(a);
-  network.writeYaml(n);
-  node["algorithm"] = a;
-  node["network"] = n;
+  writeRun(node);
+  YAML::Node d;
   d["paths"] = data.paths;
   d["objects"] = data.objects;
   d["per_object"] = data.per_object;
@@ -37,30 +38,19 @@ void TrainOptions::writeYaml(YAML::Node& node) const {
   d["executed_actions"] = data.executed_actions;
   node["data"] = d;
   node["iterations"] = iterations;
-  node["seed"] = seed;
-  node["threads"] = threads;
-  node["device"] = device;
-  node["eval_device"] = eval_device;
   node["prefetch"] = prefetch;
-  node["checkpoint_every"] = checkpoint_every;
-  node["log_every"] = log_every;
   node["normalize_state"] = normalize_state;
-  e["every"] = eval_every;
+  YAML::Node e = node["evaluation"];
   e["task"] = eval_task;
   e["split"] = eval_split;
   e["objects"] = eval_objects;
-  e["episodes"] = eval_episodes;
-  e["seed"] = eval_seed;
   e["workers"] = eval_workers;
-  node["evaluation"] = e;
-  node["command"] = command;
+  e["device"] = eval_device;
 }
 
 TrainOptions TrainOptions::readYaml(const YAML::Node& node) {
   TrainOptions o;
-  o.out_dir = node["out_dir"].as<std::string>();
-  o.algorithm = AlgorithmOptions::readYaml(node["algorithm"]);
-  o.network = NetOptions::readYaml(node["network"]);
+  o.readRun(node);
   const YAML::Node d = node["data"];
   o.data.paths = d["paths"].as<std::vector<std::string>>();
   o.data.objects = d["objects"].as<std::vector<std::string>>(std::vector<std::string>());
@@ -68,23 +58,15 @@ TrainOptions TrainOptions::readYaml(const YAML::Node& node) {
   o.data.cache_bytes = d["cache_bytes"].as<uint64_t>();
   o.data.executed_actions = d["executed_actions"].as<bool>(false);
   o.iterations = node["iterations"].as<int64_t>();
-  o.seed = node["seed"].as<uint64_t>();
-  o.threads = node["threads"].as<int>();
-  o.device = node["device"].as<std::string>();
-  o.eval_device = node["eval_device"].as<std::string>("cpu");  // absent before it was an option
   o.prefetch = node["prefetch"].as<bool>(false);
-  o.checkpoint_every = node["checkpoint_every"].as<int64_t>();
-  o.log_every = node["log_every"].as<int64_t>();
   o.normalize_state = node["normalize_state"].as<bool>();
   const YAML::Node e = node["evaluation"];
-  o.eval_every = e["every"].as<int64_t>();
   o.eval_task = e["task"].as<std::string>();
   o.eval_split = e["split"].as<std::string>();
   o.eval_objects = e["objects"].as<std::vector<std::string>>(std::vector<std::string>());
-  o.eval_episodes = e["episodes"].as<uint32_t>();
-  o.eval_seed = e["seed"].as<uint64_t>(1000);
   o.eval_workers = e["workers"].as<unsigned>();
-  o.command = node["command"].as<std::string>("");
+  // Top level before RunOptions (and absent before it was an option).
+  o.eval_device = e["device"].as<std::string>(node["eval_device"].as<std::string>("cpu"));
   return o;
 }
 
@@ -378,25 +360,14 @@ std::string findNewestCheckpoint(const std::string& dir) {
 }
 
 TrainResult train(const PluginRegistry& registry, const TrainOptions& options, const TrainHooks& hooks) {
-  if (options.out_dir.empty()) throw LearningError("no output directory (--out DIR)");
-  if (options.iterations <= 0) throw LearningError("--iterations must be positive");
-  if (options.checkpoint_every <= 0 || options.log_every <= 0)
-    throw LearningError("--checkpoint-every and --log-every must be positive");
+  options.check();
   Trainer trainer(registry, options, hooks);
   return trainer.start();
 }
 
 TrainResult resumeTraining(const PluginRegistry& registry, const std::string& dir, int64_t iterations,
                            const TrainHooks& hooks) {
-  TrainOptions options;
-  const YAML::Node node = readTrainingYaml(dir);
-  try {
-    options = TrainOptions::readYaml(node);
-  } catch (const YAML::Exception& e) {
-    throw LearningError("'" + (fs::path(dir) / "train.yaml").string() + "': " + e.what());
-  }
-  options.out_dir = dir;
-  Trainer trainer(registry, options, hooks);
+  Trainer trainer(registry, readRunDirectory<TrainOptions>(dir), hooks);
   return trainer.resume(iterations);
 }
 

@@ -60,11 +60,11 @@ void truncateCsv(const fs::path& path, int64_t iteration) {
   writeText(path, kept);
 }
 
-YAML::Node readTrainingYaml(const std::string& dir) {
+void readTrainingYaml(const std::string& dir, const std::function<void(const YAML::Node&)>& read) {
   const fs::path file = fs::path(dir) / "train.yaml";
   if (!fs::exists(file)) throw LearningError("'" + dir + "' holds no training (no train.yaml)");
   try {
-    return YAML::LoadFile(file.string());
+    read(YAML::LoadFile(file.string()));
   } catch (const YAML::Exception& e) {
     throw LearningError("'" + file.string() + "': " + e.what());
   }

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 
 namespace YAML {
@@ -29,7 +30,20 @@ void truncateCsv(const std::filesystem::path& path, int64_t iteration);
 // comment line showing how to evaluate it on `task`.
 void writePolicyConfig(const std::filesystem::path& dir, const std::string& task, const std::string& checkpoint,
                        const std::string& device);
-// DIR/train.yaml; a LearningError naming the file when it is missing or damaged.
-YAML::Node readTrainingYaml(const std::string& dir);
+// Calls `read` with DIR/train.yaml; a LearningError naming the file when
+// it is missing or damaged (or `read` throws a YAML::Exception: a key
+// missing or of the wrong type).
+void readTrainingYaml(const std::string& dir, const std::function<void(const YAML::Node&)>& read);
+
+// What --resume DIR runs with: the options of DIR/train.yaml (Options: a
+// RunOptions, TrainOptions or SacOptions, whose readYaml reads its older
+// layouts too), out_dir the directory as named now (it may have moved).
+template <class Options>
+Options readRunDirectory(const std::string& dir) {
+  Options options;
+  readTrainingYaml(dir, [&](const YAML::Node& node) { options = Options::readYaml(node); });
+  options.out_dir = dir;
+  return options;
+}
 
 }  // namespace manibench::learning

@@ -296,6 +296,49 @@ TEST(LearningCheckpoints, ACheckpointRestoresTheSameActions) {
   std::remove(path.c_str());
 }
 
+// The inference policy (what the torch_policy plugin runs: inference mode,
+// the process's freed memory kept) acts as the algorithm's own act() on the
+// same inputs, bit for bit, step after step and across a reset: BC with
+// stacked observations and actions (the history it keeps between steps)
+// and BCQ (its sampled latents from the policy's generator).
+TEST(LearningCheckpoints, TheInferencePolicyActsAsTheAlgorithmBitForBit) {
+  const std::string path = (std::filesystem::temp_directory_path() / "manibench_inference_test.pt").string();
+  const ObservationSpec spec = makeCloudSpec();
+  for (const std::string name : {"bc", "bcq"}) {
+    SCOPED_TRACE(name);
+    torch::manual_seed(0);
+    CheckpointInfo info;
+    info.algorithm = AlgorithmOptions::makeDefaults(name, spec.mode);
+    info.algorithm.eval_samples = 7;
+    info.network = makeNet(name == "bc" ? NetKind::PointNet : NetKind::PnTransformer);
+    if (name == "bc") {
+      info.network.history = 2;
+      info.network.action_history = 2;
+    }
+    info.spec = spec;
+    auto algorithm = makeAlgorithm(info.algorithm, info.network, spec, torch::kCPU);
+    saveCheckpoint(path, info, *algorithm, {});
+    InferenceOptions options;
+    options.checkpoint = path;
+    const std::unique_ptr<InferencePolicy> policy = loadInferencePolicy(options, spec);
+    InputHistory history(info.network, spec);
+    for (int episode = 0; episode < 2; ++episode) {
+      policy->reset(uint64_t(10 + episode));
+      history.reset();
+      at::Generator generator = at::detail::createCPUGenerator(uint64_t(10 + episode));
+      for (int64_t step = 0; step < 3; ++step) {
+        const ObservationBatch obs = makeCloudBatch(1, spec, uint64_t(100 * episode + step));
+        ObservationBatch input = obs;
+        input.state = history.makeInput(obs.state, step);
+        const torch::Tensor expected = algorithm->act(input, generator).squeeze(0);
+        history.setAction(expected);
+        EXPECT_TRUE(torch::equal(policy->act(obs), expected)) << "episode " << episode << ", step " << step;
+      }
+    }
+  }
+  std::remove(path.c_str());
+}
+
 // The parameters of every network of an algorithm, detached copies.
 std::vector<torch::Tensor> copyParameters(const Algorithm& algorithm) {
   std::vector<torch::Tensor> all;

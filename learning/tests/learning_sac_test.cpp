@@ -99,9 +99,17 @@ TEST_F(Sac, TheSameSeedGivesTheSameCurveAndAResumedRunContinuesExactly) {
   EXPECT_EQ(curve.size(), 13u);
   EXPECT_EQ(curve, readCurve(path("b/log.csv")));
 
-  // Stopped at 250 env steps (in the third episode), resumed to 600.
+  // Stopped at 250 env steps (in the third episode), resumed to 600, its
+  // train.yaml in the layout before RunOptions (flat eval_every,
+  // eval_episodes, eval_seed): an older run directory resumes as well.
   const SacResult first = trainSac(getBuildTreeRegistry(), makeOptions("c", 250), {});
   EXPECT_EQ(first.env_steps, 250);
+  {
+    YAML::Node node = YAML::LoadFile(path("c/train.yaml"));
+    for (const std::string key : {"every", "episodes", "seed"}) node["eval_" + key] = node["evaluation"][key];
+    node.remove("evaluation");
+    std::ofstream(path("c/train.yaml")) << YAML::Dump(node) << "\n";
+  }
   std::vector<std::string> messages;
   SacHooks hooks;
   hooks.on_message = [&](const std::string& line) { messages.push_back(line); };

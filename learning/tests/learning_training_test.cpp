@@ -6,6 +6,7 @@
 #include <manibench/learning/checkpoint.hpp>
 #include <manibench/learning/compute.hpp>
 #include <manibench/learning/dataset.hpp>
+#include <manibench/learning/sac_trainer.hpp>
 #include <manibench/learning/trainer.hpp>
 
 #include <manibench/demos.hpp>
@@ -17,6 +18,7 @@
 #include <test_support.hpp>
 
 #include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
 
 #include <malloc.h>
 
@@ -120,6 +122,108 @@ std::vector<std::string> readLosses(const std::string& path) {
     rows.push_back(line.substr(0, a) + line.substr(b, c - b));
   }
   return rows;
+}
+
+// train.yaml as manibench wrote it before RunOptions: the evaluation's
+// device at the top level as eval_device (the rest as now).
+void rewriteInTheOldLayout(const std::string& dir) {
+  const std::string file = (fs::path(dir) / "train.yaml").string();
+  YAML::Node node = YAML::LoadFile(file);
+  node["eval_device"] = node["evaluation"]["device"].as<std::string>();
+  node["evaluation"].remove("device");
+  std::ofstream(file) << YAML::Dump(node) << "\n";
+}
+
+TEST_F(LearningTraining, OneRunOptionsLayoutAndTheOldLayoutsStillRead) {
+  // train.yaml's layout (RunOptions): the shared keys at the top level,
+  // every evaluation key under `evaluation:`; each program's round trip.
+  TrainOptions t = makeOptions("bc", "layout", 10);
+  t.seed = 3;
+  t.eval_every = 5;
+  t.eval_episodes = 2;
+  t.eval_seed = 77;
+  t.eval_split = "test";
+  t.eval_device = "cuda";
+  YAML::Node node;
+  t.writeYaml(node);
+  for (const char* key : {"out_dir", "algorithm", "network", "seed", "threads", "device", "checkpoint_every",
+                          "log_every", "command", "data", "iterations"})
+    EXPECT_TRUE(node[key].IsDefined()) << key;
+  for (const char* key : {"every", "episodes", "seed", "task", "split", "objects", "workers", "device"})
+    EXPECT_TRUE(node["evaluation"][key].IsDefined()) << key;
+  EXPECT_FALSE(node["eval_device"].IsDefined());
+  EXPECT_EQ(YAML::Dump(node), [&] {
+    YAML::Node again;
+    TrainOptions::readYaml(node).writeYaml(again);
+    return YAML::Dump(again);
+  }());
+  // The demonstration trainer's layout before: eval_device at the top level.
+  node["eval_device"] = "cuda";
+  node["evaluation"].remove("device");
+  EXPECT_EQ(TrainOptions::readYaml(node).eval_device, "cuda");
+
+  SacOptions s;
+  s.out_dir = "sac";
+  s.environment_id = "Reach-v0";
+  s.eval_every = 100;
+  s.eval_episodes = 3;
+  s.eval_seed = 9;
+  YAML::Node sac;
+  s.writeYaml(sac);
+  EXPECT_EQ(sac["evaluation"]["every"].as<int64_t>(), 100);
+  EXPECT_FALSE(sac["eval_every"].IsDefined());
+  EXPECT_EQ(sac["algorithm"]["name"].as<std::string>(), "sac");  // what `train --resume` dispatches on
+  // SAC's layout before: flat eval_every, eval_episodes, eval_seed (each
+  // absent in still older files: the defaults).
+  sac.remove("evaluation");
+  sac["eval_every"] = 200;
+  sac["eval_episodes"] = 4;
+  sac["eval_seed"] = 5;
+  const SacOptions old = SacOptions::readYaml(sac);
+  EXPECT_EQ(old.eval_every, 200);
+  EXPECT_EQ(old.eval_episodes, 4u);
+  EXPECT_EQ(old.eval_seed, 5u);
+  sac.remove("eval_every");
+  sac.remove("eval_episodes");
+  sac.remove("eval_seed");
+  const SacOptions older = SacOptions::readYaml(sac);
+  EXPECT_EQ(older.eval_every, 0);
+  EXPECT_EQ(older.eval_episodes, 10u);
+  EXPECT_EQ(older.eval_seed, 1000u);
+  EXPECT_EQ(older.checkpoint_every, s.checkpoint_every);
+
+  // One check: the shared options' refusals name the option in both programs.
+  auto refusal = [](const auto& options) {
+    try {
+      options.check();
+    } catch (const LearningError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  TrainOptions bad_t = t;
+  bad_t.log_every = 0;
+  SacOptions bad_s = s;
+  bad_s.log_every = 0;
+  EXPECT_TRUE(contains(refusal(bad_t), "--log-every")) << refusal(bad_t);
+  EXPECT_TRUE(contains(refusal(bad_s), "--log-every")) << refusal(bad_s);
+  bad_t = t;
+  bad_t.out_dir.clear();
+  EXPECT_TRUE(contains(refusal(bad_t), "--out")) << refusal(bad_t);
+}
+
+TEST_F(LearningTraining, ARunDirectoryWrittenInTheOldLayoutResumesExactly) {
+  const TrainResult straight = train(getBuildTreeRegistry(), makeOptions("bc", "old_straight", 40), {});
+  TrainOptions o = makeOptions("bc", "old_layout", 20);
+  o.eval_device = "cpu";
+  train(getBuildTreeRegistry(), o, {});
+  rewriteInTheOldLayout(file("old_layout"));
+  const TrainResult resumed = resumeTraining(getBuildTreeRegistry(), file("old_layout"), 40, {});
+  EXPECT_EQ(resumed.iteration, 40);
+  EXPECT_TRUE(sameWeights(straight.checkpoint, resumed.checkpoint));
+  EXPECT_EQ(readLosses(file("old_straight/log.csv")), readLosses(file("old_layout/log.csv")));
+  // The resumed run wrote its train.yaml again, in the one layout.
+  EXPECT_TRUE(YAML::LoadFile(file("old_layout/train.yaml"))["evaluation"]["device"].IsDefined());
 }
 
 TEST_F(LearningTraining, AResumedTrainingContinuesExactly) {

@@ -157,11 +157,11 @@ ml::TrainOptions parseTrainOptions(const mb::cli::Arguments& args, int argc, cha
   ml::TrainOptions o;
   o.algorithm = ml::AlgorithmOptions::makeDefaults(args.positional[0]);
   o.network = ml::NetOptions::makeDefaults(args.positional[0]);
+  if (!args.options.count("out")) throw UsageError("no --out DIR", kUsage);
+  ml::programs::parseRunOptions(args, argc, argv, o, kUsage);
   if (!args.repeated.count("demos")) throw UsageError("no --demos FILE.h5", kUsage);
   for (const std::string& d : args.repeated.at("demos"))
     for (const std::string& path : splitList(d)) o.data.paths.push_back(fs::absolute(path).string());
-  if (!has("out")) throw UsageError("no --out DIR", kUsage);
-  o.out_dir = value("out");
   if (has("objects")) o.data.objects = splitList(value("objects"));
   if (has("per-object")) o.data.per_object = uint32_t(parseInteger(value("per-object"), "--per-object", 1));
   if (has("cache-gb"))
@@ -190,9 +190,6 @@ ml::TrainOptions parseTrainOptions(const mb::cli::Arguments& args, int argc, cha
   o.pick_weight_decay = !has("weight-decay");
   o.pick_lr = !has("lr");
   o.algorithm.bc_tanh = !has("no-tanh");
-  if (has("seed")) o.seed = uint64_t(parseInteger(value("seed"), "--seed", 0));
-  if (has("threads")) o.threads = int(parseInteger(value("threads"), "--threads", 1));
-  if (has("device")) o.device = value("device");
   if (has("gamma")) o.algorithm.gamma = parseNumber(value("gamma"), "--gamma");
   if (has("tau")) o.algorithm.tau = parseNumber(value("tau"), "--tau");
   if (has("alpha")) o.algorithm.alpha = parseNumber(value("alpha"), "--alpha");
@@ -203,32 +200,24 @@ ml::TrainOptions parseTrainOptions(const mb::cli::Arguments& args, int argc, cha
   if (has("lambda")) o.algorithm.lambda = parseNumber(value("lambda"), "--lambda");
   if (has("train-samples")) o.algorithm.train_samples = parseInteger(value("train-samples"), "--train-samples", 1);
   if (has("eval-samples")) o.algorithm.eval_samples = parseInteger(value("eval-samples"), "--eval-samples", 1);
-  if (has("checkpoint-every")) o.checkpoint_every = parseInteger(value("checkpoint-every"), "--checkpoint-every", 1);
-  if (has("log-every")) o.log_every = parseInteger(value("log-every"), "--log-every", 1);
-  if (has("eval-every")) o.eval_every = parseInteger(value("eval-every"), "--eval-every", 0);
   if (has("eval-task")) o.eval_task = value("eval-task");
   if (has("eval-split")) o.eval_split = value("eval-split");
   if (o.eval_split != "train" && o.eval_split != "test")
     throw UsageError("--eval-split takes train or test", kUsage);
   if (has("eval-objects")) o.eval_objects = splitList(value("eval-objects"));
-  if (has("eval-episodes")) o.eval_episodes = uint32_t(parseInteger(value("eval-episodes"), "--eval-episodes", 1));
   if (has("eval-device")) o.eval_device = ml::parseDevice(value("eval-device")).str();
-  if (has("eval-seed")) o.eval_seed = uint64_t(parseInteger(value("eval-seed"), "--eval-seed", 0));
   if (has("eval-workers")) o.eval_workers = unsigned(parseInteger(value("eval-workers"), "--eval-workers", 1));
-  std::string command = "manibench train";
-  for (int i = 2; i < argc; ++i) command += std::string(" ") + argv[i];
-  o.command = command;
   return o;
 }
 
 int run(int argc, char** argv) {
   if (ml::programs::isSacCommand(argc, argv)) return ml::programs::runSacCommand(argc, argv);
-  const std::vector<std::string> valued = {
-      "demos", "objects", "per-object", "cache-gb", "net", "history", "action-history", "hidden", "point-layers", "width", "layers", "heads", "ff",
-      "dropout", "iterations", "batch-size", "lr", "weight-decay", "seed", "threads", "device", "gamma", "tau",
-      "alpha", "action-noise", "noise-clip", "policy-delay", "phi", "lambda", "train-samples", "eval-samples",
-      "out", "checkpoint-every", "log-every", "eval-every", "eval-task", "eval-split", "eval-objects",
-      "eval-episodes", "eval-workers", "eval-seed", "eval-device", "resume"};
+  std::vector<std::string> valued = ml::programs::listRunOptions();
+  valued.insert(valued.end(), {"demos", "objects", "per-object", "cache-gb", "net", "history", "action-history", "hidden",
+                               "point-layers", "width", "layers", "heads", "ff", "dropout", "iterations", "batch-size",
+                               "lr", "weight-decay", "gamma", "tau", "alpha", "action-noise", "noise-clip",
+                               "policy-delay", "phi", "lambda", "train-samples", "eval-samples", "eval-task",
+                               "eval-split", "eval-objects", "eval-workers", "eval-device", "resume"});
   const mb::cli::Arguments args =
       mb::cli::parseArguments(argc, argv, 2, valued, {"normalize-state", "step-input", "robot-frame", "executed-actions", "no-progress", "no-tanh", "transformer-masks", "prefetch"}, kUsage, {"demos"});
   if (args.help) {

@@ -31,6 +31,30 @@ std::vector<std::string> splitList(const std::string& text) {
   return out;
 }
 
+const std::vector<std::string>& listRunOptions() {
+  static const std::vector<std::string> names = {"out",       "seed",       "threads",       "device",   "checkpoint-every",
+                                                 "log-every", "eval-every", "eval-episodes", "eval-seed"};
+  return names;
+}
+
+void parseRunOptions(const cli::Arguments& args, int argc, char** argv, RunOptions& o, const char* usage) {
+  auto has = [&](const std::string& key) { return args.options.count(key) > 0; };
+  auto integer = [&](const std::string& key, int64_t minimum) {
+    return parseInteger(args.options.at(key), "--" + key, minimum, usage);
+  };
+  if (has("out")) o.out_dir = args.options.at("out");
+  if (has("seed")) o.seed = uint64_t(integer("seed", 0));
+  if (has("threads")) o.threads = int(integer("threads", 1));
+  if (has("device")) o.device = args.options.at("device");
+  if (has("checkpoint-every")) o.checkpoint_every = integer("checkpoint-every", 1);
+  if (has("log-every")) o.log_every = integer("log-every", 1);
+  if (has("eval-every")) o.eval_every = integer("eval-every", 0);
+  if (has("eval-episodes")) o.eval_episodes = uint32_t(integer("eval-episodes", 1));
+  if (has("eval-seed")) o.eval_seed = uint64_t(integer("eval-seed", 0));
+  o.command = "manibench train";
+  for (int i = 2; i < argc; ++i) o.command += std::string(" ") + argv[i];
+}
+
 int64_t parseInteger(const std::string& text, const std::string& option, int64_t minimum, const char* usage) {
   try {
     std::size_t used = 0;

@@ -9,6 +9,10 @@
 #include <string>
 #include <vector>
 
+namespace manibench::cli {
+struct Arguments;
+}
+
 namespace manibench::learning::programs {
 
 std::vector<std::string> splitList(const std::string& text);
@@ -16,6 +20,14 @@ std::vector<std::string> splitList(const std::string& text);
 int64_t parseInteger(const std::string& text, const std::string& option, int64_t minimum, const char* usage);
 double parseNumber(const std::string& text, const std::string& option, const char* usage);
 std::vector<int64_t> parseLayers(const std::string& text, const std::string& option, const char* usage);
+
+// The options every training takes (RunOptions): the names of those with
+// a value (--out, --seed, --threads, --device, --checkpoint-every,
+// --log-every, --eval-every, --eval-episodes, --eval-seed), for the
+// command's parseArguments; and their parse into `o` (what was not given
+// keeps o's default), with `o.command` the command line.
+const std::vector<std::string>& listRunOptions();
+void parseRunOptions(const cli::Arguments& args, int argc, char** argv, RunOptions& o, const char* usage);
 
 // `manibench eval ENVIRONMENT --policy torch_policy --policy-config POLICY
 // ARGS... --no-progress --out OUT_DIR` in a child process (posix_spawn:

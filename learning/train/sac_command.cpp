@@ -102,15 +102,18 @@ Every `manibench train sac` option but --out, --objects, --split, --seed
 and --resume goes to each object's training (--steps, --workers, ...).
 )";
 
-const std::vector<std::string> kValued = {
-    "split", "objects", "config", "set", "controller", "steps", "workers", "replay-size", "batch-size", "lr",
-    "gamma", "tau", "target-update-every", "updates-per-step", "hidden", "init-temperature", "target-entropy",
-    "random-steps", "learning-starts", "seed", "threads", "device", "out", "checkpoint-every", "log-every",
-    "worker-timeout", "eval-every", "eval-episodes", "eval-seed", "resume"};
+const std::vector<std::string> kValued = [] {
+  std::vector<std::string> valued = listRunOptions();
+  valued.insert(valued.end(), {"split", "objects", "config", "set", "controller", "steps", "workers", "replay-size",
+                               "batch-size", "lr", "gamma", "tau", "target-update-every", "updates-per-step", "hidden",
+                               "init-temperature", "target-entropy", "random-steps", "learning-starts",
+                               "worker-timeout", "resume"});
+  return valued;
+}();
 const std::vector<std::string> kFlags = {"early-done", "no-early-done", "fixed-temperature",
                                          "log-temperature-gradient", "no-progress"};
 
-SacOptions parseSacOptions(const mb::cli::Arguments& args, const char* usage) {
+SacOptions parseSacOptions(const mb::cli::Arguments& args, int argc, char** argv, const char* usage) {
   auto has = [&](const std::string& key) { return args.options.count(key) > 0; };
   auto value = [&](const std::string& key) { return args.options.at(key); };
   auto integer = [&](const std::string& key, int64_t minimum) {
@@ -118,7 +121,7 @@ SacOptions parseSacOptions(const mb::cli::Arguments& args, const char* usage) {
   };
   auto number = [&](const std::string& key) { return parseNumber(value(key), "--" + key, usage); };
   SacOptions o;
-  if (has("out")) o.out_dir = value("out");
+  parseRunOptions(args, argc, argv, o, usage);
   o.split = mb::cli::parseSplit(args, "train", usage);
   if (has("objects")) o.objects = splitList(value("objects"));
   const mb::ConfigSources sources = mb::cli::getConfigSources(args);
@@ -149,22 +152,8 @@ SacOptions parseSacOptions(const mb::cli::Arguments& args, const char* usage) {
   }
   if (has("random-steps")) o.random_steps = integer("random-steps", 0);
   if (has("learning-starts")) o.learning_starts = integer("learning-starts", 0);
-  if (has("seed")) o.seed = uint64_t(integer("seed", 0));
-  if (has("threads")) o.threads = int(integer("threads", 1));
-  if (has("device")) o.device = value("device");
-  if (has("checkpoint-every")) o.checkpoint_every = integer("checkpoint-every", 1);
-  if (has("log-every")) o.log_every = integer("log-every", 1);
   if (has("worker-timeout")) o.worker_timeout = number("worker-timeout");
-  if (has("eval-every")) o.eval_every = integer("eval-every", 0);
-  if (has("eval-episodes")) o.eval_episodes = uint32_t(integer("eval-episodes", 1));
-  if (has("eval-seed")) o.eval_seed = uint64_t(integer("eval-seed", 0));
   return o;
-}
-
-std::string joinCommand(int argc, char** argv) {
-  std::string command = "manibench train";
-  for (int i = 2; i < argc; ++i) command += std::string(" ") + argv[i];
-  return command;
 }
 
 void drawSacProgress(const SacProgress& p) {
@@ -228,7 +217,7 @@ int runSacPopulation(int argc, char** argv) {
   if (args.positional.size() != 1) throw UsageError("name one task", kPopulationUsage);
   if (!has("out")) throw UsageError("no --out DIR", kPopulationUsage);
   if (has("resume")) throw UsageError("run the same command again to continue a population", kPopulationUsage);
-  parseSacOptions(args, kPopulationUsage);  // the training's options, checked once here
+  parseSacOptions(args, argc, argv, kPopulationUsage);  // the training's options, checked once here
   PopulationOptions o;
   o.task = args.positional.front();
   o.out_dir = args.options.at("out");
@@ -287,10 +276,9 @@ int runSac(int argc, char** argv) {
         args.options.count("steps") ? parseInteger(args.options.at("steps"), "--steps", 1, kSacUsage) : 0;
     result = resumeSac(registry, args.options.at("resume"), steps, hooks);
   } else {
-    SacOptions o = parseSacOptions(args, kSacUsage);
+    SacOptions o = parseSacOptions(args, argc, argv, kSacUsage);
     if (o.out_dir.empty()) throw UsageError("no --out DIR", kSacUsage);
     o.environment_id = positional.front();
-    o.command = joinCommand(argc, argv);
     result = trainSac(registry, o, hooks);
   }
   if (progress) std::cerr << "\n";

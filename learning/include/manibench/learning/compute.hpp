@@ -43,8 +43,12 @@ void setFlushDenormals();
 // page-faulted them in afresh. PointNet + Transformer BC on one thread,
 // 2026-11-27, loaded machine: 22 s of its 61 s of CPU went to the kernel;
 // kept, 1.9 of 44 s, and 0.128 -> 0.189 iterations/s, the same losses. The
-// cost: the process keeps its peak (2.6 -> 3.5 GB resident there). For
-// training processes only: it is process-wide.
+// cost: the process keeps its peak (2.6 -> 3.5 GB resident there). It is
+// process-wide: training processes, and (since 2026-11-28) a process that
+// loads an inference policy (loadInferencePolicy: the torch_policy
+// plugin's environment or policy process), where the networks' activations
+// otherwise cost more in page faults than in arithmetic; it changes no
+// value, only where freed memory goes.
 void setKeepFreedMemory();
 // What a training process (the trainers and the learning bench, which must
 // time what they run) sets before it builds a network: the threads, flushed

@@ -26,6 +26,7 @@
 
 #include <manibench/learning/algorithms.hpp>
 #include <manibench/learning/networks.hpp>
+#include <manibench/learning/run_options.hpp>
 #include <manibench/learning/trainer.hpp>
 
 #include <functional>
@@ -39,15 +40,18 @@ class PluginRegistry;
 
 namespace manibench::learning {
 
-struct SacOptions {
-  std::string out_dir;
+// RunOptions' fields (out_dir, algorithm, network: an MLP of Table 6's 3 x
+// 256, seed, threads, device, checkpoint and log cadence in env steps,
+// eval_every, eval_episodes per object of the training, eval_seed,
+// command) and SAC's own.
+struct SacOptions : RunOptions {
+  SacOptions() : RunOptions("sac", /*checkpoint_every=*/50000, /*log_every=*/2000) {}
+
   std::string environment_id;        // a task or fixed-object id
   std::string split = "train";       // a task's objects (a fixed-object id has its own)
   std::vector<std::string> objects;  // empty: all of them; episodes go round them in order
   std::vector<std::string> config_files;  // --config layers (absolute paths)
   std::vector<std::string> config_sets;   // --set KEY=VALUE layers
-  AlgorithmOptions algorithm = AlgorithmOptions::makeDefaults("sac");
-  NetOptions network;  // an MLP of Table 6's 3 x 256
   int64_t steps = 2000000;          // env steps in all (C.2: 2 x 10^6)
   unsigned workers = 4;             // C.2's sample-collecting processes
   int64_t replay_size = 1000000;    // Table 6
@@ -60,24 +64,14 @@ struct SacOptions {
   // C.2: the episode does not end at success while training (the agent
   // learns to stay successful); --early-done ends it there.
   bool early_done = false;
-  uint64_t seed = 0;
-  int threads = 1;
-  std::string device = "cpu";
-  int64_t checkpoint_every = 50000;  // env steps
-  int64_t log_every = 2000;          // env steps per log.csv row
   // A worker silent this long on one request (a task stuck in a loop or a
   // system call) is killed and replaced, its episode dropped; 0: wait for
   // ever. A drawer's reset or step takes milliseconds even on the loaded
   // 2-core machine; the margin is for a machine swapping.
   double worker_timeout = 120;
-  // The deterministic actor's success every eval_every env steps (0: never)
-  // and at the end, through SacHooks::evaluate: eval_episodes per object of
-  // the training, from base seed eval_seed (not demos generate's 0).
-  int64_t eval_every = 0;
-  uint32_t eval_episodes = 10;
-  uint64_t eval_seed = 1000;
-  std::string command;
 
+  // RunOptions::checkRun and SAC's own (a LearningError naming the option).
+  void check() const;
   void writeYaml(YAML::Node& node) const;
   static SacOptions readYaml(const YAML::Node& node);
 };

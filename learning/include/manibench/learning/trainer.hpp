@@ -15,6 +15,7 @@
 
 #include <manibench/learning/algorithms.hpp>
 #include <manibench/learning/dataset.hpp>
+#include <manibench/learning/run_options.hpp>
 
 #include <functional>
 #include <string>
@@ -26,10 +27,12 @@ class PluginRegistry;
 
 namespace manibench::learning {
 
-struct TrainOptions {
-  std::string out_dir;
-  AlgorithmOptions algorithm = AlgorithmOptions::makeDefaults("bc");
-  NetOptions network;
+// RunOptions' fields (out_dir, algorithm, network, seed, threads, device,
+// checkpoint and log cadence in iterations, eval_every, eval_episodes per
+// object, eval_seed, command) and the demonstration trainer's own.
+struct TrainOptions : RunOptions {
+  TrainOptions() : RunOptions("bc", /*checkpoint_every=*/1000, /*log_every=*/100) {}
+
   // network.kind was not chosen: mlp for state demonstrations,
   // pn_transformer for point clouds.
   bool pick_network = false;
@@ -39,36 +42,26 @@ struct TrainOptions {
   bool pick_weight_decay = false;
   DatasetOptions data;
   int64_t iterations = 10000;  // gradient steps in all
-  uint64_t seed = 0;
-  int threads = 1;
-  std::string device = "cpu";
-  // The device policy.yaml names for evaluating the checkpoints (the
-  // torch_policy plugin runs inside the environment's process, one
-  // observation at a time: the CPU unless asked, whatever trained it).
-  std::string eval_device = "cpu";
   // Gather the next batch in another thread while the current one trains:
   // always on CUDA; on the CPU off unless asked (the gather then competes
   // with the step for the cores). The weights are the same either way.
   bool prefetch = false;
-  int64_t checkpoint_every = 1000;
-  int64_t log_every = 100;
   bool normalize_state = false;  // (s - mean) / std per feature, from the demonstrations
   // Append the state's world-frame segments in the robot base's frame
   // (robot_frame.hpp); resolved into network.robot_frame when training starts.
   bool robot_frame = false;
-  // Success of the current policy every eval_every iterations (0: never),
-  // through TrainHooks::evaluate.
-  int64_t eval_every = 0;
+  // The evaluation's own (train.yaml's `evaluation:` beside RunOptions'):
   std::string eval_task;  // a task or fixed-object id (default: the demonstrations' environment)
   std::string eval_split = "train";
   std::vector<std::string> eval_objects;  // empty: the split's
-  uint32_t eval_episodes = 10;            // per object
-  // The evaluation's base seed: not 0, the default of `demos generate`, so
-  // that the episodes are not the demonstrations' own.
-  uint64_t eval_seed = 1000;
   unsigned eval_workers = 1;
-  std::string command;  // how it was started, for train.yaml
+  // The device policy.yaml names for evaluating the checkpoints (the
+  // torch_policy plugin runs inside the environment's process, one
+  // observation at a time: the CPU unless asked, whatever trained it).
+  std::string eval_device = "cpu";
 
+  // RunOptions::checkRun and the iterations (a LearningError naming the option).
+  void check() const;
   void writeYaml(YAML::Node& node) const;
   static TrainOptions readYaml(const YAML::Node& node);
 };
