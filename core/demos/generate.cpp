@@ -8,6 +8,7 @@
 #include <chrono>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <thread>
 
 namespace manibench {
@@ -64,6 +65,49 @@ class RoundWriter {
   std::size_t next_ = 0;
 };
 
+// This run's objects: its shard of the list, without those done before.
+// (MPI) the ranks share the objects left, so that a resumed run spreads the
+// rest.
+std::vector<std::string> findOwnObjects(const GenerationOptions& options) {
+  std::vector<std::string> own;
+  std::size_t position = 0;  // among the shard's objects left
+  for (std::size_t i = 0; i < options.evaluation.objects.size(); ++i) {
+    if (i % options.shards != options.shard || options.done_objects.count(options.evaluation.objects[i]))
+      continue;
+    if (position++ % options.ranks == options.rank) own.push_back(options.evaluation.objects[i]);
+  }
+  return own;
+}
+
+// The next round: the objects that still need trajectories and may still
+// try (the first round: `own`, or the workers' split where it is null),
+// each on as many new levels from `next_level` as the neediest lacks.
+// Nothing once no object needs more.
+std::optional<EvaluationOptions> planRound(const GenerationOptions& options, const GenerationResult& result,
+                                           const std::vector<std::string>* own, uint32_t max_attempts,
+                                           uint64_t& next_level) {
+  std::vector<std::string> needy;
+  uint32_t most_needed = options.per_object;
+  if (result.rounds > 0) {
+    most_needed = 0;
+    for (const GenerationObjectResult& o : result.objects)
+      if (o.kept < options.per_object && o.attempts < max_attempts) {
+        needy.push_back(o.object_id);
+        most_needed = std::max(most_needed, options.per_object - o.kept);
+      }
+    if (needy.empty()) return std::nullopt;
+  }
+  EvaluationOptions round = options.evaluation;
+  round.record_successes = true;
+  if (own != nullptr) round.objects = *own;
+  if (!needy.empty()) round.objects = needy;
+  round.levels.clear();
+  const uint64_t count = std::min<uint64_t>(most_needed, max_attempts - next_level);
+  for (uint64_t level = next_level; level < next_level + count; ++level) round.levels.push_back(level);
+  next_level += count;
+  return round;
+}
+
 }  // namespace
 
 std::string formatGeneration(const GenerationOptions& options, const std::vector<std::string>& objects,
@@ -116,16 +160,7 @@ GenerationResult generateDemonstrations(const PluginRegistry& registry,
     throw EvaluationError("a shard outside its count");
   if (options.shards > 1 && options.evaluation.objects.empty())
     throw EvaluationError("a shard needs the run's whole object list");
-  // This run's objects: its shard of the list, without those done before.
-  // (MPI) the ranks share the objects left, so that a resumed run
-  // spreads the rest.
-  std::vector<std::string> own;
-  std::size_t position = 0;  // among the shard's objects left
-  for (std::size_t i = 0; i < options.evaluation.objects.size(); ++i) {
-    if (i % options.shards != options.shard || options.done_objects.count(options.evaluation.objects[i]))
-      continue;
-    if (position++ % options.ranks == options.rank) own.push_back(options.evaluation.objects[i]);
-  }
+  const std::vector<std::string> own = findOwnObjects(options);
   const bool own_list = options.shards > 1 || options.ranks > 1 || !options.done_objects.empty();
   if (own_list && own.empty() && options.ranks > 1 && options.rank > 0) return {};  // more ranks than objects
   if (own_list && own.empty()) throw EvaluationError("no objects left to run");
@@ -149,27 +184,10 @@ GenerationResult generateDemonstrations(const PluginRegistry& registry,
     return hooks.should_stop && hooks.should_stop();
   };
   for (;;) {
-    // The objects that still need trajectories and may still try; the
-    // first round sets the list up from the workers' split.
-    std::vector<std::string> needy;
-    uint32_t most_needed = options.per_object;
-    if (result.rounds > 0) {
-      most_needed = 0;
-      for (const GenerationObjectResult& o : result.objects)
-        if (o.kept < options.per_object && o.attempts < max_attempts) {
-          needy.push_back(o.object_id);
-          most_needed = std::max(most_needed, options.per_object - o.kept);
-        }
-      if (needy.empty()) break;
-    }
-    EvaluationOptions round = options.evaluation;
-    round.record_successes = true;
-    if (own_list) round.objects = own;
-    if (!needy.empty()) round.objects = needy;
-    round.levels.clear();
-    const uint64_t count = std::min<uint64_t>(most_needed, max_attempts - next_level);
-    for (uint64_t level = next_level; level < next_level + count; ++level) round.levels.push_back(level);
-    next_level += count;
+    std::optional<EvaluationOptions> planned =
+        planRound(options, result, own_list ? &own : nullptr, max_attempts, next_level);
+    if (!planned) break;
+    const EvaluationOptions& round = *planned;
 
     std::unique_ptr<RoundWriter> round_writer;
     EvaluationHooks round_hooks;

@@ -103,6 +103,71 @@ void assignFrom(std::vector<T>& out, const std::byte* data, uint64_t count) {
   if (count) std::memcpy(out.data(), data, count * sizeof(T));
 }
 
+// Shared memory inherited from the worker (the coordinator's slots) is the
+// coordinator's: unmapped, all but the policy's own block, before any
+// policy code runs.
+void unmapSharedExcept(const std::byte* block) {
+  if (FILE* maps = std::fopen("/proc/self/maps", "r")) {
+    std::vector<std::pair<uintptr_t, uintptr_t>> shared;
+    char line[4096];
+    while (std::fgets(line, sizeof(line), maps)) {
+      unsigned long from = 0, to = 0;
+      char perms[8] = {};
+      if (std::sscanf(line, "%lx-%lx %7s", &from, &to, perms) == 3 && perms[3] == 's' &&
+          from != reinterpret_cast<uintptr_t>(block))
+        shared.emplace_back(from, to);
+    }
+    std::fclose(maps);
+    for (const auto& [from, to] : shared) munmap(reinterpret_cast<void*>(from), to - from);
+  }
+}
+
+// The policy's output goes to a log in its directory (relayed by the
+// worker, bounded by the output limit); no descriptor of the worker's
+// stays; its temporary files and home are the directory.
+void enterPrivateDir(const std::string& private_dir) {
+  const std::string log = private_dir + "/policy.log";
+  const int log_fd = open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0600);
+  const int null_fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
+  if (log_fd < 0 || null_fd < 0) throw std::runtime_error("cannot open the policy's log");
+  std::fflush(nullptr);
+  dup2(null_fd, 0);
+  dup2(log_fd, 1);
+  dup2(log_fd, 2);
+  syscall(SYS_close_range, 3u, ~0u, 0u);
+  setenv("TMPDIR", private_dir.c_str(), 1);
+  setenv("TMP", private_dir.c_str(), 1);
+  setenv("TEMP", private_dir.c_str(), 1);
+  setenv("HOME", private_dir.c_str(), 1);
+  if (chdir(private_dir.c_str()) != 0) throw std::runtime_error("cannot enter " + private_dir);
+}
+
+// The observation, rebuilt from the block as the worker wrote it.
+void readObservation(const PolicyBlockHeader& header, const std::byte* data, Eigen::VectorXd& state,
+                     VisualObservation& visual) {
+  std::size_t offset = 0;
+  const std::byte* at[kArrays];
+  for (uint32_t a = 0; a < kArrays; ++a) {
+    at[a] = data + offset;
+    offset += roundUp(header.counts[a] * kElementBytes[a]);
+  }
+  state.resize(Eigen::Index(header.counts[kState]));
+  if (state.size()) std::memcpy(state.data(), at[kState], std::size_t(state.size()) * 8);
+  visual.mode = static_cast<ObservationMode>(header.mode);
+  visual.mask_count = header.mask_count;
+  visual.points.mask_count = header.mask_count;
+  visual.camera_count = header.camera_count;
+  visual.height = header.height;
+  visual.width = header.width;
+  assignFrom(visual.points.xyz, at[kXyz], header.counts[kXyz]);
+  assignFrom(visual.points.rgb, at[kPointRgb], header.counts[kPointRgb]);
+  assignFrom(visual.points.masks, at[kPointMasks], header.counts[kPointMasks]);
+  assignFrom(visual.rgb, at[kRgb], header.counts[kRgb]);
+  assignFrom(visual.rgb_bytes, at[kRgbBytes], header.counts[kRgbBytes]);
+  assignFrom(visual.depth, at[kDepth], header.counts[kDepth]);
+  assignFrom(visual.masks, at[kMasks], header.counts[kMasks]);
+}
+
 // The policy process's side: everything from the fork on (spawnChild has
 // tied it to its worker and made its process group). Never returns.
 [[noreturn]] void servePolicy(const PolicyProcessSettings& settings, std::byte* block,
@@ -118,37 +183,8 @@ void assignFrom(std::vector<T>& out, const std::byte* data, uint64_t count) {
   };
   std::unique_ptr<PolicyInstance> policy;
   try {
-    // Shared memory inherited from the worker (the coordinator's slots) is
-    // the coordinator's: unmapped before any policy code runs.
-    if (FILE* maps = std::fopen("/proc/self/maps", "r")) {
-      std::vector<std::pair<uintptr_t, uintptr_t>> shared;
-      char line[4096];
-      while (std::fgets(line, sizeof(line), maps)) {
-        unsigned long from = 0, to = 0;
-        char perms[8] = {};
-        if (std::sscanf(line, "%lx-%lx %7s", &from, &to, perms) == 3 && perms[3] == 's' &&
-            from != reinterpret_cast<uintptr_t>(block))
-          shared.emplace_back(from, to);
-      }
-      std::fclose(maps);
-      for (const auto& [from, to] : shared) munmap(reinterpret_cast<void*>(from), to - from);
-    }
-    // Its output goes to a log in its directory (relayed by the worker,
-    // bounded by the output limit); no descriptor of the worker's stays.
-    const std::string log = private_dir + "/policy.log";
-    const int log_fd = open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0600);
-    const int null_fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
-    if (log_fd < 0 || null_fd < 0) throw std::runtime_error("cannot open the policy's log");
-    std::fflush(nullptr);
-    dup2(null_fd, 0);
-    dup2(log_fd, 1);
-    dup2(log_fd, 2);
-    syscall(SYS_close_range, 3u, ~0u, 0u);
-    setenv("TMPDIR", private_dir.c_str(), 1);
-    setenv("TMP", private_dir.c_str(), 1);
-    setenv("TEMP", private_dir.c_str(), 1);
-    setenv("HOME", private_dir.c_str(), 1);
-    if (chdir(private_dir.c_str()) != 0) throw std::runtime_error("cannot enter " + private_dir);
+    unmapSharedExcept(block);
+    enterPrivateDir(private_dir);
     SandboxSettings sandbox;
     sandbox.read_paths = settings.read_paths;
     sandbox.private_dir = private_dir;
@@ -197,28 +233,7 @@ void assignFrom(std::vector<T>& out, const std::byte* data, uint64_t count) {
         policy->reset(PolicyEpisode{std::string(names, task_size), std::string(names + task_size, object_size),
                                     header.seed});
       } else {
-        // The observation, rebuilt from the block as the worker wrote it.
-        std::size_t offset = 0;
-        const std::byte* at[kArrays];
-        for (uint32_t a = 0; a < kArrays; ++a) {
-          at[a] = data + offset;
-          offset += roundUp(header.counts[a] * kElementBytes[a]);
-        }
-        state.resize(Eigen::Index(header.counts[kState]));
-        if (state.size()) std::memcpy(state.data(), at[kState], std::size_t(state.size()) * 8);
-        visual.mode = static_cast<ObservationMode>(header.mode);
-        visual.mask_count = header.mask_count;
-        visual.points.mask_count = header.mask_count;
-        visual.camera_count = header.camera_count;
-        visual.height = header.height;
-        visual.width = header.width;
-        assignFrom(visual.points.xyz, at[kXyz], header.counts[kXyz]);
-        assignFrom(visual.points.rgb, at[kPointRgb], header.counts[kPointRgb]);
-        assignFrom(visual.points.masks, at[kPointMasks], header.counts[kPointMasks]);
-        assignFrom(visual.rgb, at[kRgb], header.counts[kRgb]);
-        assignFrom(visual.rgb_bytes, at[kRgbBytes], header.counts[kRgbBytes]);
-        assignFrom(visual.depth, at[kDepth], header.counts[kDepth]);
-        assignFrom(visual.masks, at[kMasks], header.counts[kMasks]);
+        readObservation(header, data, state, visual);
         policy->act(state, header.step, action, visual);
         std::memcpy(action_out, action.data(), std::size_t(action_dim) * sizeof(double));
       }
