@@ -398,15 +398,9 @@ class SacTrainer {
     // The buffer first, then the checkpoint that names it, then the older buffers.
     const fs::path folder = dir_ / "checkpoints";
     replay_->save(folder / replayName(env_steps_));
-    CheckpointInfo info;
-    info.iteration = updates_;
-    info.algorithm = options_.algorithm;
-    info.network = options_.network;
-    info.spec = spec_;
-    info.manibench_version = getManibenchVersion();
     YAML::Node node;
     options_.writeYaml(node);
-    info.training_yaml = yamlText(node);
+    const CheckpointInfo info = describeCheckpoint(updates_, options_, spec_, node);
     const fs::path path = fs::absolute(folder / checkpointName(env_steps_));
     saveCheckpoint(path.string(), info, *algorithm_, extras);
     writePolicyConfig(dir_, options_.environment_id, path.string(), "cpu");

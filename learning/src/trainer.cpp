@@ -230,15 +230,9 @@ class Trainer {
   }
 
   std::string saveCheckpointAt(int64_t iteration) {
-    CheckpointInfo info;
-    info.iteration = iteration;
-    info.algorithm = options_.algorithm;
-    info.network = options_.network;
-    info.spec = spec_;
-    info.manibench_version = getManibenchVersion();
     YAML::Node node;
     options_.writeYaml(node);
-    info.training_yaml = yamlText(node);
+    const CheckpointInfo info = describeCheckpoint(iteration, options_, spec_, node);
     const BatchSampler::Position p = feed_ ? feed_->getPosition() : sampler_->getPosition();
     const torch::Tensor sampler = torch::tensor({int64_t(p.epoch_seed), p.epoch, p.batch}, torch::kInt64);
     const fs::path path = fs::absolute(dir_ / "checkpoints" / checkpointName(iteration));

@@ -1,5 +1,8 @@
 #include "training_files.hpp"
 
+#include <manibench/evaluation.hpp>
+#include <manibench/learning/checkpoint.hpp>
+#include <manibench/learning/run_options.hpp>
 #include <manibench/learning/spec.hpp>
 
 #include <yaml-cpp/yaml.h>
@@ -68,6 +71,18 @@ void readTrainingYaml(const std::string& dir, const std::function<void(const YAM
   } catch (const YAML::Exception& e) {
     throw LearningError("'" + file.string() + "': " + e.what());
   }
+}
+
+CheckpointInfo describeCheckpoint(int64_t iteration, const RunOptions& options, const ObservationSpec& spec,
+                                  const YAML::Node& options_yaml) {
+  CheckpointInfo info;
+  info.iteration = iteration;
+  info.algorithm = options.algorithm;
+  info.network = options.network;
+  info.spec = spec;
+  info.manibench_version = getManibenchVersion();
+  info.training_yaml = yamlText(options_yaml);
+  return info;
 }
 
 }  // namespace manibench::learning

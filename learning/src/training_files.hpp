@@ -15,6 +15,10 @@ class Node;
 
 namespace manibench::learning {
 
+struct CheckpointInfo;
+struct ObservationSpec;
+struct RunOptions;
+
 std::string yamlText(const YAML::Node& node);
 // Writes `text` to a temporary file renamed into place.
 void writeText(const std::filesystem::path& path, const std::string& text);
@@ -30,6 +34,11 @@ void truncateCsv(const std::filesystem::path& path, int64_t iteration);
 // comment line showing how to evaluate it on `task`.
 void writePolicyConfig(const std::filesystem::path& dir, const std::string& task, const std::string& checkpoint,
                        const std::string& device);
+// A checkpoint's record of what made it: the iteration, the run's
+// algorithm and network, the observation spec, this build's version and
+// `options_yaml` (the run's options as train.yaml has them).
+CheckpointInfo describeCheckpoint(int64_t iteration, const RunOptions& options, const ObservationSpec& spec,
+                                  const YAML::Node& options_yaml);
 // Calls `read` with DIR/train.yaml; a LearningError naming the file when
 // it is missing or damaged (or `read` throws a YAML::Exception: a key
 // missing or of the wrong type).
