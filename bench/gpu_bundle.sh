@@ -63,6 +63,7 @@ is_glibc() { case $1 in libc.so*|libm.so*|libpthread.so*|libdl.so*|librt.so*|lib
 is_kept_out() { is_glibc "$1" || case $1 in libstdc++.so*|libgcc_s.so*|libEGL_mesa*|libGLX_mesa*|libtorch*|libc10*) return 0 ;; *) return 1 ;; esac; }
 soname() { objdump -p "$1" | awk '/SONAME/ {print $2}'; }
 link=()
+declare -A linked  # soname -> the file the link line named
 read -ra words < <(ninja -C "$build" -t commands bin/manibench | tail -1)
 after_out=0
 for w in "${words[@]}"; do
@@ -78,7 +79,7 @@ for w in "${words[@]}"; do
     /*.so*)
       real=$(realpath "$w"); name=$(soname "$real"); name=${name:-$(basename "$real")}
       is_kept_out "$name" && { echo "gpu_bundle: bin/manibench links $name, which the bundle leaves out" >&2; exit 1; }
-      cp -L "$real" "$p/sys/lib/$name"; link+=("sys/lib/$name") ;;
+      link+=("sys/lib/$name"); linked[$name]=$real ;;
     *) echo "gpu_bundle: unexpected word in bin/manibench's link line: $w" >&2; exit 1 ;;
   esac
 done
@@ -90,12 +91,17 @@ done
   echo "set(MANIBENCH_PREBUILT_COMMIT \"$(git -C "$root" rev-parse HEAD)\")"
 } > "$p/link.cmake"
 
-# (c) The shared-library closure of all of it.
+# (c) The shared-library closure of all of it, each library as the loader
+# finds it (not the development link's target: Debian's libblas.so leads
+# to the reference BLAS, libblas.so.3 to OpenBLAS), then what the link
+# line names and the programs do not load.
 {
-  ldd "$p/bin/manibench" "$p"/lib/manibench/plugins/*.so "$p"/sys/lib/*.so* 2>/dev/null
+  ldd "$p/bin/manibench" "$p"/lib/manibench/plugins/*.so 2>/dev/null
+  for name in "${!linked[@]}"; do ldd "${linked[$name]}" 2>/dev/null; done
 } | awk '$2 == "=>" && $3 ~ /^\// {print $1, $3}' | sort -u | while read -r name path; do
   is_kept_out "$name" || [ -e "$p/sys/lib/$name" ] || cp -L "$path" "$p/sys/lib/$name"
 done
+for name in "${!linked[@]}"; do [ -e "$p/sys/lib/$name" ] || cp -L "${linked[$name]}" "$p/sys/lib/$name"; done
 # Every library they load resolves inside the bundle, but for those left out.
 outside=$(LD_LIBRARY_PATH=$p/sys/lib ldd "$p/bin/manibench" "$p"/lib/manibench/plugins/*.so "$p"/sys/lib/*.so* 2>/dev/null |
   awk -v lib="$p/sys/lib/" '$2 == "=>" && index($3, lib) != 1 {print $1}' | sort -u |
