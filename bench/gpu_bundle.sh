@@ -145,7 +145,7 @@ owner < "$stage/deps.txt" | sed 's/:amd64\t/\t/' | while IFS=$'\t' read -r pkg f
   grep -qx "$pkg" <<<"$skip" && continue
   case $file in /usr/include/*) ;; *) echo "gpu_bundle: header outside /usr/include: $file ($pkg)" >&2; exit 1 ;; esac
   mkdir -p "$p/sys/include/$(dirname "${file#/usr/include/}")"
-  cp -L "$file" "$p/sys/include/${file#/usr/include/}"
+  cp -L --preserve=timestamps "$file" "$p/sys/include/${file#/usr/include/}"
 done
 unowned=$(owner < "$stage/deps.txt" | cut -f2 | sort -u | comm -23 "$stage/deps.txt" - | tr '\n' ' ')
 [ -z "$unowned" ] || echo "gpu_bundle: note: headers no package owns, left out: $unowned" >&2
