@@ -30,12 +30,9 @@ void sendReport(int fd, Report kind, std::size_t index, const std::string& why) 
   wire::sendFrame(fd, w);
 }
 
-int runConversionWorker(const PluginRegistry& registry, const std::string& in_path,
-                                      const std::string& part_path,
-                                      const std::vector<std::string>& overrides,
-                                      const std::vector<std::string>& names,
-                                      const std::vector<std::size_t>& mine,
-                                      const DemoFileInfo& out_info, int fd) {
+int runConversionWorker(const PluginRegistry& registry, const std::string& in_path, const std::string& part_path,
+                        const std::vector<std::string>& overrides, const std::vector<std::string>& names,
+                        const std::vector<std::size_t>& mine, const DemoFileInfo& out_info, int fd) {
   int status = 0;
   try {
     const DemoReader reader(in_path);
