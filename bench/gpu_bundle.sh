@@ -8,7 +8,7 @@
 # root (ignored through .git/info/exclude, to carry with the tree):
 #
 #   prebuilt.tar.xz  a prefix, unpacked by enter.sh (default /tmp/manibench-prebuilt):
-#     bin/manibench, lib/manibench/plugins/*.so, share/manibench/robots
+#     bin/manibench, lib/manibench/plugins/*.so, share/manibench/robots and objects
 #                    the host and the task, controller and example plugins: what
 #                    `demos generate`, `demos convert` and `eval` run (not
 #                    manibench-train, the learning runtime or torch_policy,
@@ -54,6 +54,7 @@ for so in "$build"/lib/manibench/plugins/*.so; do
   case $(basename "$so") in libmanibench_torch_policy.so|libmanibench_python_policy.so) ;; *) cp "$so" "$p/lib/manibench/plugins/" ;; esac
 done
 cp -rL "$root/assets/robots" "$p/share/manibench/robots"
+cp -rL "$root/assets/objects" "$p/share/manibench/objects"
 
 # (b) The static libraries, and bin/manibench's link line (manibench_cli +
 # manibench::core: what manibench-train links beside the learning module)

@@ -39,6 +39,10 @@ Commands:
                             converted to another observation mode
                             (docs/demonstrations.md)
   objects TASK              object ids of a split (--split train|test)
+  survey TASK DIR...        a policy (the task's expert) on every object of
+                            folders of PartNet-Mobility objects: success and
+                            why each episode failed, per object and category
+                            (docs/partnet.md)
   config [TASK]             print the merged YAML configuration
   demo                      list the plugins, then evaluate the cabinet expert
                             on the OpenCabinetDrawer-v0 test split
@@ -98,6 +102,7 @@ int dispatch(int argc, char** argv) {
   if (command == "render") return commandRender(argc, argv);
   if (command == "eval") return commandEval(argc, argv);
   if (command == "objects") return commandObjects(argc, argv);
+  if (command == "survey") return commandSurvey(argc, argv);
   if (command == "demos") return commandDemos(argc, argv);
   if (command == "train")
     return runExternalCommand(command, argc, argv,

@@ -382,6 +382,12 @@ std::string findBytesDifference(const char* what, const std::vector<uint8_t>& a,
 
 }  // namespace
 
+std::vector<double> Environment::measureProgress() {
+  if (!episode_started_)
+    throw std::logic_error("Environment::measureProgress() before reset(): no episode to measure");
+  return task_->measureProgress(*bridge_);
+}
+
 std::vector<uint8_t> Environment::saveState() {
   if (!episode_started_)
     throw std::logic_error("Environment::saveState() before reset(): no episode to save");

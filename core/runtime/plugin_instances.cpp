@@ -138,6 +138,8 @@ TaskDescription describeTask(const std::string& name, const mb_task_info& info) 
                             MB_ERROR);
     d.agent_state_dim = info.agent_state_dim;
   }
+  if (MB_HAS_FIELD(mb_task_info, progress_signals, info.struct_size))
+    d.progress_signals = toStrings(info.progress_signals, info.progress_signal_count);
   if (!(d.control_frequency > 0) || d.frame_skip == 0 ||
       d.max_episode_steps == 0)
     throw PluginCallError("task '" + name +
@@ -186,6 +188,18 @@ void TaskInstance::buildScene(SceneBridge& scene, const std::string& object_id) 
 void TaskInstance::reset(SceneBridge& scene, uint64_t seed) {
   callPlugin("task", description_.name, "reset", descriptor_->reset, handle_,
              SceneBridge::getApi(), scene.getHandle(), seed);
+}
+
+std::vector<double> TaskInstance::measureProgress(SceneBridge& scene) {
+  std::vector<double> values(description_.progress_signals.size());
+  if (values.empty()) return values;
+  if (!MB_HAS_FIELD(mb_task_descriptor, measure_progress, descriptor_->header.struct_size) ||
+      !descriptor_->measure_progress)
+    throw PluginCallError("task '" + description_.name + "' names progress signals but has no measure_progress",
+                          MB_ERROR);
+  callPlugin("task", description_.name, "measure_progress", descriptor_->measure_progress, handle_,
+             SceneBridge::getApi(), scene.getHandle(), values.data(), static_cast<uint32_t>(values.size()));
+  return values;
 }
 
 void TaskInstance::observe(SceneBridge& scene, Eigen::VectorXd& out) {

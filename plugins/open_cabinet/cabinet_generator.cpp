@@ -118,6 +118,7 @@ void addHandle(const HandleParams& h, const std::string& link, const Eigen::Vect
                          post_center_x + along * (side * (h.length / 2 - h.thickness)),
                          sized(post_length, 0.8 * h.thickness, 0.8 * h.thickness), color, kMetal});
       target.handle_half_length = h.length / 2;
+      target.handle_size = Eigen::Vector3d(h.standoff + h.thickness / 2, h.thickness, h.length);
       break;
     }
     case HandleType::kBoxed: {  // a deep rectangular loop: square grip, full posts
@@ -127,6 +128,7 @@ void addHandle(const HandleParams& h, const std::string& link, const Eigen::Vect
                          post_center_x + along * (side * (h.length / 2 + h.thickness / 2)),
                          sized(post_length + h.thickness, h.thickness, h.thickness), color, kMetal});
       target.handle_half_length = h.length / 2;
+      target.handle_size = Eigen::Vector3d(h.standoff + h.thickness / 2, h.thickness, h.length + 2 * h.thickness);
       break;
     }
     case HandleType::kKnob: {  // head of size `length` on a thin stem
@@ -134,6 +136,7 @@ void addHandle(const HandleParams& h, const std::string& link, const Eigen::Vect
       const double stem = h.standoff - h.length / 2;
       boxes.push_back({link + "_handle_stem", at + out * (stem / 2), sized(stem, 0.012, 0.012), color, kMetal});
       target.handle_half_length = h.length / 2;
+      target.handle_size = Eigen::Vector3d(h.standoff + h.length / 2, h.length, h.length);
       break;
     }
   }

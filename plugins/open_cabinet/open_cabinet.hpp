@@ -30,6 +30,10 @@ struct TargetLink {
   Eigen::Vector3d handle_position = Eigen::Vector3d::Zero();
   Eigen::Matrix3d handle_rotation = Eigen::Matrix3d::Identity();
   double handle_half_length = 0.0;  // m, along the grip
+  // The handle's extent in its grasp frame (m): x its depth out of the
+  // panel, y its width across the grip (what the fingers close on), z its
+  // length along the grip.
+  Eigen::Vector3d handle_size = Eigen::Vector3d::Zero();
   std::string handle_type;          // bar, knob, boxed (generator); mesh (PartNet)
 };
 
@@ -86,29 +90,11 @@ std::string toString(HandleType type);
 // PartNet reader (manibench/kit/partnet.hpp). Handles are the
 // visuals whose name contains "handle"; targets are links with a handle
 // and a revolute/continuous (door) or prismatic (drawer) joint.
-// The cabinet is scaled (partnet_loader.cpp: ManiSkill v1's scale for its
-// own ids, else kCabinetDiagonal over the object's bounding-box diagonal,
-// within v1's range) and stands with its joints at their lower limits.
-// `scale` > 0 replaces that rule (the task key partnet_scale).
-CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id, double scale = 0);
-
-// ManiSkill v1's cabinets by id (v1_cabinets.cpp): its hand-tuned scale and
-// how many door / drawer target links its tasks had.
-struct V1Cabinet {
-  double scale;
-  int doors, drawers;
-};
-const std::map<std::string, V1Cabinet>& getV1Cabinets();
-
-// The scale of a PartNet cabinet not in v1's list: its bounding-box
-// diagonal (PartNet units, every joint at 0) becomes kCabinetDiagonal m,
-// within [kMinCabinetScale, kMaxCabinetScale], v1's range. PartNet-Mobility
-// normalises objects to a diagonal of about 2 (2.00-2.11 for the 8
-// cabinets we test on); 1.0 m gives 0.47-0.50, the median of v1's 57
-// hand-tuned scales being 0.49 (drawers) and 0.51 (doors).
-constexpr double kCabinetDiagonal = 1.0;
-constexpr double kMinCabinetScale = 0.2808, kMaxCabinetScale = 0.8129;
-double calcCabinetScale(const std::string& id, double diagonal);
+// The cabinet's scale and, for ManiSkill v1's own ids, how many door and
+// drawer targets v1 had, come from its object facts (`facts`:
+// assets/objects/open_cabinet.yaml, kit/object_facts.hpp); it stands with
+// its joints at their lower limits.
+CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id, const ObjectFacts& facts);
 
 // ---- object ids ------------------------------------------------------------
 
@@ -129,7 +115,8 @@ struct ObservationLayout {
   static constexpr uint32_t kHandlePose = 69;           // 7: grasp frame, world
   static constexpr uint32_t kHandleHalfLength = 76;     // 1
   static constexpr uint32_t kCabinetCenter = 77;        // 3: cabinet bounding box centre
-  static constexpr uint32_t kDim = 80;
+  static constexpr uint32_t kHandleSize = 80;           // 3: TargetLink::handle_size
+  static constexpr uint32_t kDim = 83;
 };
 
 constexpr uint32_t kRobotDof = 13;
@@ -167,6 +154,10 @@ class OpenCabinetTask : public sdk::Task {
   void observe(const SceneView& scene, Eigen::Map<Eigen::VectorXd> out) override;
   double computeReward(const SceneView& scene, Eigen::Map<const Eigen::VectorXd> action) override;
   std::vector<sdk::Condition> evaluateSuccess(const SceneView& scene) override;
+  // reached (the gripper within kContactDistance of the grip), holding
+  // (both fingers press on the target link), progress (the opened fraction
+  // over B.4's), blocked (the robot's body touches anything).
+  std::vector<double> measureProgress(const SceneView& scene) const override;
 
   // The reward as a function of the quantities it reads (C.1.1), for tests:
   // gripper-handle distance (m), opened fraction of the joint range, target

@@ -23,6 +23,16 @@ namespace {
 constexpr double kBaseSpeed = MobilePandaSpeeds::kBase;  // per unit action
 constexpr double kEeSpeed = MobilePandaSpeeds::kEeLinear, kEeAngularSpeed = MobilePandaSpeeds::kEeAngular;
 constexpr double kDoorLead = 0.02;  // m: how far the goal leads a door's handle
+// A finger's travel over the gripper action's range (-1 closed, +1 open:
+// assets/robots/mobile_panda_single.yaml, finger_position 0 to 0.04 m).
+constexpr double kFingerTravel = 0.04;
+// The fingers open this much wider than the handle on each side: the
+// approach hands over to the grasp within 1 cm of its goal (approach()),
+// and 5 mm more keeps a pad off the handle's edge. Opened fully (8 cm),
+// a finger reached past the handle into what stands around it: a table
+// top over a drawer, a door's frame (the survey's not_grasped: 12 of 28
+// table drawer episodes, 10 of 50 cabinet door episodes, before).
+constexpr double kFingerClearance = 0.015;
 
 }  // namespace
 
@@ -44,6 +54,7 @@ struct OpenCabinetExpert::View {
   Eigen::Vector3d axis, origin;  // the target joint's
   double qdot = 0;               // its speed
   double fingers = 0;            // opening, m
+  double open_action = 1;        // the gripper action that opens the fingers just around the handle
   Eigen::Vector3d motion;        // the handle's direction of motion as the joint opens
   Eigen::Matrix3d grasp_rotation;       // the TCP's at the grasp
   Eigen::AngleAxisd orientation_error;  // from the TCP to the grasp orientation
@@ -72,6 +83,10 @@ OpenCabinetExpert::View OpenCabinetExpert::read(const sdk::Observation& observat
   v.origin = getVector3(s, L::kJointOrigin);
   v.qdot = s[L::kTargetJoint + 1];
   v.fingers = s[agent_.joint_positions + 11] + s[agent_.joint_positions + 12];
+  // Each finger half the handle's width out from the grip, plus the
+  // clearance; the whole travel where the handle is wider than that.
+  const double finger = std::min(s[L::kHandleSize + 1] / 2 + kFingerClearance, kFingerTravel);
+  v.open_action = 2 * finger / kFingerTravel - 1;
   const Eigen::Vector3d motion = v.door ? v.axis.cross(v.handle - v.origin) : v.axis;
   v.motion = motion.norm() > 1e-9 ? Eigen::Vector3d(motion.normalized()) : Eigen::Vector3d(hx);
   v.grasp_rotation = (Eigen::Matrix3d() << hz, hy, -hx).finished();
@@ -201,6 +216,7 @@ Eigen::VectorXd OpenCabinetExpert::act(const sdk::Observation& observation) {
   ++phase_steps_;
   Command c;
   c.goal = v.handle;
+  c.gripper = v.open_action;
   switch (phase_) {
     case Phase::kApproach:
     case Phase::kPreGrasp: approach(v, c); break;

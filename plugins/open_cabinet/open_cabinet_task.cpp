@@ -31,8 +31,8 @@ OpenCabinetTask::OpenCabinetTask(const Config& config, TargetKind kind)
       hold_steps_(config.get<uint32_t>("hold_steps", 10)),
       cabinets_(taskName(kind), "cabinet", readPartNetDir(config, taskName(kind)),
                 {[kind](const std::string& split) { return listGeneratedCabinets(kind, split); }, generateCabinet,
-                 [scale = config.get<double>("partnet_scale", 0.0)](const std::string& folder, const std::string& id) {
-                   return loadPartNetCabinet(folder, id, scale);
+                 [facts = ObjectFacts(config, "open_cabinet")](const std::string& folder, const std::string& id) {
+                   return loadPartNetCabinet(folder, id, facts);
                  },
                  [](const CabinetModel& cabinet) {
                    return cabinet.getTargets(TargetKind::kDoor).empty() && cabinet.getTargets(TargetKind::kDrawer).empty()
@@ -40,11 +40,9 @@ OpenCabinetTask::OpenCabinetTask(const Config& config, TargetKind kind)
                               : "";
                  }, nullptr}) {
   config.requireKnownKeys(
-      {"partnet_dir", "partnet_scale", "robot_dir", "static_speed", "static_angular_speed", "hold_steps"},
+      {"partnet_dir", "partnet_scale", "object_facts", "robot_dir", "static_speed", "static_angular_speed",
+       "hold_steps"},
       taskName(kind) + ": task");
-  if (const double scale = config.get<double>("partnet_scale", 0.0); !(scale >= 0) || !std::isfinite(scale))
-    throw Error(taskName(kind) + ": task.partnet_scale must be positive (or 0: the per-object rule)",
-                MB_INVALID_ARGUMENT);
   if (!(static_speed_ > 0) || !(static_angular_speed_ > 0) || hold_steps_ == 0)
     throw Error(taskName(kind) + ": static_speed, static_angular_speed and hold_steps must be positive",
                 MB_INVALID_ARGUMENT);
@@ -66,10 +64,13 @@ sdk::TaskSpec OpenCabinetTask::describe() const {
       {"handle_pose", 7, "grasp frame of the handle (x out of the front, z along the grip), world"},
       {"handle_half_length", 1, "half the grip length (m)"},
       {"cabinet_center", 3, "centre of the cabinet's bounding box, world (m)"},
+      {"handle_size", 3, "the handle's extent in its grasp frame: depth out of the front, width across the grip, "
+                         "length along it (m)"},
   };
   spec.observation.insert(spec.observation.end(), object.begin(), object.end());
   spec.success_conditions = {"open_enough", "static", "success"};
   spec.success_hold_steps = hold_steps_;
+  spec.progress_signals = {"reached", "holding", "progress", "blocked"};
   spec.masks = {"handle", "target_link", "robot"};
   // ManiSkill v1 friction: cabinet 1, finger pads 2; the robot's head cameras.
   spec.default_config = "physics:\n  contact:\n    bodies:\n"
@@ -165,6 +166,7 @@ void OpenCabinetTask::observe(const SceneView& scene, Eigen::Map<Eigen::VectorXd
   putPose(out, L::kHandlePose, calcHandlePose(scene));
   out[L::kHandleHalfLength] = target_->handle_half_length;
   out.segment<3>(L::kCabinetCenter) = (cabinet_->lower + cabinet_->upper) / 2;
+  out.segment<3>(L::kHandleSize) = target_->handle_size;
 }
 
 OpenCabinetTask::Measured OpenCabinetTask::measure(const SceneView& scene) const {
@@ -192,6 +194,16 @@ std::vector<sdk::Condition> OpenCabinetTask::evaluateSuccess(const SceneView& sc
   const bool still = m.linear_speed <= static_speed_ && m.angular_speed <= static_angular_speed_;
   // `success` once both have held for hold_steps steps (TaskSpec::success_hold_steps).
   return {{open, m.open_fraction}, {still, m.linear_speed}, {open && still, 0.0}};
+}
+
+std::vector<double> OpenCabinetTask::measureProgress(const SceneView& scene) const {
+  const Measured m = measure(scene);
+  // 1 N: a touch, well under the fingers' 25-75 N squeeze and any push
+  // that moves a damped door.
+  constexpr double kTouch = 1.0;
+  return {m.handle_distance < kContactDistance ? 1.0 : 0.0,
+          robot_->isHolding(scene, target_link_, 0, kTouch) ? 1.0 : 0.0, m.open_fraction / kOpenFraction,
+          robot_->calcBodyContactForce(scene) > kTouch ? 1.0 : 0.0};
 }
 
 }  // namespace open_cabinet

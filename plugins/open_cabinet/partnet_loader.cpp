@@ -28,24 +28,17 @@ constexpr double kGroundClearance = 0.005;
 
 }  // namespace
 
-double calcCabinetScale(const std::string& id, double diagonal) {
-  const auto v1 = getV1Cabinets().find(id);
-  if (v1 != getV1Cabinets().end()) return v1->second.scale;
-  if (!(diagonal > 0) || !std::isfinite(diagonal))
-    throw Error("PartNet cabinet " + id + ": its visual geometry has no extent", MB_INVALID_ARGUMENT);
-  return std::clamp(kCabinetDiagonal / diagonal, kMinCabinetScale, kMaxCabinetScale);
-}
-
-CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id, double scale) {
-  // The scale needs the unscaled size first: every length of the file
-  // scales alike, so the object is read again at its scale, and its
-  // bounds are the unscaled ones times the scale (its meshes are read once).
-  const bool v1 = !(scale > 0) && getV1Cabinets().count(id) > 0;
-  partnet::Bounds unscaled;
-  if (!(scale > 0) && !v1) unscaled = partnet::loadObject(folder, id).calcVisualBounds();
-  if (!(scale > 0)) scale = calcCabinetScale(id, v1 ? 1.0 : unscaled.extent().norm());
+CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id, const ObjectFacts& facts) {
+  // The scale rule needs the unscaled size first (the visual bounds'
+  // diagonal with every joint at 0, the rule's measure): every length of
+  // the file scales alike, so the object is read again at its scale.
+  double diagonal = 0;
+  if (facts.needsDiagonal(id)) diagonal = partnet::loadObject(folder, id).calcVisualBounds().extent().norm();
+  const double scale = facts.calcScale(id, diagonal);
   const partnet::Object object = partnet::loadObject(folder, id, scale);
-  const std::map<std::string, Eigen::Isometry3d> pose = object.calcLinkPoses();
+  // Closed: each joint at its lower limit, as the task's reset sets them.
+  const std::map<std::string, double> closed = object.getLowerLimits();
+  const std::map<std::string, Eigen::Isometry3d> pose = object.calcLinkPoses(closed);
 
   CabinetModel cabinet;
   cabinet.id = id;
@@ -101,37 +94,39 @@ CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id
     t.handle_rotation.col(1) = along.cross(x);
     t.handle_position = handle.center();
     t.handle_half_length = extent[grip_axis] / 2;
+    {  // the handle's points in its grasp frame (rotation only: extents)
+      partnet::Bounds local;
+      for (const partnet::Shape& v : link.visuals)
+        if (v.name.find("handle") != std::string::npos)
+          for (const Eigen::Vector3d& p : object.calcShapePoints(v)) local.add(t.handle_rotation.transpose() * p);
+      t.handle_size = local.extent();
+    }
     t.handle_type = "mesh";
     (t.kind == TargetKind::kDoor ? doors : drawers)++;
     cabinet.targets.push_back(t);
   }
-  partnet::Bounds all;
-  if (unscaled.empty()) {
-    all = object.calcVisualBounds();
-  } else {
-    all.add(scale * unscaled.lo);
-    all.add(scale * unscaled.hi);
-  }
+  const partnet::Bounds all = object.calcVisualBounds(closed);
   if (all.empty())
     throw Error("PartNet: " + object.urdf_file + " has no visual geometry", MB_INVALID_ARGUMENT);
   // ManiSkill v1 lifts the cabinet, joints at their lower limits (as the
   // task's reset sets them), so that its collision box touches the ground
-  // (here: the meshes' box, kGroundClearance above it).
-  // The bounds are taken at q = 0, which is every PartNet door's and
-  // drawer's lower limit we have seen (the 8 cabinets of the tests: 23
-  // joints); the visual and collision meshes are the same files.
+  // (here: the meshes' box, kGroundClearance above it); the visual and
+  // collision meshes are the same files.
   cabinet.placement = Eigen::Vector3d(0, 0, -all.lo.z() + kGroundClearance);
   cabinet.lower = all.lo + cabinet.placement;
   cabinet.upper = all.hi + cabinet.placement;
   cabinet.scale = scale;
-  // v1's own ids had this many targets of each kind: its link_k is the k-th
-  // such link in link order, as ours, so the first ones are kept.
-  if (const auto found = getV1Cabinets().find(id); found != getV1Cabinets().end()) {
+  // v1's own ids had this many targets of each kind (their object facts'
+  // doors and drawers): its link_k is the k-th such link in link order, as
+  // ours, so the first ones are kept.
+  const double keep_doors = facts.findNumber(id, "doors"), keep_drawers = facts.findNumber(id, "drawers");
+  if (keep_doors >= 0 || keep_drawers >= 0) {
     std::vector<TargetLink> kept;
     int kept_doors = 0, kept_drawers = 0;
     for (const TargetLink& t : cabinet.targets) {
       int& count = t.kind == TargetKind::kDoor ? kept_doors : kept_drawers;
-      if (count < (t.kind == TargetKind::kDoor ? found->second.doors : found->second.drawers)) {
+      const double keep = t.kind == TargetKind::kDoor ? keep_doors : keep_drawers;
+      if (keep < 0 || count < keep) {
         ++count;
         kept.push_back(t);
       }
@@ -141,7 +136,7 @@ CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id
     drawers = kept_drawers;
   }
   std::ostringstream summary;
-  summary << "PartNet-Mobility " << id << " at scale " << scale << (v1 ? " (ManiSkill v1's)" : "") << ", " << doors
+  summary << "PartNet-Mobility " << id << " at scale " << scale << (facts.hasOwnScale(id) ? " (its object facts')" : "") << ", " << doors
           << " doors, " << drawers << " drawers with handles";
   cabinet.summary = summary.str();
   return cabinet;

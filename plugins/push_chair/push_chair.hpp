@@ -164,8 +164,11 @@ class PushChairTask : public sdk::Task {
  private:
   RewardInput measure(const SceneView& scene) const;
   double calcPadDistance(const SceneView& scene) const;
+  // reached (the pads within the reward's 10 cm of the chair), progress
+  // (the way to the target's radius covered), fallen (past the upright
+  // tilt).
+  std::vector<double> measureProgress(const SceneView& scene) const override;
 
-  double partnet_scale_;
   double static_speed_, static_angular_speed_;
   uint32_t hold_steps_;
   // the robot's facts (assets/robots/mobile_panda_dual.yaml) and state
@@ -178,6 +181,7 @@ class PushChairTask : public sdk::Task {
   uint32_t chair_joint_count_ = 0;
   std::vector<ChairJoint> joint_roles_;  // per scene joint
   Eigen::Vector3d target_ = Eigen::Vector3d::Zero();
+  double start_distance_ = 1;  // the chair's from the target at reset (m)
 };
 
 // The expert's phases, in order (an episode starts in the first).

@@ -35,22 +35,21 @@ double calcTilt(const Eigen::Quaterniond& q) {
 // ---- the task ---------------------------------------------------------------------
 
 PushChairTask::PushChairTask(const Config& config)
-    : partnet_scale_(config.get<double>("partnet_scale", 0.8)),
-      static_speed_(config.get<double>("static_speed", 0.1)),
+    : static_speed_(config.get<double>("static_speed", 0.1)),
       static_angular_speed_(config.get<double>("static_angular_speed", 0.2)),
       hold_steps_(config.get<uint32_t>("hold_steps", 10)),
       chairs_(kTaskName, "chair", readPartNetDir(config, kTaskName),
               {listGeneratedChairs, [](const std::string& id) { return generateChair(id); },
-               [scale = partnet_scale_](const std::string& folder, const std::string& id) {
-                 return loadPartNetChair(folder, id, scale);
+               [facts = ObjectFacts(config, "push_chair")](const std::string& folder, const std::string& id) {
+                 return loadPartNetChair(folder, id, facts.calcScale(id));
                },
                nullptr, nullptr}) {
   config.requireKnownKeys(
-      {"partnet_dir", "partnet_scale", "robot_dir", "static_speed", "static_angular_speed", "hold_steps"},
+      {"partnet_dir", "partnet_scale", "object_facts", "robot_dir", "static_speed", "static_angular_speed",
+       "hold_steps"},
       "PushChair: task");
   if (!(static_speed_ > 0) || !(static_angular_speed_ > 0) || hold_steps_ == 0)
     throw Error("PushChair: static_speed, static_angular_speed and hold_steps must be positive", MB_INVALID_ARGUMENT);
-  if (!(partnet_scale_ > 0)) throw Error("PushChair: task.partnet_scale must be positive", MB_INVALID_ARGUMENT);
   robot_ = std::make_unique<mobile_panda::AgentState>(mobile_panda::readRobotDir(config),
                                                       "mobile_panda_dual", kTaskName, 2, kRobotDof);
 }
@@ -70,6 +69,7 @@ sdk::TaskSpec PushChairTask::describe() const {
   };
   spec.observation.insert(spec.observation.end(), object.begin(), object.end());
   spec.success_conditions = {"close_to_target", "static", "upright", "success"};
+  spec.progress_signals = {"reached", "progress", "fallen"};
   spec.success_hold_steps = hold_steps_;
   spec.masks = {"robot"};
   // ManiSkill v1: chair density 200 (links without <inertial>: PartNet
@@ -123,6 +123,7 @@ void PushChairTask::reset(SceneView& scene, uint64_t seed) {
   const double chair_bearing = rng.uniform(-kPi, kPi);
   const double chair_yaw = rng.uniform(-kPi, kPi);
   const Eigen::Vector2d chair_xy = target_.head<2>() + chair_distance * Eigen::Vector2d(std::cos(chair_bearing), std::sin(chair_bearing));
+  start_distance_ = chair_distance;
   const double robot_distance = rng.uniform(0.8, 1.2);
   const double robot_bearing = rng.uniform(-kPi, kPi);
   robot_->placeFacing(scene, rng, chair_xy, robot_distance, robot_bearing, kPi);
@@ -217,6 +218,15 @@ std::vector<sdk::Condition> PushChairTask::evaluateSuccess(const SceneView& scen
   const bool upright = m.tilt < kUprightTilt;
   // `success` once all three have held for hold_steps steps (TaskSpec::success_hold_steps).
   return {{close, m.target_distance}, {m.is_static, m.speed}, {upright, m.tilt}, {close && m.is_static && upright, 0.0}};
+}
+
+std::vector<double> PushChairTask::measureProgress(const SceneView& scene) const {
+  const RewardInput m = measure(scene);
+  // The reward's second stage starts with the pads within 10 cm.
+  constexpr double kReach = 0.1;
+  const double way = std::max(start_distance_ - kTargetRadius, 1e-6);
+  return {calcPadDistance(scene) < kReach ? 1.0 : 0.0, (start_distance_ - m.target_distance) / way,
+          m.tilt >= kUprightTilt ? 1.0 : 0.0};
 }
 
 }  // namespace push_chair

@@ -73,7 +73,7 @@ TEST(OpenCabinetScenario, PartNetFolderReplacesTheGenerator) {
   EXPECT_NEAR(o[79], 0.405, 1e-6) << "centre height: half of 0.8 m, the bottom 5 mm above the ground";
   EXPECT_NEAR(o[76], 0.08, 1e-6) << "half the grip length";
   expectExpertSucceeds(s, "100001_link_1", 1);
-  expectExpertSucceeds(d, "100001_link_0", 0);  // 3 of seeds 0-5 succeed: mesh handles slip more
+  expectExpertSucceeds(d, "100001_link_0", 1);  // 5 of seeds 0-5 succeed (3 with the fingers wide open): mesh handles slip more
 }
 
 // A user's folder with test objects only (every id in test.txt): the test

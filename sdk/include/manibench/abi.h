@@ -58,7 +58,7 @@ extern "C" {
 #endif
 
 #define MB_ABI_MAJOR 1
-#define MB_ABI_MINOR 5
+#define MB_ABI_MINOR 6
 #define MB_ENTRY_POINT_NAME "manibench_plugin_entry"
 
 /* True when `field` of struct type `type` lies within `size` bytes. */
@@ -302,6 +302,25 @@ typedef struct mb_task_info {
    * the policy gets only these, as ManiSkill's visual modes give only the
    * agent's state. 0: the whole vector. */
   uint32_t agent_state_dim;
+
+  /* ---- ABI 1.6: progress signals (optional; 0 / NULL: none) ----------- */
+  /* Named values that say how far an episode has come, read by the host
+   * through measure_progress to tell why an episode failed (`manibench
+   * survey`, docs/partnet.md "Surveying a folder"). The names the host
+   * understands (others are recorded, not interpreted):
+   *   "reached"  1 when the robot's effector is at the part it must act on
+   *              (a handle, a chair's back, a bucket's rim), by the task's
+   *              own distance; else 0
+   *   "holding"  1 while the gripper holds that part (both fingers touch it)
+   *   "progress" the fraction of what success needs (an opened fraction over
+   *              the target's, a distance covered): 1 at the goal, below 0
+   *              when the object moved the wrong way
+   *   "blocked"  1 while the robot touches the object elsewhere than by
+   *              the fingers (an arm on a table top, a base on a door)
+   *   "fallen"   1 while the object lies knocked over (past the task's
+   *              upright limit) */
+  uint32_t progress_signal_count;
+  const char* const* progress_signals;
 } mb_task_info;
 
 typedef struct mb_task_descriptor {
@@ -345,6 +364,15 @@ typedef struct mb_task_descriptor {
                          uint64_t* out_size, mb_error* err);
   mb_status (*set_state)(mb_task* task, const uint8_t* data, uint64_t size,
                          mb_error* err);
+
+  /* ---- ABI 1.6: optional (NULL, or beyond struct_size in an older
+   * plugin: no progress signals) ----------------------------------------- */
+  /* One value per mb_task_info.progress_signals, of the scene as it is. It
+   * reads the scene and changes nothing, so the host may call it at any
+   * point between steps (the survey does after each). */
+  mb_status (*measure_progress)(mb_task* task, const mb_scene_api* api,
+                                mb_scene* scene, double* out, uint32_t count,
+                                mb_error* err);
 } mb_task_descriptor;
 
 /* ---- controller ------------------------------------------------------- */

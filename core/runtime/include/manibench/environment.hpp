@@ -122,6 +122,11 @@ class Environment {
   // when a plugin cannot save or restore (built against ABI < 1.2).
   std::vector<uint8_t> saveState();
   void restoreState(const std::vector<uint8_t>& blob);
+  // The task's progress signals now (ABI 1.6; names in the task
+  // description's progress_signals, empty when it has none): how far the
+  // episode has come, for telling why one failed (survey). Reads only.
+  // Throws std::logic_error before reset().
+  std::vector<double> measureProgress();
   // The task, object, seed and step a blob holds, without restoring it
   // (throws as restoreState for a blob that is not one).
   struct StateHeader {

@@ -45,6 +45,9 @@ struct TaskDescription {
   // Leading values of the state that are the robot's own (what the visual
   // modes keep); equals observation_dim when the task does not say.
   uint32_t agent_state_dim = 0;
+  // ABI 1.6: the named values measureProgress gives (abi.h); empty for a
+  // task that has none or a plugin older than 1.6.
+  std::vector<std::string> progress_signals;
 };
 
 struct ControllerDescription {
@@ -76,6 +79,9 @@ class TaskInstance {
   // so (MB_UNSUPPORTED).
   std::vector<uint8_t> saveState();
   void restoreState(const std::vector<uint8_t>& bytes);
+  // ABI 1.6: one value per description's progress_signals (none when it
+  // has none).
+  std::vector<double> measureProgress(SceneBridge& scene);
 
  private:
   const mb_task_descriptor* descriptor_;

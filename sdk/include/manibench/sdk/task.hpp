@@ -52,6 +52,10 @@ struct TaskSpec {
   // (evaluate_success exactly once per env step, reset before the first),
   // so no task keeps such a counter itself.
   uint32_t success_hold_steps = 0;
+  // ABI 1.6: names of the values Task::measureProgress returns, in order
+  // (abi.h lists those the host interprets: reached, holding, progress,
+  // blocked). Empty: the task says nothing of its progress.
+  std::vector<std::string> progress_signals;
 };
 
 // One success condition's outcome: whether it holds, and the value behind
@@ -80,6 +84,9 @@ class Task {
                                Eigen::Map<const Eigen::VectorXd> action) = 0;
   // One entry per TaskSpec::success_conditions, in that order.
   virtual std::vector<Condition> evaluateSuccess(const SceneView& scene) = 0;
+  // One value per TaskSpec::progress_signals, of the scene as it is (ABI
+  // 1.6). Reads only: the host may call it between any two steps.
+  virtual std::vector<double> measureProgress(const SceneView&) const { return {}; }
 };
 
 namespace detail {
@@ -88,7 +95,7 @@ struct TaskHandle {
   std::unique_ptr<Task> task;
   TaskSpec spec;
   SegmentTable observation;
-  StringTable conditions, masks, joints;
+  StringTable conditions, masks, joints, progress;
   std::map<std::string, std::unique_ptr<StringTable>> objects;
   uint32_t held_steps = 0;  // TaskSpec::success_hold_steps' count
 
@@ -98,7 +105,8 @@ struct TaskHandle {
         observation(spec.observation),
         conditions(spec.success_conditions),
         masks(spec.masks),
-        joints(spec.actuated_joints) {
+        joints(spec.actuated_joints),
+        progress(spec.progress_signals) {
     if (spec.success_conditions.empty() || spec.success_conditions.back() != "success")
       throw Error("TaskSpec::success_conditions must end with \"success\"",
                   MB_INVALID_ARGUMENT);
@@ -150,6 +158,8 @@ struct TaskTrampolines {
       info.max_episode_steps = h.spec.max_episode_steps;
       info.default_config = h.spec.default_config.c_str();
       info.agent_state_dim = h.spec.agent_state_dim;
+      info.progress_signal_count = h.progress.count();
+      info.progress_signals = h.progress.data();
       writeOutputStruct(out, info);
     });
   }
@@ -222,6 +232,18 @@ struct TaskTrampolines {
     });
   }
 
+  static mb_status measureProgress(mb_task* t, const mb_scene_api* api, mb_scene* scene,
+                                   double* out, uint32_t count, mb_error* err) {
+    return guard(err, [&] {
+      const TaskHandle& h = *asTask(t);
+      checkVectorSize("progress buffer", h.progress.count(), count);
+      const SceneView view(api, scene);
+      const std::vector<double> values = h.task->measureProgress(view);
+      checkVectorSize("measureProgress() result", count, values.size());
+      std::copy(values.begin(), values.end(), out);
+    });
+  }
+
   // ABI 1.2: the hold count, then the task's Stateful part (state.hpp).
   static mb_status getState(mb_task* t, uint8_t* out, uint64_t capacity, uint64_t* out_size,
                             mb_error* err) {
@@ -251,6 +273,7 @@ bool registerTask(const char* name, const char* summary) {
   d->evaluate_success = &TaskTrampolines<T>::evaluateSuccess;
   d->get_state = &TaskTrampolines<T>::getState;
   d->set_state = &TaskTrampolines<T>::setState;
+  d->measure_progress = &TaskTrampolines<T>::measureProgress;
   return true;
 }
 

@@ -1,12 +1,13 @@
 // What a mobile-manipulation task family includes: the SDK, the mobile
 // Panda (its facts, observation, placement; the experts' segments), the
-// object catalog and ids, and the SDK's fully specified random numbers.
+// object catalog and ids, the object facts (object_facts.hpp), and the SDK's fully specified random numbers.
 // A family writes `using namespace manibench::kit;` in its own namespace
 // and then names everything it shares plainly: sdk::Task, Config, Error,
 // Pose, SceneView, kPi, putPose, Random, hashString, mobile_panda::...
 #pragma once
 
 #include <manibench/kit/catalog.hpp>
+#include <manibench/kit/object_facts.hpp>
 #include <manibench/kit/mobile_panda.hpp>
 #include <manibench/sdk.hpp>
 #include <manibench/sdk/random.hpp>

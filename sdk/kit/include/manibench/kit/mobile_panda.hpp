@@ -11,6 +11,7 @@
 
 #include <manibench/kit/common.hpp>
 #include <manibench/kit/policy_math.hpp>
+#include <manibench/kit/urdf.hpp>
 #include <manibench/sdk/data.hpp>
 #include <manibench/sdk/policy.hpp>
 #include <manibench/sdk/random.hpp>
@@ -212,10 +213,31 @@ class AgentState {
     tcps_.clear();
     for (const std::string& l : facts_.finger_links) fingers_.push_back(scene.findLink(robot, l));
     for (const std::string& l : facts_.tcp_links) tcps_.push_back(scene.findLink(robot, l));
+    bindBodyLinks(scene);
   }
 
   const std::vector<mb_id>& getFingers() const { return fingers_; }
   const std::vector<mb_id>& getTcps() const { return tcps_; }
+  // The robot's links with collision geometry, fingers left out: the arm,
+  // the hand, the body.
+  const std::vector<mb_id>& getBodyLinks() const { return body_links_; }
+
+  // Whether arm `arm`'s two fingers both press on `link` (more than
+  // `min_force` N each): the gripper holds it. One contact query per finger.
+  bool isHolding(const SceneView& scene, mb_id link, std::size_t arm = 0, double min_force = 1.0) const {
+    for (std::size_t k = 2 * arm; k < 2 * arm + 2; ++k)
+      if (!(scene.calcContactForce(fingers_.at(k), link).norm() > min_force)) return false;
+    return true;
+  }
+  // The largest contact force (N) on one of the robot's body links (not
+  // its fingers): from the object, the ground or anything else the body
+  // runs into. One contact query per body link: for diagnostics (progress
+  // signals), not for every step of a fast loop.
+  double calcBodyContactForce(const SceneView& scene) const {
+    double most = 0;
+    for (const mb_id link : body_links_) most = std::max(most, scene.calcContactForce(link).norm());
+    return most;
+  }
 
   // World positions of the finger pads, in the observation's order.
   std::vector<Eigen::Vector3d> calcPadPositions(const SceneView& scene) const {
@@ -257,8 +279,21 @@ class AgentState {
 
  private:
   Facts facts_;
+  // The links of the robot's URDF that have a <collision>, but the fingers.
+  void bindBodyLinks(const SceneView& scene) {
+    body_links_.clear();
+    std::ifstream in(facts_.urdf);
+    const urdf::Tree tree = urdf::readTree(in, "URDF " + facts_.urdf);
+    for (const urdf::Tree::Link& link : tree.links) {
+      if (std::find(facts_.finger_links.begin(), facts_.finger_links.end(), link.name) != facts_.finger_links.end())
+        continue;
+      if (link.element != nullptr && link.element->count("collision") > 0)
+        body_links_.push_back(scene.findLink(robot_, link.name));
+    }
+  }
+
   mb_id robot_ = -1;
-  std::vector<mb_id> fingers_, tcps_;
+  std::vector<mb_id> fingers_, tcps_, body_links_;
 };
 
 // ---- what the experts read -------------------------------------------------

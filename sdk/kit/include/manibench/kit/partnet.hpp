@@ -256,18 +256,36 @@ class Object {
     return nullptr;
   }
 
-  // Every link's pose in the object frame (the root's) with every joint at 0.
-  std::map<std::string, Eigen::Isometry3d> calcLinkPoses() const {
+  // Every link's pose in the object frame (the root's) with each joint at
+  // its position in `q` (by joint name; 0 for joints it does not name): a
+  // revolute or continuous joint turns its child about its axis, a
+  // prismatic one slides it along it (URDF: the axis in the joint frame).
+  std::map<std::string, Eigen::Isometry3d> calcLinkPoses(const std::map<std::string, double>& q = {}) const {
     std::map<std::string, Eigen::Isometry3d> pose;
     for (const Link& l : links) {
       if (l.parent_joint < 0) {
         pose[l.name] = Eigen::Isometry3d::Identity();
       } else {
         const Joint& j = joints[std::size_t(l.parent_joint)];
-        pose[l.name] = pose.at(j.parent) * j.origin;
+        Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
+        const auto at = q.find(j.name);
+        const double x = at == q.end() ? 0.0 : at->second;
+        if (j.type == JointType::kRevolute || j.type == JointType::kContinuous)
+          motion.linear() = Eigen::AngleAxisd(x, j.axis).toRotationMatrix();
+        else if (j.type == JointType::kPrismatic)
+          motion.translation() = x * j.axis;
+        pose[l.name] = pose.at(j.parent) * j.origin * motion;
       }
     }
     return pose;
+  }
+  // Each limited movable joint at its lower limit (where ManiSkill v1 and
+  // the tasks' resets put them), by name.
+  std::map<std::string, double> getLowerLimits() const {
+    std::map<std::string, double> q;
+    for (const Joint& j : joints)
+      if (j.isMovable() && j.limited) q[j.name] = j.lower;
+    return q;
   }
 
   // Points of a shape in its link's frame: mesh vertices (read once and
@@ -311,9 +329,10 @@ class Object {
     return *slot;
   }
 
-  // Bounds of the visuals in the object frame, every joint at 0.
-  Bounds calcVisualBounds() const {
-    const auto pose = calcLinkPoses();
+  // Bounds of the visuals in the object frame, each joint at its position
+  // in `q` (calcLinkPoses; every joint at 0 by default).
+  Bounds calcVisualBounds(const std::map<std::string, double>& q = {}) const {
+    const auto pose = calcLinkPoses(q);
     Bounds all;
     for (const Link& l : links)
       for (const Shape& v : l.visuals)
