@@ -197,7 +197,8 @@ std::vector<ConfigKey> makeSchema() {
                   "the articulation's name in the scene (as the task added it)")
                   .required());
   k.push_back(Key("physics.contact.bodies[].link", T::String,
-                  "the link's name in its URDF; null: every link of the articulation")
+                  "the link's name in its URDF; `NAME*`: every link whose name starts with NAME (none is not an "
+                  "error); null: every link of the articulation")
                   .orNull()
                   .itemDefault("null"));
   addMaterialKeys(k, "physics.contact.bodies[]");

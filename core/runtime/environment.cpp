@@ -198,6 +198,16 @@ void Environment::applySceneOptions(const std::string& object_id) {
   if (options_.ground_material) scene_->setGroundMaterial(*options_.ground_material);
   for (const BodyContactMaterial& body : options_.contact_materials) {
     const int articulation = findArticulation(body.articulation, body.source);
+    // "NAME*": every link whose name starts with NAME, none included (a
+    // family's objects differ in how many wheels they have; the task's
+    // materials are written before any object is known).
+    if (!body.link.empty() && body.link.back() == '*') {
+      const std::string prefix = body.link.substr(0, body.link.size() - 1);
+      for (const int link : scene_->listLinks(articulation))
+        if (scene_->getLinkName(link).compare(0, prefix.size(), prefix) == 0)
+          scene_->setContactMaterial(articulation, scene_->getLinkName(link), body.material);
+      continue;
+    }
     if (!body.link.empty() && scene_->findLink(articulation, body.link) < 0)
       throw SceneError(body.source + ": articulation '" + body.articulation + "' of " + where +
                        " has no link '" + body.link + "'");

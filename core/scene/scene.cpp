@@ -193,6 +193,13 @@ int Scene::findLink(int articulation, const std::string& link_name) const {
   return -1;
 }
 
+std::vector<int> Scene::listLinks(int articulation) const {
+  const Impl::Articulation& art = impl_->getArticulation(articulation, "listLinks");
+  std::vector<int> links(art.model.links.size());
+  for (std::size_t l = 0; l < links.size(); ++l) links[l] = art.first_link + static_cast<int>(l);
+  return links;
+}
+
 int Scene::getRootLink(int articulation) const {
   // The model lists links depth first from the root (urdf_model.cpp).
   return impl_->getArticulation(articulation, "getRootLink").first_link;

@@ -126,10 +126,6 @@ std::string toString(BucketShape shape);
 // body weighs a shell of kShellThickness at kShellDensity over its surface.
 constexpr double kShellThickness = 0.004;  // m: a plastic bucket's wall
 constexpr double kShellDensity = 1000;     // kg/m^3: ManiSkill v1's bucket density
-// ManiSkill v1's scale of a PartNet bucket: 0.3, and 0.35 for its bucket
-// 4018 (its only exception: ../shared/reference/maniskill-v1-objects).
-double calcBucketScale(const std::string& id);
-
 BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, double scale,
                               const std::string& cache_root = "");
 
@@ -209,12 +205,19 @@ class MoveBucketTask : public sdk::Task {
   void observe(const SceneView& scene, Eigen::Map<Eigen::VectorXd> out) override;
   double computeReward(const SceneView& scene, Eigen::Map<const Eigen::VectorXd> action) override;
   std::vector<sdk::Condition> evaluateSuccess(const SceneView& scene) override;
+  // reached (the pads within the reward's kNear), holding (both grippers
+  // press on the body), progress (half the lift to the platform's top, half
+  // the way to it in the plane), fallen (tipped past kTipped): what the
+  // survey classifies a failure by (manibench/outcome.hpp).
+  std::vector<double> measureProgress(const SceneView& scene) const override;
 
  private:
   RewardInputs measure(const SceneView& scene, double action_norm) const;
 
   std::string cache_dir_;
-  double partnet_scale_;
+  // The scale of each bucket (assets/objects/move_bucket.yaml: ManiSkill
+  // v1's 0.3, and its per-object exceptions; task.partnet_scale).
+  ObjectFacts facts_;
   uint32_t hold_steps_;
   // the robot's facts (assets/robots/mobile_panda_dual.yaml) and state
   std::unique_ptr<mobile_panda::AgentState> robot_state_;
@@ -226,6 +229,7 @@ class MoveBucketTask : public sdk::Task {
   int bail_index_ = -1;             // in the bucket's joint vector
   uint32_t bucket_joint_count_ = 0;
   double initial_height_ = 0;       // root height at reset
+  double initial_platform_distance_ = 1;  // root to platform centre in the plane at reset
   Eigen::Vector3d platform_centre_ = Eigen::Vector3d(0, 0, 0.1);
 };
 

@@ -45,19 +45,17 @@ std::string writePlatformUrdf() {
 
 MoveBucketTask::MoveBucketTask(const Config& config)
     : cache_dir_(config.get<std::string>("cache_dir", "")),
-      partnet_scale_(config.get<double>("partnet_scale", 0.0)),
+      facts_(config, "move_bucket"),
       hold_steps_(config.get<uint32_t>("hold_steps", 10)),
       buckets_(kTaskName, "bucket", readPartNetDir(config, kTaskName),
                {listGeneratedBuckets, [](const std::string& id) { return generateBucket(id); },
                 [this](const std::string& folder, const std::string& id) {
-                  return loadPartNetBucket(folder, id, partnet_scale_ > 0 ? partnet_scale_ : calcBucketScale(id), cache_dir_);
+                  return loadPartNetBucket(folder, id, facts_.calcScale(id), cache_dir_);
                 },
                 nullptr, [this](BucketModel& model) { writeMeshFiles(model, cache_dir_); }}) {
-  config.requireKnownKeys({"partnet_dir", "robot_dir", "cache_dir", "partnet_scale", "hold_steps"},
+  config.requireKnownKeys({"partnet_dir", "robot_dir", "cache_dir", "partnet_scale", "object_facts", "hold_steps"},
                          "MoveBucket: task");
   if (hold_steps_ == 0) throw Error("MoveBucket: task.hold_steps must be positive", MB_INVALID_ARGUMENT);
-  if (!(partnet_scale_ >= 0) || !std::isfinite(partnet_scale_))
-    throw Error("MoveBucket: task.partnet_scale must be positive (or 0: ManiSkill v1's)", MB_INVALID_ARGUMENT);
   if (cache_dir_.empty()) cache_dir_ = getDefaultCacheRoot();
   // The observation layout (ObservationLayout) and the expert assume the
   // dual-arm robot's 22 joints and 88-value agent vector.
@@ -82,6 +80,7 @@ sdk::TaskSpec MoveBucketTask::describe() const {
   spec.observation.insert(spec.observation.end(), objects.begin(), objects.end());
   spec.success_conditions = {"on_platform", "upright", "static", "ball_inside", "success"};
   spec.success_hold_steps = hold_steps_;
+  spec.progress_signals = {"reached", "holding", "progress", "fallen"};
   spec.masks = {"robot"};
   // ManiSkill v1: bucket, ball and platform friction 0.5 (default 0.5), fingers 2.
   std::ostringstream config;
@@ -125,6 +124,7 @@ void MoveBucketTask::reset(SceneView& scene, uint64_t seed) {
   bucket.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
   scene.setRootPose(bucket_id_, bucket);
   initial_height_ = bucket.position.z();
+  initial_platform_distance_ = distance;
   const double robot_distance = rng.uniform(0.6, 0.8);
   const double around = theta + rng.uniform(-0.4 * kPi, 0.4 * kPi);
   robot_state_->placeFacing(scene, rng, bucket.position.head<2>(), robot_distance, around, -kPi);
@@ -220,6 +220,19 @@ std::vector<sdk::Condition> MoveBucketTask::evaluateSuccess(const SceneView& sce
   const bool inside = (ball.array() > bucket_->lower.array()).all() && (ball.array() < bucket_->upper.array()).all();
   return {{on, m.platform_distance}, {upright, m.tilt}, {still, m.speed}, {inside, ball.z()},
           {on && upright && still && inside, 0.0}};
+}
+
+std::vector<double> MoveBucketTask::measureProgress(const SceneView& scene) const {
+  const RewardInputs m = measure(scene, 0);
+  // 1 N each finger: a touch, well under the grippers' squeeze.
+  constexpr double kTouch = 1.0;
+  const bool holding =
+      robot_state_->isHolding(scene, body_link_, 0, kTouch) && robot_state_->isHolding(scene, body_link_, 1, kTouch);
+  const double lift = std::clamp(m.lift / RewardConstants::kLiftHeight, 0.0, 1.0);
+  const double way = std::max(initial_platform_distance_ - RewardConstants::kOnPlatform, 1e-6);
+  const double carried = std::clamp((initial_platform_distance_ - m.platform_distance) / way, -1.0, 1.0);
+  return {m.gripper_distance < RewardConstants::kNear ? 1.0 : 0.0, holding ? 1.0 : 0.0, 0.5 * lift + 0.5 * carried,
+          m.tilt > RewardConstants::kTipped ? 1.0 : 0.0};
 }
 
 }  // namespace move_bucket

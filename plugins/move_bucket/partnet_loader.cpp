@@ -104,9 +104,16 @@ std::optional<double> findInnerCrossing(const std::vector<Eigen::Vector2d>& rim,
 // took out the lid HACD made over the flat rims of 100431, 100441 and
 // 100454, on which the fingers stood 1-1.5 cm above the rim: expert 11/40
 // -> 31/40.)
+//
+// The cap on HACD's input: the 20 body and handle meshes of the 14 real
+// buckets we measured (208-8,748 welded triangles) decomposed in 0.1-10 s
+// on the loaded 2-core VM, and 100477's body (63,680) 362 s; 10,000 leaves
+// every mesh we measured as it is and bounds a first load to tens of
+// seconds a part (docs/partnet.md, "Collision geometry").
 const convex::DecompositionOptions kDecomposition = [] {
   convex::DecompositionOptions o;
   o.concavity = 0.02;
+  o.max_triangles = 10000;
   return o;
 }();
 
@@ -196,16 +203,10 @@ std::string makeUrdf(const partnet::Object& object, const std::set<std::string>&
         << (decomposed_body ? inertialXml(shell) : "") << "  </link>\n  <joint name=\"" << kFrameLink
         << "_joint\" type=\"fixed\"><parent link=\"" << kFrameLink << "\"/><child link=\"" << object.getRoot().name
         << "\"/><origin xyz=\"" << -origin.x() << " " << -origin.y() << " " << -origin.z() << "\"/></joint>";
-  const std::size_t robot = urdf.find("<robot");
-  const std::size_t open_end = robot == std::string::npos ? robot : urdf.find('>', robot);
-  if (open_end == std::string::npos) throw Error("PartNet: " + object.urdf_file + ": no <robot> element", MB_INVALID_ARGUMENT);
-  urdf.insert(open_end + 1, frame.str());
-  return urdf;
+  return partnet::prependElements(urdf, frame.str(), "PartNet: " + object.urdf_file);
 }
 
 }  // namespace
-
-double calcBucketScale(const std::string& id) { return id == "4018" ? 0.35 : 0.3; }
 
 BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, double scale,
                               const std::string& cache_root) {

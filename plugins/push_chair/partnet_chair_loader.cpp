@@ -1,9 +1,9 @@
 // PartNet-Mobility chairs over the SDK's PartNet reader
 // (manibench/kit/partnet.hpp: folders, mobility.urdf, semantics, OBJ
 // vertices, scaling). What this family adds is what a chair's parts are,
-// from semantics.txt labels: the wheels ('wheel'; renamed wheel_0..wheel_4
-// in the URDF, so that the task's contact materials find them: ManiSkill's
-// chairs have 5 casters), the seat ('seat'; its joint gets the seat's
+// from semantics.txt labels: the wheels ('wheel'; renamed wheel_0, wheel_1,
+// ... in the URDF, as many as the chair has, so that the task's contact
+// material `wheel_*` finds them), the seat ('seat'; its joint gets the seat's
 // friction and damping), caster swivels (the parents of wheels). The chair
 // stands with its lowest point on the ground.
 #include "push_chair.hpp"
@@ -11,7 +11,6 @@
 #include <manibench/kit/partnet.hpp>
 
 #include <limits>
-#include <regex>
 #include <set>
 #include <sstream>
 
@@ -38,14 +37,12 @@ std::vector<Eigen::Vector3d> thinPoints(const std::vector<Eigen::Vector3d>& poin
   return out;
 }
 
-// ManiSkill's chairs stand on 5 casters; PartNet's office chairs have one
-// or two wheels per caster (chair 179: 10). The first wheel of each caster
-// (the wheel's parent link) comes first, to become wheel_0..wheel_4, which
-// the task's contact materials name (friction 1.0); a caster's second
-// wheel comes after, becomes wheel_5.. and keeps the chair's friction
-// (0.1), since the task's materials are set before any object is known.
-std::vector<std::string> orderWheels(const partnet::Object& object, const std::vector<std::string>& wheels,
-                                     const std::string& where) {
+// PartNet's office chairs have one or two wheels per caster (chair 179:
+// 10 on 5) and 3 to 6 casters; ManiSkill v1's wheels all have friction 1.0
+// (the task's `wheel_*`). The first wheel of each caster (the wheel's
+// parent link) comes first, so that wheel_0.. name one wheel per caster in
+// caster order, the casters' second wheels after them.
+std::vector<std::string> orderWheels(const partnet::Object& object, const std::vector<std::string>& wheels) {
   std::vector<std::string> first, second;
   std::set<std::string> casters;
   for (const std::string& w : wheels) {
@@ -53,12 +50,6 @@ std::vector<std::string> orderWheels(const partnet::Object& object, const std::v
     const std::string caster = j == nullptr ? w : j->parent;
     (casters.insert(caster).second ? first : second).push_back(w);
   }
-  if (first.size() != 5)
-    throw Error(where + ": semantics.txt labels " + std::to_string(wheels.size()) + " links 'wheel' on " +
-                    std::to_string(first.size()) +
-                    " casters; PushChair needs a chair on 5 casters (the task's contact materials name "
-                    "wheel_0..wheel_4)",
-                MB_INVALID_ARGUMENT);
   first.insert(first.end(), second.begin(), second.end());
   return first;
 }
@@ -77,7 +68,7 @@ ChairModel loadPartNetChair(const std::string& folder, const std::string& id, do
     if (hasLabel(s, "wheel")) wheels.push_back(link.name);
     if (seat == nullptr && hasLabel(s, "seat")) seat = &link;
   }
-  wheels = orderWheels(object, wheels, where);
+  wheels = orderWheels(object, wheels);
   if (seat == nullptr) throw Error(where + ": semantics.txt labels no link 'seat'", MB_INVALID_ARGUMENT);
 
   ChairModel chair;
@@ -88,11 +79,14 @@ ChairModel loadPartNetChair(const std::string& folder, const std::string& id, do
   // Wheels take the names the task's materials use.
   std::map<std::string, std::string> rename;
   for (std::size_t k = 0; k < wheels.size(); ++k) rename[wheels[k]] = "wheel_" + std::to_string(k);
-  std::string urdf = object.urdf;
   for (std::size_t k = 0; k < wheels.size(); ++k) chair.wheel_links.push_back("wheel_" + std::to_string(k));
-  for (const auto& [from, to] : rename)
-    urdf = std::regex_replace(urdf, std::regex("(name|link)=\"" + from + "\""), "$1=\"" + to + "\"");
-  chair.urdf = urdf;
+  // A link already named wheel_k that is not the k-th wheel would be
+  // renamed onto another's name, or get the wheels' friction.
+  for (const partnet::Link& link : object.links)
+    if (link.name.rfind("wheel_", 0) == 0 && rename.count(link.name) == 0)
+      throw Error(where + ": link '" + link.name + "' is not labelled a wheel but has the name PushChair gives wheels",
+                  MB_INVALID_ARGUMENT);
+  chair.urdf = partnet::renameLinks(object.urdf, rename);
   auto renamed = [&rename](const std::string& link) {
     const auto it = rename.find(link);
     return it == rename.end() ? link : it->second;

@@ -79,8 +79,9 @@ sdk::TaskSpec PushChairTask::describe() const {
   config << "physics:\n  default_density: 200\n  contact:\n"
          << "    ground: {static_friction: 0.5, dynamic_friction: 0.5}\n    bodies:\n"
          << "      - {articulation: chair, static_friction: 0.1, dynamic_friction: 0.1}\n";
-  for (int k = 0; k < 5; ++k)
-    config << "      - {articulation: chair, link: wheel_" << k << ", static_friction: 1.0, dynamic_friction: 1.0}\n";
+  // Every wheel, however many the chair has (procedural chairs: one per
+  // leg; PartNet's: wheel_0.. from the loader).
+  config << "      - {articulation: chair, link: \"wheel_*\", static_friction: 1.0, dynamic_friction: 1.0}\n";
   spec.default_config = config.str() + robot_->getFingerFrictionYaml() + robot_->getFacts().camera_yaml;
   return spec;
 }

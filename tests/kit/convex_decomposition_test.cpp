@@ -38,9 +38,9 @@ constexpr double kRimWidth = 0.015;  // the flat rim of makeCup(true), outwards
 // A cylinder cup (side and bottom, open at the top) of 32 sectors and 6
 // rings, each triangle also flipped; with `rim`, a flat ring kRimWidth wide
 // round the top (as PartNet's buckets 100441 and 100454 have).
-convex::Mesh makeCup(bool rim = false) {
+convex::Mesh makeCup(bool rim = false, int sectors = 32, int rings = 6) {
+  const int kSectors = sectors, kRings = rings;
   convex::Mesh m;
-  constexpr int kSectors = 32, kRings = 6;
   for (int r = 0; r <= kRings; ++r)
     for (int s = 0; s < kSectors; ++s) {
       const double a = 2 * M_PI * s / kSectors;
@@ -48,7 +48,7 @@ convex::Mesh makeCup(bool rim = false) {
     }
   const uint32_t centre = uint32_t(m.vertices.size());
   m.vertices.emplace_back(0, 0, 0);
-  auto at = [](int r, int s) { return uint32_t(r * kSectors + (s % kSectors)); };
+  auto at = [kSectors](int r, int s) { return uint32_t(r * kSectors + (s % kSectors)); };
   for (int r = 0; r < kRings; ++r)
     for (int s = 0; s < kSectors; ++s) {
       m.triangles.push_back({at(r, s), at(r, s + 1), at(r + 1, s + 1)});
@@ -119,6 +119,37 @@ TEST(ConvexDecomposition, ACupStaysHollowAndItsWallIsCovered) {
   const std::vector<convex::Mesh> again = convex::decompose(cup);
   ASSERT_EQ(again.size(), pieces.size());
   for (std::size_t k = 0; k < pieces.size(); ++k) EXPECT_EQ(again[k].vertices, pieces[k].vertices) << k;
+}
+
+// A mesh past max_triangles is clustered down to it before HACD (whose
+// time grows faster than the square of its triangles): the result keeps
+// the shape's extent to within a cell, is the same every time, and the
+// cup it makes is still hollow. A mesh under the cap is left as it is.
+TEST(ConvexDecomposition, ABigMeshIsSimplifiedToTheCapFirst) {
+  const convex::Mesh fine = convex::detail::weld(makeCup(false, 256, 40));  // 20,736 triangles
+  ASSERT_GT(fine.triangles.size(), 20000u);
+  const double diagonal = std::hypot(2 * kRadius, 2 * kRadius, kHeight);
+  const convex::Mesh simple = convex::detail::simplify(fine, 3000, diagonal);
+  EXPECT_LE(simple.triangles.size(), 3000u);
+  EXPECT_GT(simple.triangles.size(), 1000u) << "the finest grid that fits, not a coarser one";
+  Eigen::Vector3d lo = simple.vertices.front(), hi = lo;
+  for (const Eigen::Vector3d& v : simple.vertices) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  EXPECT_NEAR(hi.z() - lo.z(), kHeight, 0.02);
+  EXPECT_NEAR(hi.x() - lo.x(), 2 * kRadius, 0.02);
+  const convex::Mesh again = convex::detail::simplify(fine, 3000, diagonal);
+  EXPECT_EQ(again.vertices, simple.vertices);
+  EXPECT_EQ(again.triangles, simple.triangles);
+  const convex::Mesh coarse = convex::detail::weld(makeCup());
+  EXPECT_EQ(convex::detail::simplify(coarse, 3000, diagonal).triangles, coarse.triangles);
+  convex::DecompositionOptions options;
+  options.max_triangles = 3000;
+  const std::vector<convex::Mesh> pieces = convex::decompose(fine, options);
+  ASSERT_GE(pieces.size(), 4u);
+  for (const double z : {0.4, 0.6, 0.8})
+    for (const convex::Mesh& piece : pieces) EXPECT_FALSE(isInside(piece, {0, 0, z * kHeight})) << z;
 }
 
 // HACD measures concavity along the surface's normals, which a flat ring

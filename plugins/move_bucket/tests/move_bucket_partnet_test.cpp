@@ -34,10 +34,15 @@ TEST(MoveBucketPartNet, SplitsComeFromTestTxt) {
 }
 
 // ManiSkill v1 scaled its buckets by 0.3, and its bucket 4018 by 0.35: a
-// folder of v1's own ids gets v1's sizes (task.partnet_scale 0, the default).
+// folder of v1's own ids gets v1's sizes (task.partnet_scale 0, the
+// default), from the shipped facts (assets/objects/move_bucket.yaml), not
+// from code; task.partnet_scale replaces them all.
 TEST(MoveBucketPartNet, V1ScalesItsBucketsAsV1Did) {
-  EXPECT_EQ(bk::calcBucketScale("4018"), 0.35);
-  for (const char* id : {"4000", "4019", "100461", "200001"}) EXPECT_EQ(bk::calcBucketScale(id), 0.3) << id;
+  const manibench::kit::ObjectFacts v1(manibench::sdk::Config(""), "move_bucket");
+  EXPECT_EQ(v1.calcScale("4018"), 0.35);
+  for (const char* id : {"4000", "4019", "100461", "200001"}) EXPECT_EQ(v1.calcScale(id), 0.3) << id;
+  const manibench::kit::ObjectFacts fixed(manibench::sdk::Config("partnet_scale: 0.5"), "move_bucket");
+  EXPECT_EQ(fixed.calcScale("4018"), 0.5);
 }
 
 TEST(MoveBucketPartNet, RimFloorAndHandleAreMeasuredInTheBucketFrame) {
@@ -56,7 +61,9 @@ TEST(MoveBucketPartNet, RimFloorAndHandleAreMeasuredInTheBucketFrame) {
   EXPECT_DOUBLE_EQ(octagon.bail_lower, -2.0);
   EXPECT_DOUBLE_EQ(octagon.bail_upper, 2.0);
   EXPECT_EQ(octagon.body_link, "move_bucket_frame");
-  EXPECT_NE(octagon.urdf.find("<link name=\"move_bucket_frame\">"), std::string::npos);
+  EXPECT_NE(octagon.urdf.find("<link name=\"move_bucket_frame\""), std::string::npos);
+  EXPECT_LT(octagon.urdf.find("<link name=\"move_bucket_frame\""), octagon.urdf.find("<link name=\"base\""))
+      << "the frame link comes first";
   EXPECT_TRUE(octagon.files.empty()) << "meshes stay where they are";
   EXPECT_EQ(octagon.base_dir, kFixture + "/200001");
   ASSERT_GT(octagon.surface_points.size(), 50u);
@@ -104,7 +111,7 @@ TEST(MoveBucketPartNet, ErrorsNameTheFileAndTheProblem) {
       {dir + "/1/mobility.urdf", "rim's inside"});
   std::filesystem::remove_all(dir);
   // The task refuses a folder that is not one, and a negative scale (0 is
-  // v1's own: calcBucketScale).
+  // the object facts' own).
   auto makeEnvironment = [](std::vector<std::string> overrides) {
     mb::ConfigSources sources;
     sources.overrides = std::move(overrides);
@@ -118,7 +125,7 @@ TEST(MoveBucketPartNet, ErrorsNameTheFileAndTheProblem) {
   mb::testing::expectMentions(mb::testing::catchMessage<std::exception>([&] {
                                 makeEnvironment({"task.partnet_dir=" + kFixture, "task.partnet_scale=-0.3"});
                               }),
-                              {"task.partnet_scale must be positive (or 0: ManiSkill v1's)"});
+                              {"task.partnet_scale must be positive (or 0: the object facts' scale"});
 }
 
 std::unique_ptr<mb::Environment> makePartNetEnv(std::vector<std::string> overrides = {}) {

@@ -10,6 +10,8 @@
 #include <manibench/environment.hpp>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <random>
 #include <set>
 #include <sstream>
@@ -426,28 +428,59 @@ TEST(PushChairPartNet, LoaderFindsWheelsCastersAndTheSeat) {
   EXPECT_FALSE(m.surface.empty());
 }
 
+// Any number of casters: 200003 stands on four, its wheels wheel_0..3
+// (the task's material `wheel_*` gives them all v1's wheel friction).
+TEST(PushChairPartNet, AChairOnFourCastersLoads) {
+  const pc::ChairModel m = pc::loadPartNetChair(kFixture, "200003", 0.8);
+  EXPECT_EQ(m.wheel_links, (std::vector<std::string>{"wheel_0", "wheel_1", "wheel_2", "wheel_3"}));
+  int swivels = 0;
+  for (const pc::ChairJoint& j : m.joints) swivels += j.role == pc::JointRole::kCasterSwivel;
+  EXPECT_EQ(swivels, 4);
+}
+
 TEST(PushChairPartNet, BadFoldersGetClearErrors) {
-  try {
-    pc::loadPartNetChair(kFixture, "200003", 0.8);
-    FAIL() << "four wheels";
-  } catch (const manibench::sdk::Error& e) {
-    EXPECT_NE(std::string(e.what()).find("4 links 'wheel'"), std::string::npos) << e.what();
-  }
+  // A chair whose semantics.txt names no seat, and one with a link that
+  // already has a wheel's name but is not labelled a wheel.
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "push_chair_bad_folders";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  for (const char* id : {"1", "2"})
+    std::filesystem::copy(kFixture + "/200001", dir / id, std::filesystem::copy_options::recursive);
+  auto rewrite = [&](const std::filesystem::path& file, const std::string& from, const std::string& to) {
+    std::ifstream in(file);
+    std::stringstream text;
+    text << in.rdbuf();
+    std::string s = text.str();
+    for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
+      s.replace(at, from.size(), to);
+    std::ofstream(file) << s;
+  };
+  rewrite(dir / "1" / "semantics.txt", " seat", " cushion");
+  rewrite(dir / "2" / "mobility.urdf", "\"link_0\"", "\"wheel_7\"");
+  rewrite(dir / "2" / "semantics.txt", "link_0 ", "wheel_7 ");
+  mb::testing::expectMentions(
+      mb::testing::catchMessage<manibench::sdk::Error>([&] { pc::loadPartNetChair(dir.string(), "1", 0.8); }),
+      {(dir / "1").string(), "labels no link 'seat'"});
+  mb::testing::expectMentions(
+      mb::testing::catchMessage<manibench::sdk::Error>([&] { pc::loadPartNetChair(dir.string(), "2", 0.8); }),
+      {(dir / "2").string(), "link 'wheel_7' is not labelled a wheel"});
   EXPECT_THROW(pc::loadPartNetChair(kFixture, "999999", 0.8), manibench::sdk::Error);
+  std::filesystem::remove_all(dir);
 }
 
 // The folder replaces the generator; a chair the family cannot use is
 // skipped with a warning, as in every family (kit/catalog.hpp).
 TEST(PushChairPartNet, FolderReplacesTheGeneratorAndTheChairStandsAndRolls) {
-  // 200003 stands on four wheels: skipped, with its reason, once.
-  ::testing::internal::CaptureStderr();
   const auto env = makeEnv({"task.partnet_dir=" + kFixture});
   EXPECT_EQ(env->listObjects("test"), std::vector<std::string>{"200002"});
-  EXPECT_EQ(env->listObjects("train"), std::vector<std::string>{"200001"});
-  EXPECT_EQ(env->listObjects("train"), std::vector<std::string>{"200001"});
-  const std::string warnings = ::testing::internal::GetCapturedStderr();
-  mb::testing::expectMentions(warnings, {"skipping PartNet chair 200003 (" + kFixture + "/200003)", "4 links 'wheel'"});
-  EXPECT_EQ(warnings.find("200003 ("), warnings.rfind("200003 (")) << warnings;
+  EXPECT_EQ(env->listObjects("train"), (std::vector<std::string>{"200001", "200003"}));
+  // the four-caster chair stands on its wheels too
+  env->reset("200003", 2);
+  const Eigen::VectorXd zero4 = Eigen::VectorXd::Zero(env->getControllerDescription().action_dim);
+  const Eigen::VectorXd start4 = env->getObservation();
+  for (int i = 0; i < 40; ++i) env->step(zero4);
+  EXPECT_LT((env->getObservation().segment<3>(L::kChairPose) - start4.segment<3>(L::kChairPose)).norm(), 0.01);
+  EXPECT_LT(calcTilt(env->getObservation()), 0.02);
   env->reset("200001", 2);
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(env->getControllerDescription().action_dim);
   const Eigen::VectorXd start = env->getObservation();

@@ -262,6 +262,8 @@ class Scene {
   int findArticulation(const std::string& name) const;  // -1 if none
   // Link ids are global in the scene; links merged by fixed joints keep ids.
   int findLink(int articulation, const std::string& link_name) const;  // -1
+  // Every link id of the articulation, the root's first (depth first).
+  std::vector<int> listLinks(int articulation) const;
   // The link id of the articulation's root link (its URDF's root).
   int getRootLink(int articulation) const;
   const std::string& getLinkName(int link) const;

@@ -34,9 +34,12 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <iomanip>
+#include <iostream>
 #include <map>
 #include <sstream>
 #include <string>
@@ -57,6 +60,10 @@ struct DecompositionOptions {
   double shell = 0.005;              // half thickness given to the surface, fraction of the diagonal
   double connect = 0.015;            // parts closer than this are joined, fraction of the diagonal
   double min_coverage = 0.6;         // a piece whose hull is less covered by the surface is split (lids)
+  // HACD's time grows faster than the square of the triangles it is given
+  // (docs/partnet.md, "Collision geometry"): a welded mesh with more is
+  // first simplified by vertex clustering to at most this many (0: never).
+  std::size_t max_triangles = 0;
 };
 
 namespace detail {
@@ -83,6 +90,42 @@ inline Mesh weld(const Mesh& in) {
     out.triangles.push_back(r);
   }
   return out;
+}
+
+// `in` (welded) with its vertices clustered on a grid of cells of side h:
+// each cell's vertices replaced by their mean, triangles that collapse or
+// repeat dropped. Deterministic: cells are keyed by integer coordinates and
+// visited in that order.
+inline Mesh cluster(const Mesh& in, double h) {
+  Eigen::Vector3d lo = in.vertices.front();
+  for (const Eigen::Vector3d& v : in.vertices) lo = lo.cwiseMin(v);
+  std::map<std::array<long, 3>, std::pair<Eigen::Vector3d, int>> cells;
+  std::vector<std::array<long, 3>> key(in.vertices.size());
+  for (std::size_t i = 0; i < in.vertices.size(); ++i) {
+    const Eigen::Vector3d c = (in.vertices[i] - lo) / h;
+    key[i] = {long(std::floor(c.x())), long(std::floor(c.y())), long(std::floor(c.z()))};
+    auto& cell = cells.try_emplace(key[i], Eigen::Vector3d::Zero(), 0).first->second;
+    cell.first += in.vertices[i];
+    ++cell.second;
+  }
+  Mesh out;
+  std::map<std::array<long, 3>, uint32_t> index;
+  for (const auto& [k, cell] : cells) {
+    index[k] = uint32_t(out.vertices.size());
+    out.vertices.push_back(cell.first / cell.second);
+  }
+  for (const auto& t : in.triangles) out.triangles.push_back({index[key[t[0]]], index[key[t[1]]], index[key[t[2]]]});
+  return weld(out);
+}
+
+// `in` (welded) clustered on the finest grid, from 1/1000 of its diagonal
+// growing by a quarter each time, that leaves at most `max_triangles`.
+inline Mesh simplify(const Mesh& in, std::size_t max_triangles, double diagonal) {
+  if (max_triangles == 0 || in.triangles.size() <= max_triangles) return in;
+  for (double h = 1e-3 * diagonal;; h *= 1.25) {
+    Mesh out = cluster(in, h);
+    if (out.triangles.size() <= max_triangles) return out;
+  }
 }
 
 // The surface as a closed slab of half thickness h: faces oriented alike
@@ -337,7 +380,8 @@ inline std::vector<Mesh> decompose(const Mesh& mesh, const DecompositionOptions&
     hi = hi.cwiseMax(v);
   }
   const double diagonal = (hi - lo).norm();
-  const Mesh solid = options.shell > 0 ? detail::solidify(welded, options.shell * diagonal) : welded;
+  const Mesh simple = detail::simplify(welded, options.max_triangles, diagonal);
+  const Mesh solid = options.shell > 0 ? detail::solidify(simple, options.shell * diagonal) : simple;
   // HACD normalises the points in place; it works in units where the
   // diagonal is 2 * scale.
   std::vector<HACD::Vec3<HACD::Real>> points;
@@ -410,12 +454,19 @@ inline std::vector<std::string> decomposeCached(const Mesh& mesh, const std::str
   hash.add(mesh.vertices.data(), mesh.vertices.size() * sizeof(Eigen::Vector3d));
   hash.add(mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0]));
   const double numbers[] = {options.concavity, double(options.min_pieces), double(options.max_piece_vertices),
-                            options.shell, options.connect, options.min_coverage};
+                            options.shell, options.connect, options.min_coverage, double(options.max_triangles)};
   hash.add(numbers, sizeof numbers);
   const fs::path folder = fs::path(cache_root) / "convex" / hash.str();
   if (!isCompleteFolder(folder.string())) {
+    // Minutes on a slow machine for a big mesh: a word before, one after.
+    std::cerr << "manibench: convex decomposition of a " << mesh.triangles.size()
+              << "-triangle mesh (once per machine, cached in " << folder.string() << ")..." << std::endl;
+    const auto start = std::chrono::steady_clock::now();
     std::map<std::string, std::string> files;
     const std::vector<Mesh> pieces = decompose(mesh, options);
+    std::cerr << "manibench: convex decomposition done: " << pieces.size() << " pieces in " << std::fixed
+              << std::setprecision(1) << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
+              << " s" << std::defaultfloat << std::endl;
     for (std::size_t k = 0; k < pieces.size(); ++k) files["piece_" + std::to_string(k) + ".obj"] = writeObj(pieces[k]);
     writeFilesOnce(folder.string(), files, "convex decomposition");
   }

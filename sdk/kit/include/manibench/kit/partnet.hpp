@@ -352,19 +352,73 @@ class Object {
   mutable std::map<std::string, std::shared_ptr<std::vector<Eigen::Vector3d>>> point_cache_;
 };
 
-// `urdf` with `edit(name, element)` called on every <link> element (as
-// Boost.PropertyTree's XML: attributes under "<xmlattr>").
-inline std::string editLinks(const std::string& urdf,
-                             const std::function<void(const std::string&, boost::property_tree::ptree&)>& edit) {
+// The one way the kit rewrites URDF text: `urdf` with `edit(robot)` called
+// on its <robot> element (as Boost.PropertyTree's XML: attributes under
+// "<xmlattr>"), written back. Errors name `where` (XML that does not parse,
+// with its line; no <robot>).
+inline std::string editRobot(const std::string& urdf, const std::function<void(boost::property_tree::ptree&)>& edit,
+                             const std::string& where = "URDF") {
   using detail::ptree;
   ptree document;
   std::istringstream in(urdf);
-  boost::property_tree::read_xml(in, document, boost::property_tree::xml_parser::trim_whitespace);
-  for (auto& [tag, link] : document.get_child("robot"))
-    if (tag == "link") edit(detail::getAttribute(link, "name"), link);
+  try {
+    boost::property_tree::read_xml(in, document, boost::property_tree::xml_parser::trim_whitespace);
+  } catch (const boost::property_tree::xml_parser_error& e) {
+    throw Error(where + ":" + std::to_string(e.line()) + ": not valid XML (" + e.message() + ")", MB_INVALID_ARGUMENT);
+  }
+  const auto robot = document.get_child_optional("robot");
+  if (!robot) throw Error(where + ": no <robot> element", MB_INVALID_ARGUMENT);
+  edit(*robot);
   std::ostringstream out;
   boost::property_tree::write_xml(out, document, boost::property_tree::xml_writer_make_settings<std::string>(' ', 1));
   return out.str();
+}
+
+// `urdf` with `edit(name, element)` called on every <link> element.
+inline std::string editLinks(const std::string& urdf,
+                             const std::function<void(const std::string&, boost::property_tree::ptree&)>& edit) {
+  return editRobot(urdf, [&](detail::ptree& robot) {
+    for (auto& [tag, link] : robot)
+      if (tag == "link") edit(detail::getAttribute(link, "name"), link);
+  });
+}
+
+// `urdf` with the links named in `names` renamed (old -> new), in their
+// <link> elements and in every joint's <parent link> and <child link>.
+inline std::string renameLinks(const std::string& urdf, const std::map<std::string, std::string>& names) {
+  return editRobot(urdf, [&](detail::ptree& robot) {
+    auto rename = [&](detail::ptree& element, const std::string& path) {
+      const auto value = element.get_optional<std::string>(path);
+      if (!value) return;
+      const auto found = names.find(*value);
+      if (found != names.end()) element.put(path, found->second);
+    };
+    for (auto& [tag, element] : robot) {
+      if (tag == "link") rename(element, "<xmlattr>.name");
+      if (tag == "joint") {
+        rename(element, "parent.<xmlattr>.link");
+        rename(element, "child.<xmlattr>.link");
+      }
+    }
+  });
+}
+
+// `urdf` with the elements of `fragment` (URDF text without its <robot>,
+// e.g. a <link> and a <joint>) put first in <robot>, after its attributes.
+inline std::string prependElements(const std::string& urdf, const std::string& fragment,
+                                   const std::string& where = "URDF") {
+  using detail::ptree;
+  ptree added;
+  std::istringstream in("<robot>" + fragment + "</robot>");
+  boost::property_tree::read_xml(in, added, boost::property_tree::xml_parser::trim_whitespace);
+  return editRobot(
+      urdf,
+      [&](ptree& robot) {
+        auto at = robot.begin();
+        if (at != robot.end() && at->first == "<xmlattr>") ++at;
+        for (auto& child : added.get_child("robot")) at = std::next(robot.insert(at, child));
+      },
+      where);
 }
 
 // `urdf` with every <collision> of the links named in `meshes` replaced by
