@@ -238,6 +238,7 @@ void writeEvaluationJson(std::ostream& out, const EvaluationResult& result) {
 
   out << "{\n";
   out << "  \"manibench_version\": " << quote(getManibenchVersion()) << ",\n";
+  out << "  \"build_id\": " << quote(getManibenchBuildId()) << ",\n";
   out << "  \"task\": " << quote(o.task) << ",\n";
   out << "  \"observation_mode\": " << quote(toString(result.task.observation_mode)) << ",\n";
   out << "  \"controller\": " << quote(result.task.controller) << ",\n";
@@ -324,6 +325,7 @@ std::vector<std::string> writeEvaluationFiles(const std::string& directory,
   write("summary.csv", writeSummaryCsv);
   write("episodes.csv", writeEpisodesCsv);
   write("summary.json", writeEvaluationJson);
+  write("certificate.json", writeCertificateJson);
   return written;
 }
 
