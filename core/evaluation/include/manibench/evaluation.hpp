@@ -119,6 +119,12 @@ struct EvaluationSummary {
   uint32_t successes = 0;
   uint32_t failures = 0;  // episodes that did not run to their end
   double success_rate = 0;
+  // The success rate's 95 % interval: an object's, Wilson's score interval
+  // over its episodes; the overall line's, a bootstrap that resamples the
+  // objects (the split's objects are the population), widened to the
+  // pooled Wilson interval where that is wider (calcOverallInterval);
+  // docs/evaluation.md, "Intervals".
+  double success_low = 0, success_high = 0;
   std::vector<double> condition_rates;  // per success condition
   double mean_return = 0;
   double mean_steps = 0;
