@@ -18,7 +18,7 @@ double calcQuantile(const std::vector<double>& sorted, double p) {
 }
 
 // The paired difference of resampled pairs: n draws among the four kinds.
-double drawPairedDifference(ResampleRandom& random, const PairedCounts& c) {
+double drawPairedDifference(sdk::Random& random, const PairedCounts& c) {
   int64_t net = 0;
   for (uint32_t i = 0; i < c.pairs; ++i) {
     const std::size_t j = random.below(c.pairs);
@@ -43,7 +43,7 @@ void calcPairsBootstrap(const PairedCounts& c, uint64_t seed, double& low, doubl
     high = 1;
     return;
   }
-  ResampleRandom random(seed);
+  sdk::Random random(seed);
   std::vector<double> values;
   values.reserve(kBootstrapResamples);
   for (int b = 0; b < kBootstrapResamples; ++b) values.push_back(drawPairedDifference(random, c));
@@ -78,7 +78,7 @@ void calcBootstrapInterval(const std::vector<uint32_t>& successes, const std::ve
     return;
   }
   if (k == 1) return calcWilsonInterval(successes[0], episodes[0], low, high);
-  ResampleRandom random(seed);
+  sdk::Random random(seed);
   std::vector<double> rates;
   rates.reserve(kBootstrapResamples);
   for (int b = 0; b < kBootstrapResamples; ++b) {
@@ -148,7 +148,7 @@ std::vector<PairedDifference> comparePaired(const std::vector<PairedCounts>& obj
     return out;
   }
   // Objects drawn with replacement: the pooled difference of each draw.
-  ResampleRandom random(kBootstrapSeed);
+  sdk::Random random(kBootstrapSeed);
   std::vector<double> values;
   values.reserve(kBootstrapResamples);
   for (int b = 0; b < kBootstrapResamples; ++b) {

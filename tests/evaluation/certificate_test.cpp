@@ -208,11 +208,7 @@ TEST(Certificate, ReportIsIndependentOfWorkersAndShards) {
   TempDir one, two, first, second, merged;
   const std::vector<std::string> common = {"Reach-v0", "--policy", "random", "--objects", "8,11", "--levels", "0-2",
                                            "--set", "episode.max_steps=15"};
-  auto with = [&](std::vector<std::string> extra) {
-    std::vector<std::string> a = common;
-    a.insert(a.end(), extra.begin(), extra.end());
-    return a;
-  };
+  auto with = [&](const std::vector<std::string>& extra) { return joinArguments(common, extra); };
   ASSERT_EQ(runEval(one, with({"--workers", "1"})).exit_code, 0);
   ASSERT_EQ(runEval(two, with({"--workers", "2"})).exit_code, 0);
   ASSERT_EQ(runEval(first, with({"--shard", "1/2"})).exit_code, 0);

@@ -78,8 +78,8 @@ struct Population {
   std::vector<double> a, b;  // per object: policy A's and B's success probability
   double mean_a = 0, difference = 0;
   explicit Population(uint64_t seed) {
-    ResampleRandom random(seed);
-    auto uniform = [&] { return double(random.next() >> 11) * 0x1.0p-53; };
+    sdk::Random random(seed);
+    auto uniform = [&] { return random.uniform(0, 1); };
     for (int i = 0; i < 200; ++i) {
       a.push_back(0.2 + 0.7 * uniform());
       b.push_back(std::clamp(a.back() - 0.1 + 0.2 * (uniform() - 0.5), 0.0, 1.0));
@@ -91,8 +91,8 @@ struct Population {
 
 TEST(Statistics, IntervalsCoverTheirTruthInSimulation) {
   const Population population(7);
-  ResampleRandom random(11);
-  auto uniform = [&] { return double(random.next() >> 11) * 0x1.0p-53; };
+  sdk::Random random(11);
+  auto uniform = [&] { return random.uniform(0, 1); };
   int rate_covered = 0, difference_covered = 0;
   const int reports = 1000;
   for (int r = 0; r < reports; ++r) {

@@ -7,6 +7,8 @@
 // fixed seed and its own generator.
 #pragma once
 
+#include <manibench/sdk/random.hpp>
+
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -17,12 +19,13 @@ namespace manibench {
 // Wilson's 95 % score interval for `successes` of `n` (0 <= low <= high
 // <= 1; [0, 1] for n = 0).
 void calcWilsonInterval(uint64_t successes, uint64_t n, double& low, double& high);
-// The resamples and the seed of the overall bootstrap (fixed: the same
-// episodes give the same interval).
+// The resamples and the seed of the bootstraps (fixed: the same episodes
+// give the same interval); draws come from sdk::Random (SplitMix64), the
+// same numbers on every platform, unlike the standard distributions.
 inline constexpr int kBootstrapResamples = 2000;
 inline constexpr uint64_t kBootstrapSeed = 0x6d616e6962656e63ULL;
 // The 95 % percentile bootstrap interval of sum(successes) / sum(episodes)
-// over objects drawn with replacement (kBootstrapResamples, from `seed`);
+// over objects drawn with replacement (kBootstrapResamples, sdk::Random(seed));
 // with one object, that object's Wilson interval.
 void calcBootstrapInterval(const std::vector<uint32_t>& successes, const std::vector<uint32_t>& episodes,
                            uint64_t seed, double& low, double& high);
@@ -31,23 +34,6 @@ void calcBootstrapInterval(const std::vector<uint32_t>& successes, const std::ve
 // to a point when every object's rate is the same, 1 say).
 void calcOverallInterval(const std::vector<uint32_t>& successes, const std::vector<uint32_t>& episodes,
                          double& low, double& high);
-// A deterministic generator for resampling (SplitMix64): the same numbers
-// on every platform, unlike the standard library's distributions.
-class ResampleRandom {
- public:
-  explicit ResampleRandom(uint64_t seed) : state_(seed) {}
-  uint64_t next() {
-    uint64_t x = (state_ += 0x9e3779b97f4a7c15ULL);
-    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-    return x ^ (x >> 31);
-  }
-  // Uniform in [0, n) (Lemire's multiply-shift).
-  std::size_t below(std::size_t n) { return std::size_t((unsigned __int128)next() * n >> 64); }
-
- private:
-  uint64_t state_;
-};
 
 // --- paired comparison: the same (object, level, seed) episodes under two
 // policies A and B ---
