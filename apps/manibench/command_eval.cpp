@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <optional>
@@ -293,6 +294,42 @@ Arguments parseEvalArguments(int argc, char** argv, int first) {
                         {"config", "set", "policy-read"});
 }
 
+namespace {
+
+// The files a policy configuration names (torch_policy's `checkpoint:`,
+// a population's per-object policy.yaml, in turn), each scalar that is a
+// regular file as written or beside the configuration: the policy's own
+// files too, hashed into the certificate.
+void addNamedFiles(const std::string& yaml_file, std::vector<std::string>& files, int depth = 0) {
+  namespace fs = std::filesystem;
+  ConfigNode config;
+  try {
+    config = loadConfigFile(yaml_file);
+  } catch (const std::exception&) {
+    return;  // not YAML: the file itself is hashed, the policy reports its own errors
+  }
+  const fs::path folder = fs::path(yaml_file).parent_path();
+  std::function<void(const ConfigNode&)> walk = [&](const ConfigNode& node) {
+    if (node.isScalar() && !node.scalar.empty() && node.scalar.size() < 4096) {
+      std::error_code error;
+      for (const fs::path& candidate : {fs::path(node.scalar), folder / node.scalar})
+        if (fs::is_regular_file(candidate, error)) {
+          const std::string path = candidate.string();
+          if (std::find(files.begin(), files.end(), path) != files.end()) return;
+          files.push_back(path);
+          const std::string extension = candidate.extension().string();
+          if ((extension == ".yaml" || extension == ".yml") && depth < 3) addNamedFiles(path, files, depth + 1);
+          return;
+        }
+    }
+    for (const ConfigNode& item : node.items) walk(item);
+    for (const ConfigEntry& entry : node.entries) walk(entry.value);
+  };
+  walk(config);
+}
+
+}  // namespace
+
 std::unique_ptr<EvalSetup> prepareEval(const Arguments& args) {
   std::string task = valueOr(args, "task", "");
   if (args.positional.size() > 1 || (args.positional.size() == 1 && !task.empty()))
@@ -311,6 +348,7 @@ std::unique_ptr<EvalSetup> prepareEval(const Arguments& args) {
   setup->run = preparePolicyRun(setup->registry, args, task, kEvalUsage, options);
   options.command = describeEvalCommand(args);
   options.policy_files = setup->run.policy.files;
+  if (args.options.count("policy-config")) addNamedFiles(args.options.at("policy-config"), options.policy_files);
   options.configuration = formatConfig(setup->run.config);
   options.working_directory = std::filesystem::current_path().string();
   return setup;

@@ -149,6 +149,26 @@ TEST(Certificate, VerifyPassesUntouchedAndNamesEachChange) {
   EXPECT_EQ(check({"--sample", "1"}).exit_code, 0);
 }
 
+// A --policy-config file and the files it names (torch_policy's
+// checkpoint: PATH, here a file beside it) are the policy's own files.
+TEST(Certificate, PolicyConfigurationAndTheFilesItNamesAreHashed) {
+  TempDir dir, out;
+  writeText(dir / "policy.yaml", "weights: weights.bin\n");
+  writeText(dir / "weights.bin", "0123");
+  const auto r = runEval(out, {"Reach-v0", "--policy", "zero", "--policy-config", (dir / "policy.yaml").string(),
+                               "--objects", "8", "--levels", "0", "--set", "episode.max_steps=5"});
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  const std::string certificate = readFile(out / "certificate.json");
+  const std::string weights = (dir / "weights.bin").string();
+  EXPECT_TRUE(contains(certificate, "\"file\": \"" + weights + "\",\n      \"sha256\": \"" + calcSha256("0123")))
+      << certificate;
+  EXPECT_EQ(verify(out.path()).exit_code, 0);
+  writeText(dir / "weights.bin", "0124");
+  const auto v = verify(out.path());
+  EXPECT_EQ(v.exit_code, 1) << v.out;
+  testing::expectMentions(v.out, {"verify FAILED: policy file", weights, calcSha256("0123") + " in the report"});
+}
+
 // A journal and report forged to agree (one episode's success flipped, the
 // files written again from the forged journal): only the re-run shows it.
 TEST(Certificate, VerifyRerunsTheEpisodesOfAForgedReport) {
