@@ -39,6 +39,7 @@ int commandEval(int argc, char** argv);     // command_eval.cpp
 int commandDemo(int argc, char** argv);     // command_demo.cpp
 int commandDemos(int argc, char** argv);    // command_demos.cpp
 int commandSurvey(int argc, char** argv);   // command_survey.cpp
+int commandCompare(int argc, char** argv);  // command_compare.cpp
 
 // A usage error carries the usage text of the command it concerns.
 class UsageError : public Error {

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <optional>
@@ -17,6 +18,7 @@
 #include <sstream>
 
 #include "cli.hpp"
+#include "eval_setup.hpp"
 #include "mpi_ranks.hpp"
 #include "policy_run.hpp"
 
@@ -26,6 +28,7 @@ namespace {
 
 const std::string kEvalUsageText = R"(usage: manibench eval [TASK] --policy NAME|PATH.so|PATH.py [options]
        manibench eval merge DIR... [--out DIR]
+       manibench eval --verify DIR [--sample N] [--workers N]
 
 Evaluates a policy on a task's objects (ManiSkill's evaluation kit): every
 selected object times every level is one episode, with a seed derived from
@@ -34,7 +37,9 @@ run in worker processes: a policy that crashes, hangs or returns NaN or a
 wrong-size action fails only its episode (recorded with the reason and step).
 Prints a table per object (episodes, success rate, each success condition's
 satisfactory rate) and writes summary.csv, episodes.csv and summary.json.
-Ctrl-C stops the run and writes the results collected so far.
+certificate.json says what the results came from (SHA-256 of the plugins,
+the policy's files, each object's files, the configuration). Ctrl-C stops
+the run and writes the results collected so far.
 
 Options:
   --task TASK             the task (or give it as the first word); a fixed-object
@@ -72,6 +77,11 @@ error, 130 when interrupted (partial results written).
 Under mpirun (mpirun -np R manibench eval ...) the ranks share the episodes
 and rank 0 writes the files a single run writes (docs/distributed.md).
 
+eval --verify DIR checks the report in DIR against its certificate.json
+(build, plugin and policy files, object files, configuration) and runs its
+episodes again (all, or --sample N of them): exit 0 when each is the
+report's bit for bit, else 1 naming what differs first (docs/evaluation.md).
+
 eval merge DIR... combines the results of shards (or of runs cut short) from
 their journals into --out (default results): the files the whole run writes,
 byte for byte. Episodes no DIR has are named (object, seed); the merged
@@ -79,7 +89,11 @@ files are then partial and `eval ... --out DIR --resume` runs what is
 missing. Results of different evaluations are an error naming the
 difference.
 )";
+}  // namespace
+
 const char* const kEvalUsage = kEvalUsageText.c_str();
+
+namespace {
 
 // One line, redrawn in place on the terminal.
 void drawProgress(const EvaluationProgress& p) {
@@ -253,20 +267,70 @@ int reportEvaluation(const EvaluationOptions& options, const EvaluationResult& r
 
 }  // namespace
 
-int commandEval(int argc, char** argv) {
-  if (argc > 2 && std::string(argv[2]) == "merge") return mergeEvaluations(argc, argv);
-  const Arguments args =
-      parseArguments(argc, argv, 2,
-                     {"task", "policy", "policy-config", "obs", "split", "objects",
-                      "episodes-per-object", "levels", "seed", "workers", "step-timeout",
-                      "env-timeout", "out", "controller", "config", "set", "policy-cpu-limit",
-                      "policy-memory-limit", "policy-output-limit", "policy-read", "shard"},
-                     {"no-progress", "benchmark", "resume", kTrustedPolicyFlag}, kEvalUsage,
-                     {"config", "set", "policy-read"});
-  if (args.help) {
-    std::cout << kEvalUsage;
-    return 0;
+std::vector<std::string> describeEvalCommand(const Arguments& args) {
+  // What --verify runs again: everything but where the files go and how
+  // the work is spread (neither changes a result: docs/evaluation.md).
+  static const std::vector<std::string> kLeftOut = {"out", "workers", "shard", "resume", "no-progress",
+                                                    "benchmark"};
+  static const std::vector<std::string> kFlags = {"no-progress", "benchmark", "resume", kTrustedPolicyFlag};
+  std::vector<std::string> command = args.positional;
+  for (const auto& [key, value] : args.options) {
+    if (std::find(kLeftOut.begin(), kLeftOut.end(), key) != kLeftOut.end()) continue;
+    const bool flag = std::find(kFlags.begin(), kFlags.end(), key) != kFlags.end();
+    command.push_back("--" + key + (flag ? "" : "=" + value));
   }
+  for (const auto& [key, values] : args.repeated)
+    for (const std::string& value : values) command.push_back("--" + key + "=" + value);
+  return command;
+}
+
+Arguments parseEvalArguments(int argc, char** argv, int first) {
+  return parseArguments(argc, argv, first,
+                        {"task", "policy", "policy-config", "obs", "split", "objects", "episodes-per-object",
+                         "levels", "seed", "workers", "step-timeout", "env-timeout", "out", "controller", "config",
+                         "set", "policy-cpu-limit", "policy-memory-limit", "policy-output-limit", "policy-read",
+                         "shard"},
+                        {"no-progress", "benchmark", "resume", kTrustedPolicyFlag}, kEvalUsage,
+                        {"config", "set", "policy-read"});
+}
+
+namespace {
+
+// The files a policy configuration names (torch_policy's `checkpoint:`,
+// a population's per-object policy.yaml, in turn), each scalar that is a
+// regular file as written or beside the configuration: the policy's own
+// files too, hashed into the certificate.
+void addNamedFiles(const std::string& yaml_file, std::vector<std::string>& files, int depth = 0) {
+  namespace fs = std::filesystem;
+  ConfigNode config;
+  try {
+    config = loadConfigFile(yaml_file);
+  } catch (const std::exception&) {
+    return;  // not YAML: the file itself is hashed, the policy reports its own errors
+  }
+  const fs::path folder = fs::path(yaml_file).parent_path();
+  std::function<void(const ConfigNode&)> walk = [&](const ConfigNode& node) {
+    if (node.isScalar() && !node.scalar.empty() && node.scalar.size() < 4096) {
+      std::error_code error;
+      for (const fs::path& candidate : {fs::path(node.scalar), folder / node.scalar})
+        if (fs::is_regular_file(candidate, error)) {
+          const std::string path = candidate.string();
+          if (std::find(files.begin(), files.end(), path) != files.end()) return;
+          files.push_back(path);
+          const std::string extension = candidate.extension().string();
+          if ((extension == ".yaml" || extension == ".yml") && depth < 3) addNamedFiles(path, files, depth + 1);
+          return;
+        }
+    }
+    for (const ConfigNode& item : node.items) walk(item);
+    for (const ConfigEntry& entry : node.entries) walk(entry.value);
+  };
+  walk(config);
+}
+
+}  // namespace
+
+std::unique_ptr<EvalSetup> prepareEval(const Arguments& args) {
   std::string task = valueOr(args, "task", "");
   if (args.positional.size() > 1 || (args.positional.size() == 1 && !task.empty()))
     throw UsageError("eval takes one TASK (as a word or --task)", kEvalUsage);
@@ -274,17 +338,38 @@ int commandEval(int argc, char** argv) {
   if (task.empty()) throw UsageError("eval needs a TASK", kEvalUsage);
   if (!args.options.count("policy"))
     throw UsageError("eval needs --policy NAME|PATH.so|PATH.py", kEvalUsage);
-  EvaluationOptions options;
+  auto setup = std::make_unique<EvalSetup>();
+  EvaluationOptions& options = setup->options;
   options.task = task;
   parseWorkerOptions(args, "test", kEvalUsage, options);
   parseEpisodeList(args, options);
+  // Everything that can be checked here fails before any worker starts.
+  loadPlugins(setup->registry);
+  setup->run = preparePolicyRun(setup->registry, args, task, kEvalUsage, options);
+  options.command = describeEvalCommand(args);
+  options.policy_files = setup->run.policy.files;
+  if (args.options.count("policy-config")) addNamedFiles(args.options.at("policy-config"), options.policy_files);
+  options.configuration = formatConfig(setup->run.config);
+  options.working_directory = std::filesystem::current_path().string();
+  return setup;
+}
+
+int commandEval(int argc, char** argv) {
+  if (argc > 2 && std::string(argv[2]) == "merge") return mergeEvaluations(argc, argv);
+  for (int i = 2; i < argc; ++i)
+    if (std::string(argv[i]) == "--verify" || std::string(argv[i]).rfind("--verify=", 0) == 0)
+      return verifyEvaluation(argc, argv);
+  const Arguments args = parseEvalArguments(argc, argv, 2);
+  if (args.help) {
+    std::cout << kEvalUsage;
+    return 0;
+  }
+  const std::unique_ptr<EvalSetup> setup = prepareEval(args);
+  EvaluationOptions& options = setup->options;
+  const PluginRegistry& registry = setup->registry;
+  const PolicyRun& run = setup->run;
   const std::string out_dir = valueOr(args, "out", "results");
   bool benchmark = args.options.count("benchmark") != 0;
-
-  // Everything that can be checked here fails before any worker starts.
-  PluginRegistry registry;
-  loadPlugins(registry);
-  const PolicyRun run = preparePolicyRun(registry, args, task, kEvalUsage, options);
   if (benchmark && run.mpi) throw UsageError("--benchmark runs without mpirun", kEvalUsage);
   if (run.writer) prepareJournal(args, out_dir, options);
   EvaluationHooks hooks;

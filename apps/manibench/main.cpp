@@ -33,6 +33,11 @@ Commands:
   render TASK --out DIR     camera images, masks and point clouds as PNG/PLY
   eval TASK --policy NAME   evaluate a policy on a split's objects: success
                             rates per object, CSV and JSON (docs/evaluation.md)
+  eval --verify DIR         check a report against its certificate and re-run
+                            its episodes bit for bit
+  compare A B               two reports of the same episodes: the paired
+                            difference per object and overall, its interval
+                            and McNemar's exact test (docs/evaluation.md)
   demos generate|merge|replay|convert|info
                             demonstrations: a policy's successful episodes in
                             HDF5, merged from shards, replayed bit for bit,
@@ -103,6 +108,7 @@ int dispatch(int argc, char** argv) {
   if (command == "eval") return commandEval(argc, argv);
   if (command == "objects") return commandObjects(argc, argv);
   if (command == "survey") return commandSurvey(argc, argv);
+  if (command == "compare") return commandCompare(argc, argv);
   if (command == "demos") return commandDemos(argc, argv);
   if (command == "train")
     return runExternalCommand(command, argc, argv,

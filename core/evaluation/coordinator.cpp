@@ -210,6 +210,10 @@ void Coordinator::plan(EvaluationTaskInfo info) {
       position_[spec.index] = result_.planned.size();
       result_.planned.push_back(spec);
     }
+  // The libraries and the policy's files as they are now, before any
+  // episode: the certificate's, and the journal header's (a resume or a
+  // merge with a rebuilt plugin is then refused).
+  result_.inputs = calcInputDigests(*context_.registry, options_, result_.task.controller);
   const std::string header = formatJournalHeader(result_);
   if (!options_.resumed_header.empty()) {
     const std::string difference = findJournalDifference(options_.resumed_header, header, true);

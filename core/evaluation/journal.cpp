@@ -86,6 +86,11 @@ EvaluationResult parseHeader(const Json& h) {
   o.shard = h.at("shard");
   o.shards = h.at("shards");
   o.workers = h.at("workers");
+  o.command = h.value("command", std::vector<std::string>());
+  o.configuration = h.value("merged_configuration", std::string());
+  o.working_directory = h.value("working_directory", std::string());
+  for (const Json& d : h.value("inputs", Json::array()))
+    r.inputs.push_back({d.at(0), d.at(1), d.at(2), d.at(3)});
   r.policy_library = h.at("policy_library");
   r.policy_library_version = h.at("policy_version");
   const auto mode = findObservationMode(h.at("observation_mode").get<std::string>());
@@ -137,6 +142,15 @@ std::string formatJournalHeader(const EvaluationResult& result) {
   h["shard"] = o.shard;
   h["shards"] = o.shards;
   h["workers"] = o.workers;
+  // The certificate's (certificate.cpp): compared by merges and resumes
+  // like everything above.
+  h["build_id"] = getManibenchBuildId();
+  h["command"] = o.command;
+  Json inputs = Json::array();
+  for (const FileDigest& d : result.inputs) inputs.push_back({d.role, d.name, d.path, d.sha256});
+  h["inputs"] = inputs;
+  h["merged_configuration"] = o.configuration;
+  h["working_directory"] = o.working_directory;
   return h.dump();
 }
 
@@ -154,13 +168,14 @@ std::string formatJournalEpisode(const EpisodeRecord& r) {
   e["failure_step"] = r.failure_step;
   putText(e, "message", r.message);
   e["seconds"] = r.seconds;
+  e["sources"] = r.sources;
   return e.dump();
 }
 
 std::string findJournalDifference(const std::string& a, const std::string& b, bool with_shard) {
   const Json x = Json::parse(a), y = Json::parse(b);
   for (const auto& [key, value] : x.items()) {
-    if (key == "workers" || (!with_shard && (key == "shard" || key == "shards"))) continue;
+    if (key == "workers" || key == "working_directory" || (!with_shard && (key == "shard" || key == "shards"))) continue;
     if (!y.contains(key)) return key + ": " + describeValue(value) + " vs nothing";
     if (y.at(key) != value) {
       if (key == "shard") return "shard: " + std::to_string(value.get<uint32_t>() + 1) + " vs " +
@@ -222,6 +237,7 @@ EvaluationJournal readJournal(const std::string& path) {
       r.failure_step = json.at("failure_step");
       r.message = getText(json, "message");
       r.seconds = json.at("seconds");
+      r.sources = json.value("sources", std::vector<std::string>());
       records.emplace(index, std::move(r));  // a second record of one episode: the first counts
     } catch (const EvaluationError& e) {
       throw EvaluationError(path + ":" + std::to_string(number) + ": " + e.what());

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iomanip>
 #include <manibench/evaluation.hpp>
+#include <manibench/statistics.hpp>
 #include <map>
 #include <ostream>
 #include <sstream>
@@ -110,7 +111,8 @@ void writeSummaryJson(std::ostream& out, const EvaluationSummary& s,
                       const std::vector<std::string>& conditions, const std::string& indent) {
   out << "{\"object\": " << escapeJson(s.object_id) << ", \"episodes\": " << s.episodes
       << ", \"successes\": " << s.successes << ", \"failures\": " << s.failures
-      << ", \"success_rate\": " << jsonNumber(s.success_rate, 6) << ",\n"
+      << ", \"success_rate\": " << jsonNumber(s.success_rate, 6) << ", \"success_interval\": ["
+      << jsonNumber(s.success_low, 6) << ", " << jsonNumber(s.success_high, 6) << "],\n"
       << indent << " \"condition_rates\": {";
   for (std::size_t c = 0; c < conditions.size(); ++c)
     out << (c ? ", " : "") << escapeJson(conditions[c]) << ": "
@@ -118,6 +120,12 @@ void writeSummaryJson(std::ostream& out, const EvaluationSummary& s,
   out << "},\n"
       << indent << " \"mean_return\": " << jsonNumber(s.mean_return, 9)
       << ", \"mean_steps\": " << jsonNumber(s.mean_steps, 6) << "}";
+}
+
+std::string formatInterval(double low, double high) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(3) << "[" << low << ", " << high << "]";
+  return out.str();
 }
 
 }  // namespace
@@ -141,6 +149,13 @@ void summarizeEvaluation(EvaluationResult& result) {
     if (!groups[object].empty())
       result.objects.push_back(summarize(object, groups[object], conditions));
   result.overall = summarize("all", all, conditions);
+  std::vector<uint32_t> successes, episodes;
+  for (EvaluationSummary& s : result.objects) {
+    calcWilsonInterval(s.successes, s.episodes, s.success_low, s.success_high);
+    successes.push_back(s.successes);
+    episodes.push_back(s.episodes);
+  }
+  calcOverallInterval(successes, episodes, result.overall.success_low, result.overall.success_high);
 }
 
 void printEvaluationTable(std::ostream& out, const EvaluationResult& result) {
@@ -153,14 +168,15 @@ void printEvaluationTable(std::ostream& out, const EvaluationResult& result) {
   std::vector<std::size_t> widths;
   for (const std::string& c : conditions) widths.push_back(std::max<std::size_t>(c.size() + 2, 9));
   out << std::left << std::setw(int(object_width)) << "object" << std::right << std::setw(9)
-      << "episodes" << std::setw(10) << "success";
+      << "episodes" << std::setw(10) << "success" << std::setw(17) << "95% interval";
   for (std::size_t c = 0; c < conditions.size(); ++c)
     out << std::setw(int(widths[c])) << conditions[c];
   out << std::setw(9) << "failed" << std::setw(13) << "mean return" << std::setw(12) << "mean steps"
       << "\n";
   auto row = [&](const EvaluationSummary& s) {
     out << std::left << std::setw(int(object_width)) << s.object_id << std::right << std::setw(9)
-        << s.episodes << std::setw(10) << std::fixed << std::setprecision(3) << s.success_rate;
+        << s.episodes << std::setw(10) << std::fixed << std::setprecision(3) << s.success_rate
+        << std::setw(17) << formatInterval(s.success_low, s.success_high);
     for (std::size_t c = 0; c < conditions.size(); ++c)
       out << std::setw(int(widths[c])) << s.condition_rates[c];
     out << std::setw(9) << s.failures << std::setw(13) << std::setprecision(3) << s.mean_return
@@ -168,7 +184,7 @@ void printEvaluationTable(std::ostream& out, const EvaluationResult& result) {
     out.unsetf(std::ios::fixed);
   };
   for (const EvaluationSummary& s : result.objects) row(s);
-  std::size_t width = object_width + 9 + 10 + 9 + 13 + 12;
+  std::size_t width = object_width + 9 + 10 + 17 + 9 + 13 + 12;
   for (std::size_t w : widths) width += w;
   out << std::string(width, '-') << "\n";
   row(result.overall);
@@ -194,12 +210,13 @@ void printEvaluationTable(std::ostream& out, const EvaluationResult& result) {
 
 void writeSummaryCsv(std::ostream& out, const EvaluationResult& result) {
   const std::vector<std::string>& conditions = result.task.condition_names;
-  out << "object,episodes,successes,failures,success_rate";
+  out << "object,episodes,successes,failures,success_rate,success_low,success_high";
   for (const std::string& c : conditions) out << "," << escapeCsv("condition_" + c);
   out << ",mean_return,mean_steps\n";
   auto row = [&](const EvaluationSummary& s) {
     out << escapeCsv(s.object_id) << "," << s.episodes << "," << s.successes << "," << s.failures
-        << "," << formatRate(s.success_rate);
+        << "," << formatRate(s.success_rate) << "," << formatRate(s.success_low) << ","
+        << formatRate(s.success_high);
     for (double rate : s.condition_rates) out << "," << formatRate(rate);
     out << "," << formatReturn(s.mean_return) << "," << formatRate(s.mean_steps) << "\n";
   };
@@ -238,6 +255,7 @@ void writeEvaluationJson(std::ostream& out, const EvaluationResult& result) {
 
   out << "{\n";
   out << "  \"manibench_version\": " << quote(getManibenchVersion()) << ",\n";
+  out << "  \"build_id\": " << quote(getManibenchBuildId()) << ",\n";
   out << "  \"task\": " << quote(o.task) << ",\n";
   out << "  \"observation_mode\": " << quote(toString(result.task.observation_mode)) << ",\n";
   out << "  \"controller\": " << quote(result.task.controller) << ",\n";
@@ -283,6 +301,10 @@ void writeEvaluationJson(std::ostream& out, const EvaluationResult& result) {
     writeSummaryJson(out, result.objects[i], conditions, "    ");
   }
   out << "\n  ],\n";
+  out << "  \"intervals\": {\"per_object\": \"Wilson score, 95 %\", \"overall\": \"bootstrap over objects, 95 % "
+         "percentile, "
+      << kBootstrapResamples << " resamples, SplitMix64 seed " << kBootstrapSeed
+      << ", widened to the pooled episodes' Wilson interval\"},\n";
   out << "  \"overall\": ";
   writeSummaryJson(out, result.overall, conditions, "  ");
   out << ",\n";
@@ -324,6 +346,7 @@ std::vector<std::string> writeEvaluationFiles(const std::string& directory,
   write("summary.csv", writeSummaryCsv);
   write("episodes.csv", writeEpisodesCsv);
   write("summary.json", writeEvaluationJson);
+  write("certificate.json", writeCertificateJson);
   return written;
 }
 

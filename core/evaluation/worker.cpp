@@ -101,9 +101,13 @@ After runWorkerEpisode(Environment& env, ActingPolicy& policy, Slot& slot,
       }
     };
   std::optional<TrajectoryRecorder> recorder;
+  bool scene_ready = false;  // the episode's scene is built: its sources count
+  hooks.on_reset = [&] {
+    scene_ready = true;
+    if (recorder) recorder->onReset(record.spec.object_id, record.spec.level, record.spec.seed);
+  };
   if (record_trajectory) {
     recorder.emplace(env);
-    hooks.on_reset = [&] { recorder->onReset(record.spec.object_id, record.spec.level, record.spec.seed); };
     hooks.on_transition = [&](const Eigen::VectorXd& action, const StepResult& step) {
       recorder->onStep(action, step, action_noise > 0 ? &policy_action : nullptr);
     };
@@ -144,6 +148,21 @@ After runWorkerEpisode(Environment& env, ActingPolicy& policy, Slot& slot,
                      std::to_string(record.failure_step) + ": " + e.what();
   }
   record.steps = env.getElapsedSteps();
+  // What the episode's scene was built from, for the certificate; a mesh
+  // file gone since the build fails the episode rather than the run.
+  if (scene_ready) {
+    try {
+      record.sources = env.getScene().getSourceDigests();
+    } catch (const std::exception& e) {
+      if (!record.failed()) {
+        record.failure = failure::kEnvironmentError;
+        record.success = false;
+        record.flags.assign(conditions, 0);
+        record.failure_step = record.steps;
+        record.message = std::string("hashing the scene's files: ") + e.what();
+      }
+    }
+  }
   record.seconds = double(getMonotonicNs() - start) * 1e-9;
   enterPhase(slot, kIdle);
   return after;

@@ -3,11 +3,12 @@
 // and scene_step.cpp: building and advancing).
 #include "manibench/scene.hpp"
 
+#include <manibench/sha256.hpp>
+
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -113,7 +114,9 @@ int Scene::addUrdfFile(const std::string& path, const std::string& name,
   if (in.bad()) throw SceneError("URDF '" + path + "': cannot read the file");
   const std::size_t slash = path.find_last_of('/');
   const std::string base_dir = slash == std::string::npos ? "." : path.substr(0, slash);
-  return impl_->addArticulation(xml.str(), "'" + path + "'", base_dir, name, root, fixed_base);
+  const int index = impl_->addArticulation(xml.str(), "'" + path + "'", base_dir, name, root, fixed_base);
+  impl_->articulations[index].file = path;
+  return index;
 }
 
 int Scene::addUrdfString(const std::string& urdf_xml, const std::string& base_dir,
@@ -224,6 +227,21 @@ int Scene::getCollisionShapeCount(int articulation) const {
 
 const std::vector<VisualShape>& Scene::getVisualShapes() const {
   return impl_->visual_shapes;
+}
+
+std::vector<std::string> Scene::getSourceDigests() const {
+  std::vector<std::string> lines, seen;
+  auto add = [&](const std::string& digest, const std::string& name) {
+    if (std::find(seen.begin(), seen.end(), name) != seen.end()) return;
+    seen.push_back(name);
+    lines.push_back(digest + "  " + name);
+  };
+  for (const Impl::Articulation& art : impl_->articulations) {
+    add(calcSha256(art.source.urdf),
+        art.file.empty() ? "urdf text of articulation '" + art.name + "'" : art.file);
+    for (const std::string& mesh : art.model.mesh_files) add(calcFileSha256(mesh), mesh);
+  }
+  return lines;
 }
 
 bool Scene::hasGround() const { return impl_->has_ground; }

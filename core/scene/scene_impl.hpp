@@ -81,6 +81,7 @@ struct Scene::Impl {
     ArticulationSource source;
     ArticulationModel model;
     std::string base_dir;  // for mesh files
+    std::string file;      // the URDF file (addUrdfFile), else ""
     SimTK::Transform X_root;
     bool fixed_base = false;
     bool self_collision = false;

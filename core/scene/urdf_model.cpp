@@ -141,6 +141,11 @@ struct Builder {
     }
   }
 
+  void noteMeshFile(const std::string& path) {
+    if (std::find(model.mesh_files.begin(), model.mesh_files.end(), path) == model.mesh_files.end())
+      model.mesh_files.push_back(path);
+  }
+
   // The convex hull of a <mesh>; a flat or thin one is a 1 cm solid
   // (loadConvexHull pads it), so every mesh found has one.
   std::shared_ptr<const ConvexHull> loadMeshHull(const urdf::Link& link, const urdf::Mesh& mesh) {
@@ -152,6 +157,7 @@ struct Builder {
     const std::string path = findMeshFile(mesh.filename, base_dir);
     if (path.empty())
       failUrdf(source, "link '" + link.name + "': collision mesh " + describeMissingMesh(mesh.filename, base_dir));
+    noteMeshFile(path);
     try {
       return loadConvexHull(path, scale);
     } catch (const std::exception& e) {
@@ -234,6 +240,7 @@ struct Builder {
     path = findMeshFile(mesh.filename, base_dir);
     if (path.empty())
       failUrdf(source, what + ": visual mesh " + describeMissingMesh(mesh.filename, base_dir));
+    noteMeshFile(path);
     try {
       return loadVisualMeshes(path, scale);
     } catch (const std::exception& e) {

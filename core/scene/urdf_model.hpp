@@ -74,6 +74,9 @@ struct ArticulationModel {
   // unknown geometry type: "link 'x': collision 'name' (why)"), reported
   // once when the URDF is added.
   std::vector<std::string> unsimulated;
+  // Every mesh file read (collision and visual), in the order first read:
+  // what an evaluation's certificate hashes (Scene::getSourceDigests).
+  std::vector<std::string> mesh_files;
 };
 
 // Parses `urdf_xml` and builds the description. `source` names the origin

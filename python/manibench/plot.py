@@ -46,6 +46,10 @@ def read_eval(directory: str) -> dict[str, Any]:
     overall = None
     for row in rows:
         values = {"success_rate": float(row["success_rate"])}
+        # The 95 % interval (Wilson per object, a bootstrap over objects
+        # for "all"); reports from before intervals have none.
+        if row.get("success_low") not in (None, ""):
+            values["success_interval"] = (float(row["success_low"]), float(row["success_high"]))
         values.update({c: float(row["condition_" + c]) for c in conditions})
         if row["object"] == "all":
             overall = values
@@ -78,7 +82,17 @@ def plot_eval(directories: list[str]):
             label = r["split"] or os.path.basename(os.path.normpath(directories[i]))
             xs = [j + (i - (len(results) - 1) / 2) * width for j, o in enumerate(objects) if o in r["objects"]]
             ys = [r["objects"][o][metric] for o in objects if o in r["objects"]]
-            ax.bar(xs, ys, width, label=label, color=SPLIT_COLOURS.get(label))
+            # The success rate's intervals as error bars (ErrorbarContainer
+            # beside the bars: ax.manibench_intervals keeps them per label).
+            intervals = [r["objects"][o].get("success_interval") for o in objects if o in r["objects"]]
+            yerr = None
+            if metric == "success_rate" and intervals and all(intervals):
+                yerr = [[y - lo for y, (lo, _) in zip(ys, intervals)], [hi - y for y, (_, hi) in zip(ys, intervals)]]
+                if not hasattr(ax, "manibench_intervals"):
+                    ax.manibench_intervals = {}
+                ax.manibench_intervals[label] = intervals
+            ax.bar(xs, ys, width, label=label, color=SPLIT_COLOURS.get(label), yerr=yerr, capsize=2,
+                   error_kw={"elinewidth": 0.8, "ecolor": "#333333"})
         ax.set_ylim(0, 1.05)
         ax.set_ylabel("success" if metric == "success_rate" else metric.replace("_", " "))
         ax.grid(axis="y", alpha=0.3)

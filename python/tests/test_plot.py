@@ -1,5 +1,6 @@
 """`manibench plot`: the evaluation figure of a two-split run (train and
-test) shows exactly summary.csv's numbers, read back from the figure's bars;
+test) shows exactly summary.csv's numbers, read back from the figure's bars
+and the success rate's error bars (its 95 % intervals);
 and the training curves of a log.csv."""
 import csv
 import os
@@ -46,6 +47,14 @@ def test_eval_figure_numbers_equal_summary_csv(tmp_path):
             assert len(heights) == len(mine) == len(rows)
             assert heights == [float(rows[o][ax.manibench_metric]) for o in mine], ax.manibench_metric
             checked += len(heights)
+            if ax.manibench_metric == "success_rate":
+                # The error bars span summary.csv's 95 % intervals.
+                segments = bars[0].errorbar.lines[2][0].get_segments()
+                spans = [(s[0][1], s[1][1]) for s in segments]
+                wanted = [(float(rows[o]["success_low"]), float(rows[o]["success_high"])) for o in mine]
+                assert len(spans) == len(wanted)
+                for (a, b), (lo, hi) in zip(spans, wanted):
+                    assert a == pytest.approx(lo, abs=1e-9) and b == pytest.approx(hi, abs=1e-9)
     metrics = {ax.manibench_metric for ax in axes}
     assert "success_rate" in metrics and any(m.startswith("condition_") for m in metrics)
     assert checked >= 2 * len(axes)

@@ -16,10 +16,12 @@
 
 namespace manibench::testing {
 
-// episodes.csv, summary.csv and summary.json (but its timing line) the same.
+// episodes.csv, summary.csv, certificate.json and summary.json (but its
+// timing line) the same.
 inline void expectSameFiles(const fs::path& a, const fs::path& b) {
   EXPECT_EQ(readFile(a / "episodes.csv"), readFile(b / "episodes.csv")) << a << " vs " << b;
   EXPECT_EQ(readFile(a / "summary.csv"), readFile(b / "summary.csv")) << a << " vs " << b;
+  EXPECT_EQ(readFile(a / "certificate.json"), readFile(b / "certificate.json")) << a << " vs " << b;
   EXPECT_EQ(withoutTiming(readFile(a / "summary.json")), withoutTiming(readFile(b / "summary.json")))
       << a << " vs " << b;
 }

@@ -157,11 +157,7 @@ TEST(Eval, SameSeedGivesSameFilesWhateverTheWorkers) {
   const std::vector<std::string> common = {"Reach-v0",  "--policy", "random",
                                            "--objects", "8,11",     "--levels",
                                            "0-2",       "--set",    "episode.max_steps=25"};
-  auto with = [&](std::vector<std::string> extra) {
-    std::vector<std::string> a = common;
-    a.insert(a.end(), extra.begin(), extra.end());
-    return a;
-  };
+  auto with = [&](const std::vector<std::string>& extra) { return joinArguments(common, extra); };
   ASSERT_EQ(runEval(one, with({"--workers", "1"})).exit_code, 0);
   ASSERT_EQ(runEval(two, with({"--workers", "2"})).exit_code, 0);
   ASSERT_EQ(runEval(again, with({"--workers", "2"})).exit_code, 0);

@@ -89,6 +89,12 @@ inline std::string withoutTiming(const std::string& json) {
   return out;
 }
 
+// `common` arguments, then `extra`.
+inline std::vector<std::string> joinArguments(std::vector<std::string> common, const std::vector<std::string>& extra) {
+  common.insert(common.end(), extra.begin(), extra.end());
+  return common;
+}
+
 inline testing::CommandResult runEval(const TempDir& out, std::vector<std::string> arguments,
                                const std::vector<std::string>& environment = {},
                                const std::function<void()>& in_child = {}) {

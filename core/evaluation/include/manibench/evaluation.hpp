@@ -32,6 +32,21 @@ class EvaluationError : public Error {
 
 // This build's version, as written into result files.
 const char* getManibenchVersion();
+// This build's identity: the GNU build id of the running program (40 hex
+// digits, what `file` and `readelf -n` print), else the SHA-256 of its
+// executable. Two builds of different sources differ in it.
+const std::string& getManibenchBuildId();
+
+// A file a result depends on, with its SHA-256 (the certificate,
+// docs/evaluation.md): a plugin library (role "task", "controller",
+// "policy", `name` the plugin) or one of the policy's own files (role
+// "policy file").
+struct FileDigest {
+  std::string role;
+  std::string name;
+  std::string path;
+  std::string sha256;
+};
 
 // What the policy's sandbox is made of on this machine: "seccomp, Landlock
 // ABI 7, rlimits", or without Landlock "seccomp, rlimits; no file rules
@@ -87,6 +102,10 @@ struct EpisodeRecord {
   int64_t failure_step = -1;  // the step being taken when it failed
   std::string message;        // what went wrong, for people
   double seconds = 0;         // wall time of the episode (timing)
+  // What the episode's scene was built from (Scene::getSourceDigests:
+  // "<sha256>  <file>" lines, URDF and meshes); empty when its reset
+  // failed. The certificate's objects (certificate.json).
+  std::vector<std::string> sources;
   // The recorded episode, when EvaluationOptions::record_successes asked
   // for it and the episode succeeded; else empty.
   std::shared_ptr<const Trajectory> trajectory;
@@ -100,6 +119,12 @@ struct EvaluationSummary {
   uint32_t successes = 0;
   uint32_t failures = 0;  // episodes that did not run to their end
   double success_rate = 0;
+  // The success rate's 95 % interval: an object's, Wilson's score interval
+  // over its episodes; the overall line's, a bootstrap that resamples the
+  // objects (the split's objects are the population), widened to the
+  // pooled Wilson interval where that is wider (calcOverallInterval);
+  // docs/evaluation.md, "Intervals".
+  double success_low = 0, success_high = 0;
   std::vector<double> condition_rates;  // per success condition
   double mean_return = 0;
   double mean_steps = 0;
@@ -156,6 +181,19 @@ struct EvaluationOptions {
   // journal header, which must describe this same run.
   std::vector<EpisodeRecord> resumed;
   std::string resumed_header;
+
+  // --- the certificate's parts only the command knows (docs/evaluation.md,
+  // "Certificate"); all of them go into the journal's header, so that a
+  // resume or a merge of another build, plugin or configuration is refused.
+  // The eval arguments that decide the result (without --out, --workers,
+  // --shard, --resume and the progress flags): what `eval --verify` runs.
+  std::vector<std::string> command;
+  // The policy's own files (its configuration, script, checkpoint), hashed.
+  std::vector<std::string> policy_files;
+  // The merged configuration, as `manibench config` prints it.
+  std::string configuration;
+  // Where the command ran: its relative paths start there.
+  std::string working_directory;
 };
 
 // What a worker reports after setting up: the task as configured.
@@ -173,6 +211,9 @@ struct EvaluationResult {
   EvaluationOptions options;
   std::string policy_library;
   std::string policy_library_version;
+  // The task's, the controller's and the policy's libraries, then the
+  // policy's own files, each with its SHA-256 (calcInputDigests).
+  std::vector<FileDigest> inputs;
   EvaluationTaskInfo task;
   std::vector<EpisodeSpec> planned;        // the whole episode list
   std::vector<EpisodeRecord> episodes;     // those that finished, by index
@@ -227,6 +268,14 @@ EvaluationResult evaluatePolicy(const PluginRegistry& registry, const Evaluation
                                 const EnvironmentFactory& make_environment,
                                 const EvaluationHooks& hooks = {});
 
+// The libraries of the task `task_name` (a fixed-object id too), of the
+// controller `controller` and of `options.policy`, then every file of
+// `options.policy_files` (a folder: each regular file under it, in name
+// order), with their SHA-256. Throws Error naming a file that cannot be
+// read.
+std::vector<FileDigest> calcInputDigests(const PluginRegistry& registry, const EvaluationOptions& options,
+                                         const std::string& controller);
+
 // Per-object and overall summaries of `result.episodes` (failed episodes
 // count as unsuccessful, with every condition unsatisfied).
 void summarizeEvaluation(EvaluationResult& result);
@@ -238,8 +287,13 @@ void printEvaluationTable(std::ostream& out, const EvaluationResult& result);
 void writeSummaryCsv(std::ostream& out, const EvaluationResult& result);
 void writeEpisodesCsv(std::ostream& out, const EvaluationResult& result);
 void writeEvaluationJson(std::ostream& out, const EvaluationResult& result);
-// summary.csv, episodes.csv and summary.json in `directory` (created if
-// needed); returns the paths written.
+// certificate.json: what the result came from (build, plugins, policy
+// files, configuration, each object's files, the episodes) and the
+// SHA-256 of episodes.csv and summary.csv (docs/evaluation.md,
+// "Certificate").
+void writeCertificateJson(std::ostream& out, const EvaluationResult& result);
+// summary.csv, episodes.csv, summary.json and certificate.json in
+// `directory` (created if needed); returns the paths written.
 std::vector<std::string> writeEvaluationFiles(const std::string& directory,
                                               const EvaluationResult& result);
 

@@ -276,6 +276,13 @@ class Scene {
   // each add; unchanged by finalize and stepping. Link poses come from
   // getLinkPose.
   const std::vector<VisualShape>& getVisualShapes() const;
+  // What the scene was built from, as `sha256sum` lines ("<64 hex digits>
+  // <two spaces><name>"), in the order added: each URDF (its file path, or
+  // "urdf text of articulation 'NAME'" for addUrdfString) and every mesh
+  // file its links read, each once. An evaluation's certificate holds them
+  // per object (docs/evaluation.md, "Certificate"). Throws Error naming a
+  // mesh file that can no longer be read.
+  std::vector<std::string> getSourceDigests() const;
   // The addGround plane (z = height, infinite), if any; the renderer draws
   // it as background (no visual, no link).
   bool hasGround() const;
