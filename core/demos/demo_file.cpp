@@ -189,6 +189,8 @@ void writeInfo(const Handle& file, const DemoFileInfo& info) {
   writeAttribute(meta, "created", info.created);
   writeAttribute(meta, "command", info.command);
   if (!info.generation.empty()) writeAttribute(meta, "generation", info.generation);
+  if (!info.converted_from.empty()) writeAttribute(meta, "converted_from", info.converted_from);
+  if (!info.conversion.empty()) writeAttribute(meta, "conversion", info.conversion);
 }
 
 // --- reading ----------------------------------------------------------------------
@@ -219,6 +221,8 @@ DemoFileInfo readInfo(const Handle& file) {
   info.created = readStringAttribute(meta, "created");
   info.command = readStringAttribute(meta, "command");
   if (hasAttribute(meta, "generation")) info.generation = readStringAttribute(meta, "generation");
+  if (hasAttribute(meta, "converted_from")) info.converted_from = readStringAttribute(meta, "converted_from");
+  if (hasAttribute(meta, "conversion")) info.conversion = readStringAttribute(meta, "conversion");
   // Written by close(), after the last trajectory: absent in a file cut short.
   if (hasAttribute(file, "generation_result"))
     info.generation_result = readStringAttribute(file, "generation_result");
@@ -527,6 +531,8 @@ std::string formatDemoJson(const DemoFileInfo& info, const std::vector<std::stri
   json["policy"] = info.policy;
   json["created"] = info.created;
   json["command"] = info.command;
+  if (!info.converted_from.empty()) json["converted_from"] = info.converted_from;
+  if (!info.conversion.empty()) json["conversion"] = info.conversion;
   nlohmann::ordered_json episodes = nlohmann::ordered_json::array();
   for (std::size_t i = 0; i < names.size() && i < summaries.size(); ++i) {
     const Trajectory& t = summaries[i];

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -41,6 +42,12 @@ struct DemoFileInfo {
   // merge` and --resume go by (docs/distributed.md).
   std::string generation;
   std::string generation_result;
+  // `demos convert`: the input file and how its trajectories became these
+  // ("observations": the same actions, another observation mode;
+  // "exact": the actions of the controller the input's is a layer over,
+  // replaying the same physics bit for bit); "" for a file not converted.
+  std::string converted_from;
+  std::string conversion;
 };
 
 // Writes a demonstration file: root attributes, then one group per
@@ -153,6 +160,38 @@ struct ConversionHooks {
   std::function<void(std::size_t done, std::size_t total, double elapsed)> on_progress;
   std::function<bool()> should_stop;
 };
+// --- controller conversion (convert_controller.cpp) ------------------------------------
+
+// How `demos convert --controller` (overrides with control.controller)
+// turns a file's trajectories into another controller's: "exact" where the
+// file's controller is a layer over the target (ABI 1.7 base_controller:
+// mobile_panda_ee over mobile_panda). Both environments then run at
+// control rate (frame_skip 1, the time limit in control steps), so that
+// each of the file's steps becomes `frame_skip` steps whose actions are
+// those the layer produced at each control step.
+struct ControllerConversion {
+  std::string source, target;  // controllers
+  std::string method;          // "exact"
+  uint32_t frame_skip = 1;     // the file's
+  // Over the file's configuration: the layer's environment (state
+  // observations) and the target's (what the output's replays build).
+  std::vector<std::string> source_overrides, target_overrides;
+};
+// Empty when `overrides` keep the file's controller. Throws DemoError when
+// the target is not the base of the file's controller (tracked conversion
+// is not built yet: issue 53).
+std::optional<ControllerConversion> planControllerConversion(const PluginRegistry& registry,
+                                                             const DemoFileInfo& info,
+                                                             const std::vector<std::string>& overrides);
+// One trajectory converted as `plan` says: `source` built with its
+// source_overrides, `target` with its target_overrides. Checks at every
+// control step that the target's scene state equals the layer's bit for
+// bit, and at every recorded step that the layer's equals the recording's;
+// throws DemoError naming the step and the first difference otherwise. The
+// result ends where the target's episode ends (its success or time limit).
+Trajectory convertTrajectoryController(Environment& source, Environment& target, const Trajectory& trajectory,
+                                       uint32_t frame_skip);
+
 ConversionResult convertDemonstrations(const PluginRegistry& registry, const std::string& in_path,
                                        const std::string& out_path,
                                        const std::vector<std::string>& overrides,

@@ -1,0 +1,110 @@
+// demos convert --controller: the experts' end-effector demonstrations of
+// every mobile-manipulation family converted into mobile_panda's joint
+// velocity actions (exactly: mobile_panda_ee is a layer over mobile_panda,
+// ABI 1.7) replay bit for bit under mobile_panda, through the same physics
+// states as the recording; a conversion that cannot be exact is refused.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cctype>
+
+#include "demos_support.hpp"
+
+namespace manibench {
+namespace {
+
+using testing::DemoSetup;
+using testing::getBuildTreeRegistry;
+
+class ExactConversion : public ::testing::TestWithParam<DemoSetup> {};
+
+TEST_P(ExactConversion, TheExpertsDemonstrationsReplayBitForBitInMobilePandaActions) {
+  const DemoSetup& setup = GetParam();
+  const PluginRegistry& registry = getBuildTreeRegistry();
+  const auto dir = testing::makeDemoDir("controller");
+  const std::string source = (dir / "ee.h5").string(), converted = (dir / "joints.h5").string();
+  std::vector<std::string> objects;
+  {
+    Environment probe(registry, setup.task);
+    objects = probe.listObjects("train");
+  }
+  objects.resize(std::min<std::size_t>(objects.size(), 2));
+  ASSERT_TRUE(testing::generateDemoFile(setup, source, 1, 2, objects).isComplete(1));
+  DemoFileInfo info;
+  {
+    const DemoReader reader(source);
+    info = reader.getInfo();
+  }
+  const ConversionResult result =
+      convertDemonstrations(registry, source, converted, {"control.controller=mobile_panda"}, {}, 2, info);
+  EXPECT_TRUE(result.failed.empty()) << result.failed.front();
+  ASSERT_EQ(result.converted, objects.size());
+
+  const DemoReader in(source), out(converted);
+  EXPECT_EQ(out.getInfo().controller, "mobile_panda");
+  EXPECT_EQ(out.getInfo().conversion, "exact");
+  EXPECT_EQ(out.getInfo().converted_from, source);
+  const auto env = makeDemoEnvironment(registry, out.getInfo());
+  EXPECT_EQ(env->getControllerDescription().name, "mobile_panda");
+  const uint32_t frame_skip = 5;  // the mobile Panda tasks' (kit/mobile_panda.hpp)
+  EXPECT_EQ(env->getTaskDescription().frame_skip, 1u);
+  EXPECT_EQ(env->getTaskDescription().max_episode_steps, 200u * frame_skip);
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const std::string name = "traj_" + std::to_string(i);
+    const Trajectory original = in.read(name), joints = out.read(name);
+    EXPECT_EQ(joints.object_id, original.object_id);
+    EXPECT_EQ(joints.seed, original.seed);
+    EXPECT_TRUE(joints.success) << name;
+    EXPECT_EQ(joints.action_dim, 12u);
+    // Each recorded step is frame_skip control steps; the tasks' hold_steps
+    // count steps, so at control rate success comes a few recorded steps
+    // sooner (docs/demonstrations.md).
+    EXPECT_LE(joints.steps, original.steps * frame_skip);
+    EXPECT_GT(joints.steps, original.steps);
+    // The same physics: every frame_skip-th state is the recording's.
+    for (uint32_t k = 0; k * frame_skip <= joints.steps; ++k)
+      ASSERT_EQ(env->findSceneDifference(joints.getEnvState(k * frame_skip), original.getEnvState(k)), "")
+          << name << " step " << k;
+    // Joint velocity actions inside the controller's range.
+    EXPECT_LE(*std::max_element(joints.actions.begin(), joints.actions.end()), 1.0);
+    EXPECT_GE(*std::min_element(joints.actions.begin(), joints.actions.end()), -1.0);
+    const ReplayResult replay = replayTrajectory(*env, joints, true);
+    EXPECT_TRUE(replay.matches) << name << ": " << replay.divergence;
+    EXPECT_EQ(replay.steps, joints.steps);
+  }
+  std::filesystem::remove_all(dir);
+}
+
+std::string nameSetup(const ::testing::TestParamInfo<DemoSetup>& info) {
+  std::string name = info.param.task;
+  name.erase(std::remove_if(name.begin(), name.end(), [](char c) { return !std::isalnum(c); }), name.end());
+  return name;
+}
+
+INSTANTIATE_TEST_SUITE_P(Experts, ExactConversion,
+                         ::testing::Values(DemoSetup{"OpenCabinetDoor-v0", "open_cabinet_expert", "mobile_panda_ee"},
+                                           DemoSetup{"OpenCabinetDrawer-v0", "open_cabinet_expert", "mobile_panda_ee"},
+                                           DemoSetup{"MoveBucket-v0", "move_bucket_expert", "mobile_panda_ee"},
+                                           DemoSetup{"PushChair-v0", "push_chair_expert", "mobile_panda_ee"}),
+                         nameSetup);
+
+TEST(ControllerConversion, AConversionThatCannotBeExactIsRefusedNamingBothControllers) {
+  const PluginRegistry& registry = getBuildTreeRegistry();
+  // The drawer's default controller is mobile_panda: its demonstrations
+  // are no layer's, and tracking them is not built yet.
+  DemoFileInfo info = testing::makeDemoInfo(registry, {"OpenCabinetDrawer-v0", "zero", ""});
+  info.controller = "mobile_panda";
+  try {
+    planControllerConversion(registry, info, {"control.controller=mobile_panda_ee"});
+    ADD_FAILURE() << "a conversion of mobile_panda into mobile_panda_ee was planned";
+  } catch (const DemoError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("'mobile_panda' into 'mobile_panda_ee'"), std::string::npos) << what;
+    EXPECT_NE(what.find("no layer"), std::string::npos) << what;
+  }
+  // The same controller is no controller conversion.
+  EXPECT_FALSE(planControllerConversion(registry, info, {"control.controller=mobile_panda"}));
+}
+
+}  // namespace
+}  // namespace manibench
