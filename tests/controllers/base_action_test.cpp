@@ -30,27 +30,29 @@ int64_t countUlps(double a, double b) {
 
 TEST(NormalizeVelocity, DenormalisesToTheVelocityBitForBitOrWithinOneUlp) {
   // Uniform joint velocities, and those of [1.57, 2) rad/s where a * 3.14
-  // steps over doubles; plain division misses some of both.
-  std::mt19937_64 random(53);
-  std::uniform_real_distribution<double> any(-3.14, 3.14), skipped(1.57, 2.0);
-  int exact = 0, one_ulp = 0, division_exact = 0, samples = 0;
-  for (int i = 0; i < 400000; ++i) {
-    const double v = i % 2 ? any(random) : skipped(random);
-    const double a = normalizeVelocity(v, 3.14);
-    ASSERT_LE(std::abs(a), 1.0);
-    const int64_t ulps = countUlps(a * 3.14, v);
-    ASSERT_LE(ulps, 1) << "velocity " << v;
-    exact += ulps == 0;
-    one_ulp += ulps == 1;
-    division_exact += (v / 3.14) * 3.14 == v;
-    ++samples;
+  // steps over doubles; other arm_max_velocity settings too.
+  for (const double max : {3.14, 2.5, 0.7}) {
+    std::mt19937_64 random(53);
+    std::uniform_real_distribution<double> any(-max, max), skipped(max / 2, max * 0.64);
+    int exact = 0, one_ulp = 0, division_exact = 0, samples = 0;
+    for (int i = 0; i < 200000; ++i) {
+      const double v = i % 2 ? any(random) : skipped(random);
+      const double a = normalizeVelocity(v, max);
+      ASSERT_LE(std::abs(a), 1.0);
+      const int64_t ulps = countUlps(a * max, v);
+      ASSERT_LE(ulps, 1) << "velocity " << v << ", max " << max;
+      exact += ulps == 0;
+      one_ulp += ulps == 1;
+      division_exact += (v / max) * max == v;
+      ++samples;
+    }
+    // Never worse than the quotient alone; where no a is exact, 1 ulp off.
+    EXPECT_GE(exact, division_exact);
+    EXPECT_EQ(exact + one_ulp, samples);
+    EXPECT_GT(one_ulp, 0);  // the round trip is not exact by itself
+    std::printf("[ measured ] max %g: %d velocities, %d exact (the quotient alone: %d), %d at 1 ulp\n", max,
+                samples, exact, division_exact, one_ulp);
   }
-  // Every velocity that has an exact action gets it: the search finds more
-  // than division does, and where none exists the neighbour is 1 ulp off.
-  EXPECT_GT(exact, division_exact);
-  EXPECT_EQ(exact + one_ulp, samples);
-  std::printf("[ measured ] %d velocities: %d exact (division alone: %d), %d at 1 ulp\n", samples, exact,
-              division_exact, one_ulp);
   // The limit stays inside [-1, 1].
   EXPECT_EQ(normalizeVelocity(3.14, 3.14), 1.0);
   EXPECT_EQ(normalizeVelocity(-3.14, 3.14), -1.0);

@@ -55,7 +55,11 @@ TEST_P(ExactConversion, TheExpertsDemonstrationsReplayBitForBitInMobilePandaActi
     EXPECT_EQ(joints.object_id, original.object_id);
     EXPECT_EQ(joints.seed, original.seed);
     EXPECT_TRUE(joints.success) << name;
-    EXPECT_EQ(joints.action_dim, 12u);
+    // Per arm 7 joint velocities and a gripper for 3 + 3 TCP velocities
+    // and a gripper: 11 -> 12 single-arm (cabinets), 18 -> 20 dual.
+    const uint32_t arms = (original.action_dim - 4) / 7;
+    EXPECT_EQ(joints.action_dim, 4 + 8 * arms);
+    EXPECT_EQ(joints.action_dim, env->getControllerDescription().action_dim);
     // Each recorded step is frame_skip control steps; the tasks' hold_steps
     // count steps, so at control rate success comes a few recorded steps
     // sooner (docs/demonstrations.md).
@@ -75,18 +79,12 @@ TEST_P(ExactConversion, TheExpertsDemonstrationsReplayBitForBitInMobilePandaActi
   std::filesystem::remove_all(dir);
 }
 
-std::string nameSetup(const ::testing::TestParamInfo<DemoSetup>& info) {
-  std::string name = info.param.task;
-  name.erase(std::remove_if(name.begin(), name.end(), [](char c) { return !std::isalnum(c); }), name.end());
-  return name;
-}
-
 INSTANTIATE_TEST_SUITE_P(Experts, ExactConversion,
                          ::testing::Values(DemoSetup{"OpenCabinetDoor-v0", "open_cabinet_expert", "mobile_panda_ee"},
                                            DemoSetup{"OpenCabinetDrawer-v0", "open_cabinet_expert", "mobile_panda_ee"},
                                            DemoSetup{"MoveBucket-v0", "move_bucket_expert", "mobile_panda_ee"},
                                            DemoSetup{"PushChair-v0", "push_chair_expert", "mobile_panda_ee"}),
-                         nameSetup);
+                         testing::nameDemoSetup);
 
 TEST(ControllerConversion, AConversionThatCannotBeExactIsRefusedNamingBothControllers) {
   const PluginRegistry& registry = getBuildTreeRegistry();
