@@ -76,13 +76,16 @@ const char* kDemosUsage = R"(usage: manibench demos generate|merge|replay|conver
       camera, needs ffmpeg; --video-size WxH, default 640x480).
       Exit status 1 when any trajectory differs or cannot be read.
   convert FILE.h5 --obs pointcloud|rgbd --out FILE2.h5 [--workers N]
-          [--controller NAME] [--trajectories LIST] [--set KEY=VALUE]...
+          [--controller NAME [--keep-failed]] [--trajectories LIST] [--set KEY=VALUE]...
           [--no-progress]
       The same trajectories with the observations of another mode, rendered
       at every recorded state in worker processes. --controller NAME (with
       or without --obs): the trajectories in another controller's actions,
       exactly where the file's controller is a layer over NAME
-      (mobile_panda_ee over mobile_panda), at control rate (frame_skip 1).
+      (mobile_panda_ee over mobile_panda), at control rate (frame_skip 1);
+      otherwise tracked: NAME follows the recorded states in closed loop,
+      and a trajectory that no longer succeeds is left out unless
+      --keep-failed.
   info FILE.h5 [--write-json]
       Task, versions, configuration sources, objects, counts, lengths,
       success and bytes per step; --write-json (re)writes the JSON sidecar.
@@ -387,7 +390,7 @@ int replay(int argc, char** argv) {
 int convert(int argc, char** argv) {
   const Arguments args = parseArguments(argc, argv, 3,
                                         {"obs", "out", "workers", "trajectories", "set", "controller"},
-                                        {"no-progress"}, kDemosUsage);
+                                        {"no-progress", "keep-failed"}, kDemosUsage);
   const std::string path = onePositional(args, "convert");
   const std::optional<ObservationMode> mode = parseObservationMode(args, kDemosUsage);
   const bool controller = args.options.count("controller") > 0;
@@ -424,11 +427,14 @@ int convert(int argc, char** argv) {
   {
     StopSignals stop_signals;
     result = convertDemonstrations(registry, path, out, overrides, parseTrajectoryList(args), workers,
-                                   info, hooks);
+                                   info, hooks, args.options.count("keep-failed") > 0);
   }
   if (progress) std::cerr << "\n";
   for (const std::string& failure : result.failed) std::cout << "not converted: " << failure << "\n";
+  for (const std::string& drop : result.dropped) std::cout << "left out: " << drop << "\n";
   std::cout << "wrote " << result.converted << " trajectories";
+  if (!result.dropped.empty())
+    std::cout << " (" << result.dropped.size() << " left out: no longer successful; --keep-failed keeps them)";
   if (mode) std::cout << " in " << toString(*mode) << " mode";
   if (controller) std::cout << " for controller " << args.options.at("controller");
   std::cout << " to " << out << " in " << std::fixed << std::setprecision(2) << result.seconds << " s\n";

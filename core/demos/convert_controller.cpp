@@ -25,14 +25,15 @@ std::optional<ControllerConversion> planControllerConversion(const PluginRegistr
   {
     const Environment probe(registry, info.environment_id,
                             calcEnvironmentOptions(calcDemoConfig(registry, info, source_overrides)));
-    const ControllerDescription& controller = probe.getControllerDescription();
-    if (controller.base_controller != plan.target)
-      throw DemoError("converting demonstrations of controller '" + plan.source + "' into '" + plan.target +
-                      "': '" + plan.source + "' is " +
-                      (controller.base_controller.empty() ? std::string("no layer over another controller")
-                                                          : "a layer over '" + controller.base_controller + "'") +
-                      ", and only a layer's demonstrations convert (exactly, into its base's actions); "
-                      "tracked conversion is not built yet");
+    if (probe.getControllerDescription().base_controller != plan.target) {
+      // No layer over the target: the target tracks the recording at the
+      // file's rate.
+      plan.method = "tracked";
+      plan.source_overrides = source_overrides;
+      plan.source_overrides.push_back("observation.mode=state");
+      plan.target_overrides = overrides;
+      return plan;
+    }
     plan.frame_skip = probe.getTaskDescription().frame_skip;
     // Control rate: each recorded step is frame_skip control steps of one
     // layer action, each of which the base needs an action of its own for.

@@ -155,6 +155,7 @@ void writeTrajectory(const Handle& file, const std::string& name, const DemoFile
   writeAttribute(group, "steps", uint64_t(t.steps));
   writeAttribute(group, "success", uint64_t(t.success ? 1 : 0));
   writeAttribute(group, "total_reward", t.total_reward);
+  if (t.tracking_error >= 0) writeAttribute(group, "tracking_error", t.tracking_error);
   const hsize_t steps = t.steps;
   writeDataset(group, "actions", {steps, t.action_dim}, t.actions);
   if (!t.policy_actions.empty())
@@ -236,6 +237,7 @@ void readSummaryInto(const Handle& group, Trajectory& t) {
   t.steps = uint32_t(readUintAttribute(group, "steps"));
   t.success = readUintAttribute(group, "success") != 0;
   t.total_reward = readDoubleAttribute(group, "total_reward");
+  if (hasAttribute(group, "tracking_error")) t.tracking_error = readDoubleAttribute(group, "tracking_error");
 }
 
 void readObservations(const Handle& group, const DemoFileInfo& info, Trajectory& t) {
@@ -382,6 +384,7 @@ std::string DemoWriter::append(const Trajectory& trajectory) {
   summary.steps = trajectory.steps;
   summary.success = trajectory.success;
   summary.total_reward = trajectory.total_reward;
+  summary.tracking_error = trajectory.tracking_error;
   impl_->summaries.push_back(std::move(summary));
   return name;
 }
@@ -544,6 +547,7 @@ std::string formatDemoJson(const DemoFileInfo& info, const std::vector<std::stri
                         {"elapsed_steps", t.steps},
                         {"success", t.success},
                         {"total_reward", t.total_reward}});
+    if (t.tracking_error >= 0) episodes.back()["tracking_error"] = t.tracking_error;
   }
   json["episodes"] = std::move(episodes);
   return json.dump(2) + "\n";

@@ -86,20 +86,19 @@ INSTANTIATE_TEST_SUITE_P(Experts, ExactConversion,
                                            DemoSetup{"PushChair-v0", "push_chair_expert", "mobile_panda_ee"}),
                          testing::nameDemoSetup);
 
-TEST(ControllerConversion, AConversionThatCannotBeExactIsRefusedNamingBothControllers) {
+TEST(ControllerConversion, WhatIsNoLayerOverTheTargetIsTracked) {
   const PluginRegistry& registry = getBuildTreeRegistry();
-  // The drawer's default controller is mobile_panda: its demonstrations
-  // are no layer's, and tracking them is not built yet.
+  // The drawer's default controller is mobile_panda, no layer: into
+  // mobile_panda_ee its demonstrations are tracked, at the file's rate.
   DemoFileInfo info = testing::makeDemoInfo(registry, {"OpenCabinetDrawer-v0", "zero", ""});
   info.controller = "mobile_panda";
-  try {
-    planControllerConversion(registry, info, {"control.controller=mobile_panda_ee"});
-    ADD_FAILURE() << "a conversion of mobile_panda into mobile_panda_ee was planned";
-  } catch (const DemoError& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find("'mobile_panda' into 'mobile_panda_ee'"), std::string::npos) << what;
-    EXPECT_NE(what.find("no layer"), std::string::npos) << what;
-  }
+  const std::optional<ControllerConversion> tracked =
+      planControllerConversion(registry, info, {"control.controller=mobile_panda_ee"});
+  ASSERT_TRUE(tracked);
+  EXPECT_EQ(tracked->method, "tracked");
+  EXPECT_EQ(tracked->source, "mobile_panda");
+  EXPECT_EQ(tracked->target, "mobile_panda_ee");
+  EXPECT_EQ(std::count(tracked->target_overrides.begin(), tracked->target_overrides.end(), "control.frame_skip=1"), 0);
   // The same controller is no controller conversion.
   EXPECT_FALSE(planControllerConversion(registry, info, {"control.controller=mobile_panda"}));
 }

@@ -152,6 +152,9 @@ std::unique_ptr<Environment> makeDemoEnvironment(const PluginRegistry& registry,
 // keeps what was converted.
 struct ConversionResult {
   std::size_t converted = 0;
+  // Tracked conversion: trajectories that no longer succeed and were left
+  // out ("traj_3: ..."; kept, and not listed, with keep_failed).
+  std::vector<std::string> dropped;
   std::vector<std::string> failed;  // "traj_3: why"
   bool interrupted = false;
   double seconds = 0;
@@ -168,18 +171,18 @@ struct ConversionHooks {
 // mobile_panda_ee over mobile_panda). Both environments then run at
 // control rate (frame_skip 1, the time limit in control steps), so that
 // each of the file's steps becomes `frame_skip` steps whose actions are
-// those the layer produced at each control step.
+// those the layer produced at each control step. "tracked" otherwise: the
+// target follows the recording in closed loop (trackTrajectory), at the
+// file's rate.
 struct ControllerConversion {
   std::string source, target;  // controllers
-  std::string method;          // "exact"
+  std::string method;          // "exact" or "tracked"
   uint32_t frame_skip = 1;     // the file's
   // Over the file's configuration: the layer's environment (state
   // observations) and the target's (what the output's replays build).
   std::vector<std::string> source_overrides, target_overrides;
 };
-// Empty when `overrides` keep the file's controller. Throws DemoError when
-// the target is not the base of the file's controller (tracked conversion
-// is not built yet: issue 53).
+// Empty when `overrides` keep the file's controller.
 std::optional<ControllerConversion> planControllerConversion(const PluginRegistry& registry,
                                                              const DemoFileInfo& info,
                                                              const std::vector<std::string>& overrides);
@@ -192,12 +195,29 @@ std::optional<ControllerConversion> planControllerConversion(const PluginRegistr
 Trajectory convertTrajectoryController(Environment& source, Environment& target, const Trajectory& trajectory,
                                        uint32_t frame_skip);
 
+// Tracked conversion (convert_tracked.cpp): `source` replays the recording
+// (the file's controller, state observations), `target` (the file's
+// configuration with the target controller) takes at each step the action
+// that follows it: segments the two controllers share by name (base, lift,
+// grippers) the recorded value, the base's with half its drift from the
+// recording corrected per step; end-effector velocities (`<side>_ee_linear`,
+// `<side>_ee_angular`) towards the recorded TCP pose of the next step,
+// relative to body_link. Another segment is a DemoError. The result ends
+// where the target's episode ends; its tracking_error is the largest TCP
+// distance to the recording after a step.
+struct TrackingSpeeds {  // action 1 of the target's segments (its defaults)
+  double linear = 0.5, angular = 1.57, base = 0.5, yaw = 3.14, lift = 0.5;
+};
+TrackingSpeeds readTrackingSpeeds(const EnvironmentOptions& target);
+Trajectory trackTrajectory(Environment& source, Environment& target, const Trajectory& trajectory,
+                           const TrackingSpeeds& speeds);
+
 ConversionResult convertDemonstrations(const PluginRegistry& registry, const std::string& in_path,
                                        const std::string& out_path,
                                        const std::vector<std::string>& overrides,
                                        const std::vector<std::string>& names, unsigned workers,
                                        const DemoFileInfo& out_info_base,
-                                       const ConversionHooks& hooks = {});
+                                       const ConversionHooks& hooks = {}, bool keep_failed = false);
 
 // --- generating (supplement C.2) -------------------------------------------------------
 
