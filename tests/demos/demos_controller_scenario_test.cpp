@@ -2,7 +2,8 @@
 // every mobile-manipulation family converted into mobile_panda's joint
 // velocity actions (exactly: mobile_panda_ee is a layer over mobile_panda,
 // ABI 1.7) replay bit for bit under mobile_panda, through the same physics
-// states as the recording; a conversion that cannot be exact is refused.
+// states as the recording; tracked back into mobile_panda_ee they still
+// succeed, and one that does not is left out unless kept.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -102,6 +103,70 @@ TEST(ControllerConversion, WhatIsNoLayerOverTheTargetIsTracked) {
   // The same controller is no controller conversion.
   EXPECT_FALSE(planControllerConversion(registry, info, {"control.controller=mobile_panda"}));
 }
+
+// Back from mobile_panda into mobile_panda_ee (no layer that way): tracked,
+// each trajectory kept while it still succeeds, with its tracking error.
+class TrackedConversion : public ::testing::TestWithParam<DemoSetup> {};
+
+TEST_P(TrackedConversion, JointVelocityDemonstrationsTrackedInEndEffectorActionsStillSucceed) {
+  const DemoSetup& setup = GetParam();
+  const PluginRegistry& registry = getBuildTreeRegistry();
+  const auto dir = testing::makeDemoDir("tracked");
+  const std::string ee = (dir / "ee.h5").string(), joints = (dir / "joints.h5").string(),
+                    tracked = (dir / "tracked.h5").string(), cut = (dir / "cut.h5").string();
+  std::vector<std::string> objects;
+  {
+    Environment probe(registry, setup.task);
+    objects = probe.listObjects("train");
+  }
+  objects.resize(2);
+  ASSERT_TRUE(testing::generateDemoFile(setup, ee, 1, 2, objects).isComplete(1));
+  auto infoOf = [](const std::string& path) {
+    const DemoReader reader(path);
+    return reader.getInfo();
+  };
+  ASSERT_EQ(convertDemonstrations(registry, ee, joints, {"control.controller=mobile_panda"}, {}, 2, infoOf(ee)).converted, 2u);
+  const ConversionResult result =
+      convertDemonstrations(registry, joints, tracked, {"control.controller=mobile_panda_ee"}, {}, 2, infoOf(joints));
+  EXPECT_TRUE(result.failed.empty() && result.dropped.empty());
+  ASSERT_EQ(result.converted, 2u);
+  const DemoReader out(tracked);
+  EXPECT_EQ(out.getInfo().controller, "mobile_panda_ee");
+  EXPECT_EQ(out.getInfo().conversion, "tracked");
+  const auto env = makeDemoEnvironment(registry, out.getInfo());
+  for (const std::string& name : out.getTrajectoryNames()) {
+    const Trajectory t = out.read(name);
+    EXPECT_TRUE(t.success) << name;
+    // Millimetres: the TCP follows the recorded one closely.
+    EXPECT_GE(t.tracking_error, 0) << name;
+    EXPECT_LT(t.tracking_error, 0.01) << name;
+    EXPECT_EQ(t.action_dim, 11u);
+    const ReplayResult replay = replayTrajectory(*env, t, true);
+    EXPECT_TRUE(replay.matches) << name << ": " << replay.divergence;
+  }
+  // With a time limit too short to succeed, every trajectory is left out,
+  // unless --keep-failed, which keeps them with success 0.
+  const std::vector<std::string> short_limit = {"control.controller=mobile_panda_ee", "episode.max_steps=20"};
+  const ConversionResult left = convertDemonstrations(registry, joints, cut, short_limit, {}, 1, infoOf(joints));
+  EXPECT_EQ(left.converted, 0u);
+  ASSERT_EQ(left.dropped.size(), 2u);
+  EXPECT_NE(left.dropped.front().find("traj_0: no success in 20 steps"), std::string::npos) << left.dropped.front();
+  const ConversionResult kept =
+      convertDemonstrations(registry, joints, cut, short_limit, {}, 1, infoOf(joints), {}, /*keep_failed=*/true);
+  EXPECT_EQ(kept.converted, 2u);
+  EXPECT_TRUE(kept.dropped.empty());
+  const DemoReader failed(cut);
+  const Trajectory first = failed.read("traj_0");
+  EXPECT_FALSE(first.success);
+  EXPECT_EQ(first.steps, 20u);
+  EXPECT_GE(first.tracking_error, 0);
+  std::filesystem::remove_all(dir);
+}
+
+INSTANTIATE_TEST_SUITE_P(Cabinets, TrackedConversion,
+                         ::testing::Values(DemoSetup{"OpenCabinetDoor-v0", "open_cabinet_expert", "mobile_panda_ee"},
+                                           DemoSetup{"OpenCabinetDrawer-v0", "open_cabinet_expert", "mobile_panda_ee"}),
+                         testing::nameDemoSetup);
 
 }  // namespace
 }  // namespace manibench
