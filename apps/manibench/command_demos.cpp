@@ -492,6 +492,10 @@ int info(int argc, char** argv) {
       std::cout << "unreadable     " << e.what() << "\n";
     }
   }
+  // A tracked conversion's: how closely its TCPs followed the recording.
+  double tracking_error = -1;
+  for (const Trajectory& t : summaries) tracking_error = std::max(tracking_error, t.tracking_error);
+  if (tracking_error >= 0) std::cout << "tracking error largest " << tracking_error << " m (TCP to the recording's)\n";
   std::cout << "trajectories   " << summaries.size() << " of " << objects.size() << " object(s), "
             << steps << " steps";
   if (cut)

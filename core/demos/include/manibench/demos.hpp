@@ -199,8 +199,8 @@ Trajectory convertTrajectoryController(Environment& source, Environment& target,
 // (the file's controller, state observations), `target` (the file's
 // configuration with the target controller) takes at each step the action
 // that follows it: segments the two controllers share by name (base, lift,
-// grippers) the recorded value, the base's with half its drift from the
-// recording corrected per step; end-effector velocities (`<side>_ee_linear`,
+// grippers) the recorded value, the base's with a tenth of its drift from
+// the recording corrected per step; end-effector velocities (`<side>_ee_linear`,
 // `<side>_ee_angular`) towards the recorded TCP pose of the next step,
 // relative to body_link. Another segment is a DemoError. The result ends
 // where the target's episode ends; its tracking_error is the largest TCP
