@@ -115,5 +115,25 @@ TEST(ControllerLayer, TheEeControllerIsALayerOverMobilePanda) {
             "");
 }
 
+TEST(ControllerLayer, AControllerBuiltBeforeAbi17LoadsAndIsNoLayer) {
+  PluginRegistry registry;
+  registry.loadDirectories({MANIBENCH_TEST_BUILD_PLUGIN_DIR});
+  registry.loadLibrary(std::string(MANIBENCH_TEST_FIXTURE_DIR) + "/layer/libfixture_pre_layer_controller.so");
+  EnvironmentOptions options;
+  options.controller = "pre_layer_controller";
+  Environment env(registry, "Reach-v0", options);
+  // Its SDK would name a base, but its info ends before base_controller.
+  EXPECT_EQ(env.getControllerDescription().base_controller, "");
+  env.reset(env.listObjects("train").front(), 0);
+  const Eigen::VectorXd action = Eigen::VectorXd::Constant(env.getControllerDescription().action_dim, 0.3);
+  env.step(action);  // it drives
+  try {
+    env.getBaseAction(env.getControllerDescription().action_dim);
+    ADD_FAILURE() << "a pre-1.7 controller reported a base action";
+  } catch (const PluginCallError& e) {
+    EXPECT_NE(std::string(e.what()).find("no layer"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace manibench
