@@ -1,7 +1,8 @@
 // Demonstrations in another controller (`demos convert --controller`):
-// exactly where the file's controller is a layer over the target (ABI
-// 1.7), by stepping the layer at control rate and taking, at every control
-// step, the base controller's action it reports. docs/demonstrations.md.
+// the plan, and the exact conversion where the file's controller is a
+// layer over the target (ABI 1.7), by stepping the layer at control rate
+// and taking, at every control step, the base controller's action it
+// reports; the tracked one is convert_tracked.cpp. docs/demonstrations.md.
 #include <manibench/config.hpp>
 #include <manibench/demos.hpp>
 
@@ -54,8 +55,7 @@ std::optional<ControllerConversion> planControllerConversion(const PluginRegistr
   return plan;
 }
 
-Trajectory convertTrajectoryController(Environment& source, Environment& target, const Trajectory& trajectory,
-                                       uint32_t frame_skip) {
+void startControllerConversion(Environment& source, Environment& target, const Trajectory& trajectory) {
   if (trajectory.getStateCount() != trajectory.steps + 1)
     throw DemoError("the trajectory has " + std::to_string(trajectory.getStateCount()) + " states for " +
                     std::to_string(trajectory.steps) + " steps");
@@ -68,10 +68,15 @@ Trajectory convertTrajectoryController(Environment& source, Environment& target,
   // The target's episode starts from the same reset; its controller's
   // state is its own reset's.
   target.reset(header.object_id, header.seed);
-  TrajectoryRecorder recorder(target);
-  recorder.onReset(trajectory.object_id, trajectory.level, trajectory.seed);
   if (const std::string d = target.findSceneDifference(target.saveState(), first); !d.empty())
     throw DemoError("step 0: the target's reset differs from the recording's: " + d);
+}
+
+Trajectory convertTrajectoryController(Environment& source, Environment& target, const Trajectory& trajectory,
+                                       uint32_t frame_skip) {
+  startControllerConversion(source, target, trajectory);
+  TrajectoryRecorder recorder(target);
+  recorder.onReset(trajectory.object_id, trajectory.level, trajectory.seed);
   const uint32_t dim = target.getControllerDescription().action_dim;
   for (uint32_t k = 0; k < trajectory.steps; ++k) {
     const Eigen::VectorXd action = trajectory.getAction(k);

@@ -82,18 +82,7 @@ TrackingSpeeds readTrackingSpeeds(const EnvironmentOptions& target) {
 
 Trajectory trackTrajectory(Environment& source, Environment& target, const Trajectory& trajectory,
                            const TrackingSpeeds& speeds) {
-  if (trajectory.getStateCount() != trajectory.steps + 1)
-    throw DemoError("the trajectory has " + std::to_string(trajectory.getStateCount()) + " states for " +
-                    std::to_string(trajectory.steps) + " steps");
-  const std::vector<uint8_t> first = trajectory.getEnvState(0);
-  const Environment::StateHeader header = Environment::readStateHeader(first);
-  if (header.step != 0)
-    throw DemoError("it starts at step " + std::to_string(header.step) +
-                    " of its episode; only whole episodes (from their reset) convert to another controller");
-  source.restoreState(first);
-  target.reset(header.object_id, header.seed);
-  if (const std::string d = target.findSceneDifference(target.saveState(), first); !d.empty())
-    throw DemoError("step 0: the target's reset differs from the recording's: " + d);
+  startControllerConversion(source, target, trajectory);
   const RobotFrames frames = findFrames(target);
   const std::vector<sdk::Segment>& recorded_segments = source.getControllerDescription().action_segments;
   const std::vector<sdk::Segment>& segments = target.getControllerDescription().action_segments;

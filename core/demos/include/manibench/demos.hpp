@@ -186,6 +186,11 @@ struct ControllerConversion {
 std::optional<ControllerConversion> planControllerConversion(const PluginRegistry& registry,
                                                              const DemoFileInfo& info,
                                                              const std::vector<std::string>& overrides);
+// Both conversions' start: `source` restored to the trajectory's first
+// state, `target` reset to the same episode, their scenes checked equal
+// (DemoError otherwise, or for a trajectory that does not start at its
+// episode's reset).
+void startControllerConversion(Environment& source, Environment& target, const Trajectory& trajectory);
 // One trajectory converted as `plan` says: `source` built with its
 // source_overrides, `target` with its target_overrides. Checks at every
 // control step that the target's scene state equals the layer's bit for
