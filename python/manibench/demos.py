@@ -113,9 +113,10 @@ class DemoFile:
 
     @property
     def conversion(self) -> str | None:
-        """For a converted file: "observations" (another observation mode)
-        or "exact" (another controller's actions, the same physics bit for
-        bit); else None."""
+        """For a converted file: "observations" (another observation mode),
+        "exact" (another controller's actions, the same physics bit for bit)
+        or "tracked" (another controller following the recorded states);
+        else None."""
         return self.meta.get("conversion")
 
     def __len__(self) -> int:

@@ -45,7 +45,9 @@ struct DemoFileInfo {
   // `demos convert`: the input file and how its trajectories became these
   // ("observations": the same actions, another observation mode;
   // "exact": the actions of the controller the input's is a layer over,
-  // replaying the same physics bit for bit); "" for a file not converted.
+  // replaying the same physics bit for bit; "tracked": another
+  // controller's, following the recorded states); "" for a file not
+  // converted.
   std::string converted_from;
   std::string conversion;
 };
