@@ -210,6 +210,31 @@ inline void setBaseDrives(const sdk::SceneView& scene, const sdk::ControllerCont
   setDampingDrive(drives[joints.lift], filtered[3], s.base_damping);
 }
 
+// mobile_panda's normalized joint velocity action for `velocity` (action
+// 1 = `max`): the a in [-1, 1] whose de-normalisation a * max, the
+// expression mobile_panda computes, is `velocity` bit for bit where such a
+// double exists, else the a whose a * max lies nearest. velocity / max
+// alone does not do: it rounds, and a * max rounds again, and where max > 1
+// consecutive a step over some doubles (about a third of those in
+// [1.57, 2) for max 3.14). A layer over mobile_panda sends a * max on,
+// exactly what mobile_panda sends for a.
+inline double normalizeVelocity(double velocity, double max) {
+  const double start = std::clamp(velocity / max, -1.0, 1.0);
+  double best = start, best_error = std::abs(start * max - velocity);
+  // (velocity / max) * max lies within 2 ulp of velocity, so the exact a,
+  // where there is one, lies within 2 doubles of the quotient.
+  for (double direction : {1.0, -1.0}) {
+    double a = start;
+    for (int step = 0; step < 3 && best_error != 0; ++step) {
+      a = std::nextafter(a, direction * 2.0);
+      if (a > 1.0 || a < -1.0) break;
+      const double error = std::abs(a * max - velocity);
+      if (error < best_error) best = a, best_error = error;
+    }
+  }
+  return best;
+}
+
 // The finger position target of a gripper action (-1 closed .. +1 open).
 inline double calcFingerTarget(const MobilePandaSettings& s, double action) {
   return s.gripper_closed + 0.5 * (action + 1.0) * (s.gripper_open - s.gripper_closed);

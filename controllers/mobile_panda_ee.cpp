@@ -64,7 +64,9 @@ Eigen::Matrix3d fromRotationVector(const Eigen::Vector3d& v) {
   return Eigen::AngleAxisd(angle, v / angle).toRotationMatrix();
 }
 
-class MobilePandaEeController : public sdk::Controller, public sdk::Stateful {
+class MobilePandaEeController : public sdk::Controller,
+                                public sdk::Stateful,
+                                public sdk::ControllerLayer {
  public:
   MobilePandaEeController(const Config& config, const ControllerContext& context)
       : context_(context),
@@ -98,6 +100,7 @@ class MobilePandaEeController : public sdk::Controller, public sdk::Stateful {
 
   void reset(const SceneView& scene) override {
     stage_->reset();
+    base_action_.resize(0);
     resolveLinks(scene);
     const Eigen::Isometry3d body_inverse = scene.getLinkPose(body_link_).toIsometry().inverse();
     for (std::size_t i = 0; i < tcp_links_.size(); ++i)
@@ -118,14 +121,25 @@ class MobilePandaEeController : public sdk::Controller, public sdk::Stateful {
 
     Eigen::VectorXd velocity(4 + kPandaArmJoints * Eigen::Index(arms.size()));
     velocity.head<4>() = calcBaseVelocity(settings_, action);
+    // mobile_panda's action that makes these same drives (ControllerLayer):
+    // base and grippers as given, the arm joints normalized.
+    base_action_.resize(4 + (kPandaArmJoints + 1) * Eigen::Index(arms.size()));
+    base_action_.head<4>() = action.head<4>();
     std::vector<double> finger_targets;
     for (std::size_t i = 0; i < arms.size(); ++i) {
       const Eigen::Index a = 4 + kActionsPerArm * Eigen::Index(i);
+      const Eigen::Index b = 4 + (kPandaArmJoints + 1) * Eigen::Index(i);
       const Eigen::Vector3d linear = action.segment<3>(a) * linear_max_;
       const Eigen::Vector3d angular = action.segment<3>(a + 3) * angular_max_;
       finger_targets.push_back(calcFingerTarget(settings_, action[a + 6]));
-      velocity.segment<kPandaArmJoints>(4 + kPandaArmJoints * Eigen::Index(i)) =
-          solveArm(scene, i, body, linear, angular, dt);
+      const Eigen::Matrix<double, kPandaArmJoints, 1> qdot = solveArm(scene, i, body, linear, angular, dt);
+      // The joint velocities go on as mobile_panda's de-normalised action
+      // (within 1 ulp of qdot), so that its action reproduces them exactly.
+      for (int j = 0; j < kPandaArmJoints; ++j) {
+        base_action_[b + j] = normalizeVelocity(qdot[j], settings_.arm_max);
+        velocity[4 + kPandaArmJoints * Eigen::Index(i) + j] = base_action_[b + j] * settings_.arm_max;
+      }
+      base_action_[b + kPandaArmJoints] = action[a + 6];
     }
     const Eigen::VectorXd& filtered = stage_->filter(velocity);
     setBaseDrives(scene, context_, joints_, settings_, filtered.head<4>(), drives);
@@ -135,6 +149,13 @@ class MobilePandaEeController : public sdk::Controller, public sdk::Stateful {
         setDampingDrive(drives[arms[i].joints[j]], filtered[v++], settings_.arm_damping[j]);
       setGripperDrives(arms[i], settings_, finger_targets[i], drives);
     }
+  }
+
+  std::string getBaseController() const override { return "mobile_panda"; }
+  Eigen::VectorXd getBaseAction() const override {
+    if (base_action_.size() == 0)
+      throw Error("mobile_panda_ee: no base action before the episode's first compute", MB_UNSUPPORTED);
+    return base_action_;
   }
 
   // The filter and the integrated TCP targets (the links come from reset).
@@ -221,6 +242,7 @@ class MobilePandaEeController : public sdk::Controller, public sdk::Stateful {
   std::vector<mb_id> tcp_links_;            // per arm, once resolved
   std::vector<Eigen::Isometry3d> targets_;  // per arm: TCP target pose in body_link
   std::unique_ptr<VelocityStage> stage_;
+  Eigen::VectorXd base_action_;  // mobile_panda's action of the last compute
 };
 
 }  // namespace

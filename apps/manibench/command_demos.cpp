@@ -76,9 +76,16 @@ const char* kDemosUsage = R"(usage: manibench demos generate|merge|replay|conver
       camera, needs ffmpeg; --video-size WxH, default 640x480).
       Exit status 1 when any trajectory differs or cannot be read.
   convert FILE.h5 --obs pointcloud|rgbd --out FILE2.h5 [--workers N]
-          [--trajectories LIST] [--set KEY=VALUE]... [--no-progress]
+          [--controller NAME [--keep-failed]] [--trajectories LIST] [--set KEY=VALUE]...
+          [--no-progress]
       The same trajectories with the observations of another mode, rendered
-      at every recorded state in worker processes.
+      at every recorded state in worker processes. --controller NAME (with
+      or without --obs): the trajectories in another controller's actions,
+      exactly where the file's controller is a layer over NAME
+      (mobile_panda_ee over mobile_panda), at control rate (frame_skip 1);
+      otherwise tracked: NAME follows the recorded states in closed loop,
+      and a trajectory that no longer succeeds is left out unless
+      --keep-failed.
   info FILE.h5 [--write-json]
       Task, versions, configuration sources, objects, counts, lengths,
       success and bytes per step; --write-json (re)writes the JSON sidecar.
@@ -381,18 +388,22 @@ int replay(int argc, char** argv) {
 }
 
 int convert(int argc, char** argv) {
-  const Arguments args = parseArguments(argc, argv, 3, {"obs", "out", "workers", "trajectories", "set"},
-                                        {"no-progress"}, kDemosUsage);
+  const Arguments args = parseArguments(argc, argv, 3,
+                                        {"obs", "out", "workers", "trajectories", "set", "controller"},
+                                        {"no-progress", "keep-failed"}, kDemosUsage);
   const std::string path = onePositional(args, "convert");
   const std::optional<ObservationMode> mode = parseObservationMode(args, kDemosUsage);
-  if (!mode) throw UsageError("demos convert needs --obs pointcloud|rgbd|state", kDemosUsage);
+  const bool controller = args.options.count("controller") > 0;
+  if (!mode && !controller)
+    throw UsageError("demos convert needs --obs pointcloud|rgbd|state or --controller NAME", kDemosUsage);
   if (!args.options.count("out")) throw UsageError("demos convert needs --out FILE.h5", kDemosUsage);
   const std::string out = args.options.at("out");
   if (out == path) throw UsageError("--out must be another file than the input", kDemosUsage);
   const unsigned workers = unsigned(std::min<uint64_t>(parseCount(args, "workers", 1), 256));
   std::vector<std::string> overrides;
   if (args.repeated.count("set")) overrides = args.repeated.at("set");
-  overrides.push_back(std::string("observation.mode=") + toString(*mode));
+  if (mode) overrides.push_back(std::string("observation.mode=") + toString(*mode));
+  if (controller) overrides.push_back("control.controller=" + args.options.at("controller"));
 
   PluginRegistry registry;
   loadPlugins(registry);
@@ -416,12 +427,17 @@ int convert(int argc, char** argv) {
   {
     StopSignals stop_signals;
     result = convertDemonstrations(registry, path, out, overrides, parseTrajectoryList(args), workers,
-                                   info, hooks);
+                                   info, hooks, args.options.count("keep-failed") > 0);
   }
   if (progress) std::cerr << "\n";
   for (const std::string& failure : result.failed) std::cout << "not converted: " << failure << "\n";
-  std::cout << "wrote " << result.converted << " trajectories in " << toString(*mode) << " mode to "
-            << out << " in " << std::fixed << std::setprecision(2) << result.seconds << " s\n";
+  for (const std::string& drop : result.dropped) std::cout << "left out: " << drop << "\n";
+  std::cout << "wrote " << result.converted << " trajectories";
+  if (!result.dropped.empty())
+    std::cout << " (" << result.dropped.size() << " left out: no longer successful; --keep-failed keeps them)";
+  if (mode) std::cout << " in " << toString(*mode) << " mode";
+  if (controller) std::cout << " for controller " << args.options.at("controller");
+  std::cout << " to " << out << " in " << std::fixed << std::setprecision(2) << result.seconds << " s\n";
   std::cout.unsetf(std::ios::fixed);
   if (result.interrupted) return 130;
   return result.failed.empty() ? 0 : 1;
@@ -437,8 +453,10 @@ int info(int argc, char** argv) {
             << "made by        manibench " << info.manibench_version << ", " << info.created << "\n"
             << "command        " << info.command << "\n"
             << "task           " << info.task << " (environment " << info.environment_id << ")\n"
-            << "controller     " << info.controller << "\n"
-            << "observations   " << toString(info.observation_mode) << "\n"
+            << "controller     " << info.controller << "\n";
+  if (!info.converted_from.empty())
+    std::cout << "converted from " << info.converted_from << " (" << info.conversion << ")\n";
+  std::cout << "observations   " << toString(info.observation_mode) << "\n"
             << "policy         " << info.policy << "\n";
   std::cout << "conditions    ";
   for (const std::string& c : info.condition_names) std::cout << " " << c;
@@ -474,6 +492,10 @@ int info(int argc, char** argv) {
       std::cout << "unreadable     " << e.what() << "\n";
     }
   }
+  // A tracked conversion's: how closely its TCPs followed the recording.
+  double tracking_error = -1;
+  for (const Trajectory& t : summaries) tracking_error = std::max(tracking_error, t.tracking_error);
+  if (tracking_error >= 0) std::cout << "tracking error largest " << tracking_error << " m (TCP to the recording's)\n";
   std::cout << "trajectories   " << summaries.size() << " of " << objects.size() << " object(s), "
             << steps << " steps";
   if (cut)

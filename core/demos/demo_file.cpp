@@ -155,6 +155,7 @@ void writeTrajectory(const Handle& file, const std::string& name, const DemoFile
   writeAttribute(group, "steps", uint64_t(t.steps));
   writeAttribute(group, "success", uint64_t(t.success ? 1 : 0));
   writeAttribute(group, "total_reward", t.total_reward);
+  if (t.tracking_error >= 0) writeAttribute(group, "tracking_error", t.tracking_error);
   const hsize_t steps = t.steps;
   writeDataset(group, "actions", {steps, t.action_dim}, t.actions);
   if (!t.policy_actions.empty())
@@ -189,6 +190,8 @@ void writeInfo(const Handle& file, const DemoFileInfo& info) {
   writeAttribute(meta, "created", info.created);
   writeAttribute(meta, "command", info.command);
   if (!info.generation.empty()) writeAttribute(meta, "generation", info.generation);
+  if (!info.converted_from.empty()) writeAttribute(meta, "converted_from", info.converted_from);
+  if (!info.conversion.empty()) writeAttribute(meta, "conversion", info.conversion);
 }
 
 // --- reading ----------------------------------------------------------------------
@@ -219,6 +222,8 @@ DemoFileInfo readInfo(const Handle& file) {
   info.created = readStringAttribute(meta, "created");
   info.command = readStringAttribute(meta, "command");
   if (hasAttribute(meta, "generation")) info.generation = readStringAttribute(meta, "generation");
+  if (hasAttribute(meta, "converted_from")) info.converted_from = readStringAttribute(meta, "converted_from");
+  if (hasAttribute(meta, "conversion")) info.conversion = readStringAttribute(meta, "conversion");
   // Written by close(), after the last trajectory: absent in a file cut short.
   if (hasAttribute(file, "generation_result"))
     info.generation_result = readStringAttribute(file, "generation_result");
@@ -232,6 +237,7 @@ void readSummaryInto(const Handle& group, Trajectory& t) {
   t.steps = uint32_t(readUintAttribute(group, "steps"));
   t.success = readUintAttribute(group, "success") != 0;
   t.total_reward = readDoubleAttribute(group, "total_reward");
+  if (hasAttribute(group, "tracking_error")) t.tracking_error = readDoubleAttribute(group, "tracking_error");
 }
 
 void readObservations(const Handle& group, const DemoFileInfo& info, Trajectory& t) {
@@ -378,6 +384,7 @@ std::string DemoWriter::append(const Trajectory& trajectory) {
   summary.steps = trajectory.steps;
   summary.success = trajectory.success;
   summary.total_reward = trajectory.total_reward;
+  summary.tracking_error = trajectory.tracking_error;
   impl_->summaries.push_back(std::move(summary));
   return name;
 }
@@ -527,6 +534,8 @@ std::string formatDemoJson(const DemoFileInfo& info, const std::vector<std::stri
   json["policy"] = info.policy;
   json["created"] = info.created;
   json["command"] = info.command;
+  if (!info.converted_from.empty()) json["converted_from"] = info.converted_from;
+  if (!info.conversion.empty()) json["conversion"] = info.conversion;
   nlohmann::ordered_json episodes = nlohmann::ordered_json::array();
   for (std::size_t i = 0; i < names.size() && i < summaries.size(); ++i) {
     const Trajectory& t = summaries[i];
@@ -538,6 +547,7 @@ std::string formatDemoJson(const DemoFileInfo& info, const std::vector<std::stri
                         {"elapsed_steps", t.steps},
                         {"success", t.success},
                         {"total_reward", t.total_reward}});
+    if (t.tracking_error >= 0) episodes.back()["tracking_error"] = t.tracking_error;
   }
   json["episodes"] = std::move(episodes);
   return json.dump(2) + "\n";

@@ -311,6 +311,11 @@ StepResult Environment::step(const Eigen::VectorXd& action) {
   return result;
 }
 
+Eigen::VectorXd Environment::getBaseAction(uint32_t dim) {
+  if (!episode_started_) throw std::logic_error("Environment::getBaseAction() before reset()");
+  return controller_->getBaseAction(dim);
+}
+
 // --- episode state blobs ---------------------------------------------------------
 
 namespace {
@@ -390,6 +395,16 @@ std::string findBytesDifference(const char* what, const std::vector<uint8_t>& a,
   return std::string(what) + ": byte " + std::to_string(i) + " of " + std::to_string(a.size()) + " differs";
 }
 
+// The scenes of two blobs; `scene` (of `object_id`, may be null) names the
+// first difference where the blobs are of its object.
+std::string findScenePartDifference(const StateParts& x, const StateParts& y, const Scene* scene,
+                                    const std::string& object_id) {
+  if (x.scene == y.scene) return "";
+  // The scene decodes only into a scene of its object.
+  if (x.header.object_id == object_id && scene) return "scene " + scene->findStateDifference(x.scene, y.scene);
+  return findBytesDifference("scene", x.scene, y.scene);
+}
+
 }  // namespace
 
 std::vector<double> Environment::measureProgress() {
@@ -424,6 +439,14 @@ Environment::StateHeader Environment::readStateHeader(const std::vector<uint8_t>
   }
 }
 
+std::string Environment::findSceneDifference(const std::vector<uint8_t>& a,
+                                             const std::vector<uint8_t>& b) const {
+  const StateParts x = splitState(a, description_.name), y = splitState(b, description_.name);
+  if (x.header.object_id != y.header.object_id) return "object '" + x.header.object_id + "' vs '" + y.header.object_id + "'";
+  if (x.header.seed != y.header.seed) return "seed " + std::to_string(x.header.seed) + " vs " + std::to_string(y.header.seed);
+  return findScenePartDifference(x, y, scene_.get(), object_id_);
+}
+
 std::string Environment::findStateDifference(const std::vector<uint8_t>& a,
                                              const std::vector<uint8_t>& b) const {
   if (a == b) return "";
@@ -431,11 +454,7 @@ std::string Environment::findStateDifference(const std::vector<uint8_t>& a,
   if (x.header.object_id != y.header.object_id) return "object '" + x.header.object_id + "' vs '" + y.header.object_id + "'";
   if (x.header.seed != y.header.seed) return "seed " + std::to_string(x.header.seed) + " vs " + std::to_string(y.header.seed);
   if (x.header.step != y.header.step) return "step " + std::to_string(x.header.step) + " vs " + std::to_string(y.header.step);
-  if (x.scene != y.scene) {
-    // The scene decodes only into a scene of its object.
-    if (x.header.object_id == object_id_ && scene_) return "scene " + scene_->findStateDifference(x.scene, y.scene);
-    return findBytesDifference("scene", x.scene, y.scene);
-  }
+  if (const std::string d = findScenePartDifference(x, y, scene_.get(), object_id_); !d.empty()) return d;
   if (x.controller != y.controller) return "controller '" + x.controller + "' vs '" + y.controller + "'";
   if (const std::string d = findBytesDifference("controller state", x.controller_state, y.controller_state); !d.empty())
     return d;

@@ -254,6 +254,9 @@ ControllerInstance::ControllerInstance(const PluginRegistry& registry, const std
     description_.action_segments = toSegments(info.action_segments, info.action_segment_count,
                                               info.action_dim, "action", "controller '" + name + "'");
     description_.flags = info.flags;
+    // A plugin older than ABI 1.7 ends its info before base_controller.
+    if (MB_HAS_FIELD(mb_controller_info, base_controller, info.struct_size) && info.base_controller)
+      description_.base_controller = info.base_controller;
   } catch (...) {
     descriptor_->destroy(handle_);
     throw;
@@ -283,6 +286,20 @@ std::vector<uint8_t> ControllerInstance::saveState() {
 
 void ControllerInstance::restoreState(const std::vector<uint8_t>& bytes) {
   callSetState(*descriptor_, handle_, "controller", description_.name, library_path_, bytes);
+}
+
+Eigen::VectorXd ControllerInstance::getBaseAction(uint32_t dim) {
+  if (description_.base_controller.empty() ||
+      !MB_HAS_FIELD(mb_controller_descriptor, get_base_action, descriptor_->header.struct_size) ||
+      !descriptor_->get_base_action)
+    throw PluginCallError("controller '" + description_.name + "' (" + library_path_ +
+                              ") is no layer over another controller (ABI 1.7 base_controller and "
+                              "get_base_action)",
+                          MB_UNSUPPORTED);
+  Eigen::VectorXd action(dim);
+  callPlugin("controller", description_.name, "get_base_action", descriptor_->get_base_action, handle_,
+             action.data(), dim);
+  return action;
 }
 
 // ---- policy ----------------------------------------------------------------

@@ -101,6 +101,24 @@ class DemoFile:
             self._file.close()
             raise
 
+    @property
+    def controller(self) -> str:
+        """The controller whose actions the file holds."""
+        return self.meta.get("controller", "")
+
+    @property
+    def converted_from(self) -> str | None:
+        """For a file `demos convert` made: the input file; else None."""
+        return self.meta.get("converted_from")
+
+    @property
+    def conversion(self) -> str | None:
+        """For a converted file: "observations" (another observation mode),
+        "exact" (another controller's actions, the same physics bit for bit)
+        or "tracked" (another controller following the recorded states);
+        else None."""
+        return self.meta.get("conversion")
+
     def __len__(self) -> int:
         return len(self.names)
 

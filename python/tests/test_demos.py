@@ -55,6 +55,16 @@ def test_a_file_reads_as_the_layout_says(state_file):
             f["traj_9"]
 
 
+def test_a_converted_file_names_its_source_and_method(state_file, tmp_path):
+    out = tmp_path / "converted.h5"
+    subprocess.run([BINARY, "demos", "convert", str(state_file), "--obs", "state", "--no-progress",
+                    "--out", str(out)], check=True, capture_output=True)
+    with demos.DemoFile(state_file) as source, demos.DemoFile(out) as f:
+        assert source.converted_from is None and source.conversion is None
+        assert f.converted_from == str(state_file) and f.conversion == "observations"
+        assert f.controller == source.controller != ""
+
+
 def test_a_trajectory_replays_through_make_bit_for_bit(state_file):
     # The arrays are the recording: reset to the first state, step the
     # actions, and every observation, reward and state is the file's.

@@ -53,19 +53,13 @@ TEST_P(FamilyDemos, TenTrajectoriesReplayBitIdentically) {
   std::filesystem::remove_all(dir);
 }
 
-std::string nameSetup(const ::testing::TestParamInfo<DemoSetup>& info) {
-  std::string name = info.param.task;
-  name.erase(std::remove_if(name.begin(), name.end(), [](char c) { return !std::isalnum(c); }), name.end());
-  return name;
-}
-
 INSTANTIATE_TEST_SUITE_P(Experts, FamilyDemos,
                          ::testing::Values(DemoSetup{"Reach-v0", "reach_expert", ""},
                                            DemoSetup{"OpenCabinetDoor-v0", "open_cabinet_expert", "mobile_panda_ee"},
                                            DemoSetup{"OpenCabinetDrawer-v0", "open_cabinet_expert", "mobile_panda_ee"},
                                            DemoSetup{"MoveBucket-v0", "move_bucket_expert", "mobile_panda_ee"},
                                            DemoSetup{"PushChair-v0", "push_chair_expert", "mobile_panda_ee"}),
-                         nameSetup);
+                         testing::nameDemoSetup);
 
 TEST(DemoConversion, PointCloudsOfAConvertedSetAreThoseOfALiveEpisode) {
   const DemoSetup setup{"OpenCabinetDrawer-v0", "open_cabinet_expert", "mobile_panda_ee"};

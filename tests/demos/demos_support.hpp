@@ -5,6 +5,10 @@
 #include <manibench/config.hpp>
 #include <manibench/demos.hpp>
 
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <string>
 
@@ -56,6 +60,13 @@ inline GenerationResult generateDemoFile(const DemoSetup& setup, const std::stri
     return std::make_unique<Environment>(registry, setup.task, environment);
   };
   return generateDemonstrations(registry, options, factory, path, makeDemoInfo(registry, setup), hooks);
+}
+
+// A parameterized test's name: the task's letters and digits.
+inline std::string nameDemoSetup(const ::testing::TestParamInfo<DemoSetup>& info) {
+  std::string name = info.param.task;
+  name.erase(std::remove_if(name.begin(), name.end(), [](char c) { return !std::isalnum(c); }), name.end());
+  return name;
 }
 
 // A fresh folder for one test's files.

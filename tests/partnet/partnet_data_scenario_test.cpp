@@ -160,6 +160,51 @@ TEST(PartNetData, ADemonstrationOnARealCabinetReplaysBitForBit) {
   std::filesystem::remove(file);
 }
 
+// demos convert --controller on one real object per family: the expert's
+// end-effector demonstration (up to 5 episodes for one success) in
+// mobile_panda's actions replays bit for bit (docs/demonstrations.md,
+// "Another controller").
+struct RealConversionCase {
+  const char *task, *expert, *category, *object;
+};
+void PrintTo(const RealConversionCase& c, std::ostream* os) { *os << c.task << ", " << c.object; }
+
+class PartNetConversion : public ::testing::TestWithParam<RealConversionCase> {};
+
+TEST_P(PartNetConversion, AnExpertsDemonstrationConvertsExactlyToMobilePanda) {
+  const RealConversionCase& c = GetParam();
+  REQUIRE_CATEGORY(folder, c.category);
+  const auto dir = std::filesystem::temp_directory_path() / ("manibench_partnet_convert_" + std::string(c.object));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string ee = (dir / "ee.h5").string(), joints = (dir / "joints.h5").string();
+  const auto made = runCli({"demos", "generate", c.task, "--policy", c.expert, "--objects", c.object, "--per-object",
+                            "1", "--max-attempts", "5", "--no-progress", "--set", "task.partnet_dir=" + folder,
+                            "--out", ee});
+  ASSERT_EQ(made.exit_code, 0) << made.out << made.err;
+  const auto converted = runCli({"demos", "convert", ee, "--controller", "mobile_panda", "--out", joints, "--no-progress"});
+  ASSERT_EQ(converted.exit_code, 0) << converted.out << converted.err;
+  EXPECT_NE(converted.out.find("wrote 1 trajectories for controller mobile_panda"), std::string::npos) << converted.out;
+  const auto replay = runCli({"demos", "replay", joints, "--check"});
+  EXPECT_EQ(replay.exit_code, 0) << replay.out << replay.err;
+  EXPECT_NE(replay.out.find("1 bit-identical"), std::string::npos) << replay.out;
+  const auto info = runCli({"demos", "info", joints});
+  EXPECT_NE(info.out.find("controller     mobile_panda\n"), std::string::npos) << info.out;
+  EXPECT_NE(info.out.find("converted from " + ee + " (exact)"), std::string::npos) << info.out;
+  std::filesystem::remove_all(dir);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    PartNetData, PartNetConversion,
+    ::testing::Values(RealConversionCase{"OpenCabinetDrawer-v0", "open_cabinet_expert", "StorageFurniture", "46236_link_1"},
+                      RealConversionCase{"OpenCabinetDoor-v0", "open_cabinet_expert", "StorageFurniture", "40147_link_0"},
+                      RealConversionCase{"PushChair-v0", "push_chair_expert", "Chair", "179"},
+                      RealConversionCase{"MoveBucket-v0", "move_bucket_expert", "Bucket", "100431"}),
+    [](const ::testing::TestParamInfo<RealConversionCase>& info) {
+      std::string name = info.param.task;
+      return name.substr(0, name.find('-'));
+    });
+
 // The point cloud of a real cabinet carries its meshes' textures: 40147's
 // .mtl files give Kd 1 1 1 and a wood image, so without the textures its
 // points would be grey (r = g = b under the white lights); with them most

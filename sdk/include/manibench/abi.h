@@ -58,7 +58,7 @@ extern "C" {
 #endif
 
 #define MB_ABI_MAJOR 1
-#define MB_ABI_MINOR 6
+#define MB_ABI_MINOR 7
 #define MB_ENTRY_POINT_NAME "manibench_plugin_entry"
 
 /* True when `field` of struct type `type` lies within `size` bytes. */
@@ -398,6 +398,13 @@ typedef struct mb_controller_info {
   uint32_t action_segment_count;
   const mb_segment* action_segments;
   uint32_t flags; /* MB_CONTROLLER_* */
+
+  /* ---- ABI 1.7 (beyond struct_size, or NULL: no layer) ----------------- */
+  /* The controller this one is a layer over: its compute ends in that
+   * controller's path, so that the action get_base_action reports after a
+   * compute makes the base controller (same configuration) compute the
+   * same drive commands, bit for bit (`demos convert --controller`). */
+  const char* base_controller;
 } mb_controller_info;
 
 typedef struct mb_controller_descriptor {
@@ -423,6 +430,15 @@ typedef struct mb_controller_descriptor {
                          uint64_t capacity, uint64_t* out_size, mb_error* err);
   mb_status (*set_state)(mb_controller* controller, const uint8_t* data,
                          uint64_t size, mb_error* err);
+
+  /* ---- ABI 1.7: optional (NULL, or beyond struct_size in an older
+   * plugin: no layer) ---------------------------------------------------- */
+  /* After a compute, the normalized action of mb_controller_info's
+   * base_controller that computes the same drive commands from the same
+   * state (`dim` its action size). MB_UNSUPPORTED from a controller that is
+   * no layer, or before its first compute. */
+  mb_status (*get_base_action)(mb_controller* controller, double* out,
+                               uint32_t dim, mb_error* err);
 } mb_controller_descriptor;
 
 /* ---- policy ----------------------------------------------------------- */

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -41,6 +42,14 @@ struct DemoFileInfo {
   // merge` and --resume go by (docs/distributed.md).
   std::string generation;
   std::string generation_result;
+  // `demos convert`: the input file and how its trajectories became these
+  // ("observations": the same actions, another observation mode;
+  // "exact": the actions of the controller the input's is a layer over,
+  // replaying the same physics bit for bit; "tracked": another
+  // controller's, following the recorded states); "" for a file not
+  // converted.
+  std::string converted_from;
+  std::string conversion;
 };
 
 // Writes a demonstration file: root attributes, then one group per
@@ -145,6 +154,9 @@ std::unique_ptr<Environment> makeDemoEnvironment(const PluginRegistry& registry,
 // keeps what was converted.
 struct ConversionResult {
   std::size_t converted = 0;
+  // Tracked conversion: trajectories that no longer succeed and were left
+  // out ("traj_3: ..."; kept, and not listed, with keep_failed).
+  std::vector<std::string> dropped;
   std::vector<std::string> failed;  // "traj_3: why"
   bool interrupted = false;
   double seconds = 0;
@@ -153,12 +165,66 @@ struct ConversionHooks {
   std::function<void(std::size_t done, std::size_t total, double elapsed)> on_progress;
   std::function<bool()> should_stop;
 };
+// --- controller conversion (convert_controller.cpp) ------------------------------------
+
+// How `demos convert --controller` (overrides with control.controller)
+// turns a file's trajectories into another controller's: "exact" where the
+// file's controller is a layer over the target (ABI 1.7 base_controller:
+// mobile_panda_ee over mobile_panda). Both environments then run at
+// control rate (frame_skip 1, the time limit in control steps), so that
+// each of the file's steps becomes `frame_skip` steps whose actions are
+// those the layer produced at each control step. "tracked" otherwise: the
+// target follows the recording in closed loop (trackTrajectory), at the
+// file's rate.
+struct ControllerConversion {
+  std::string source, target;  // controllers
+  std::string method;          // "exact" or "tracked"
+  uint32_t frame_skip = 1;     // the file's
+  // Over the file's configuration: the layer's environment (state
+  // observations) and the target's (what the output's replays build).
+  std::vector<std::string> source_overrides, target_overrides;
+};
+// Empty when `overrides` keep the file's controller.
+std::optional<ControllerConversion> planControllerConversion(const PluginRegistry& registry,
+                                                             const DemoFileInfo& info,
+                                                             const std::vector<std::string>& overrides);
+// Both conversions' start: `source` restored to the trajectory's first
+// state, `target` reset to the same episode, their scenes checked equal
+// (DemoError otherwise, or for a trajectory that does not start at its
+// episode's reset).
+void startControllerConversion(Environment& source, Environment& target, const Trajectory& trajectory);
+// One trajectory converted as `plan` says: `source` built with its
+// source_overrides, `target` with its target_overrides. Checks at every
+// control step that the target's scene state equals the layer's bit for
+// bit, and at every recorded step that the layer's equals the recording's;
+// throws DemoError naming the step and the first difference otherwise. The
+// result ends where the target's episode ends (its success or time limit).
+Trajectory convertTrajectoryController(Environment& source, Environment& target, const Trajectory& trajectory,
+                                       uint32_t frame_skip);
+
+// Tracked conversion (convert_tracked.cpp): `source` replays the recording
+// (the file's controller, state observations), `target` (the file's
+// configuration with the target controller) takes at each step the action
+// that follows it: segments the two controllers share by name (base, lift,
+// grippers) the recorded value, the base's with a tenth of its drift from
+// the recording corrected per step; end-effector velocities (`<side>_ee_linear`,
+// `<side>_ee_angular`) towards the recorded TCP pose of the next step,
+// relative to body_link. Another segment is a DemoError. The result ends
+// where the target's episode ends; its tracking_error is the largest TCP
+// distance to the recording after a step.
+struct TrackingSpeeds {  // action 1 of the target's segments (its defaults)
+  double linear = 0.5, angular = 1.57, base = 0.5, yaw = 3.14, lift = 0.5;
+};
+TrackingSpeeds readTrackingSpeeds(const EnvironmentOptions& target);
+Trajectory trackTrajectory(Environment& source, Environment& target, const Trajectory& trajectory,
+                           const TrackingSpeeds& speeds);
+
 ConversionResult convertDemonstrations(const PluginRegistry& registry, const std::string& in_path,
                                        const std::string& out_path,
                                        const std::vector<std::string>& overrides,
                                        const std::vector<std::string>& names, unsigned workers,
                                        const DemoFileInfo& out_info_base,
-                                       const ConversionHooks& hooks = {});
+                                       const ConversionHooks& hooks = {}, bool keep_failed = false);
 
 // --- generating (supplement C.2) -------------------------------------------------------
 

@@ -141,11 +141,23 @@ class Environment {
   // controller's or the task's bytes; "" when they are identical.
   std::string findStateDifference(const std::vector<uint8_t>& a,
                                   const std::vector<uint8_t>& b) const;
+  // As findStateDifference, of the object, seed and scene alone (not the
+  // step, nor the controller's or the task's bytes): environments with
+  // other controllers or frame_skip agree on it in the same physical state
+  // (demos convert --controller checks its target with it).
+  std::string findSceneDifference(const std::vector<uint8_t>& a,
+                                  const std::vector<uint8_t>& b) const;
   // The cameras, masks and renderer of the current scene: `render`, videos
   // and tests render through it in any mode (only then is a renderer made).
   const VisualObserver& getObserver() const { return *observer_; }
   VisualObserver& updObserver() { return *observer_; }
   uint32_t getElapsedSteps() const { return elapsed_steps_; }
+  // ABI 1.7: for a controller that is a layer over another
+  // (getControllerDescription().base_controller), the base's action (`dim`
+  // values) that its last control step produced; with frame_skip 1 it is
+  // the whole last step's (demos convert --controller). Throws
+  // PluginCallError for a controller that is no layer.
+  Eigen::VectorXd getBaseAction(uint32_t dim);
   // Seconds spent so far in the parts of step() and reset() (manibench
   // bench's stage table): physics (controller and integrator) and the task
   // (reward, success, its state vector). Rendering and assembling the visual

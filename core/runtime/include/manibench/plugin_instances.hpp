@@ -55,6 +55,8 @@ struct ControllerDescription {
   uint32_t action_dim = 0;
   std::vector<sdk::Segment> action_segments;
   uint32_t flags = 0;
+  // ABI 1.7: the controller this one is a layer over ("": none).
+  std::string base_controller;
 };
 
 class TaskInstance {
@@ -106,6 +108,9 @@ class ControllerInstance {
   // As TaskInstance's.
   std::vector<uint8_t> saveState();
   void restoreState(const std::vector<uint8_t>& bytes);
+  // ABI 1.7, a layer's: the base controller's action of the last compute
+  // (`dim` values). PluginCallError when the controller is no layer.
+  Eigen::VectorXd getBaseAction(uint32_t dim);
 
  private:
   const mb_controller_descriptor* descriptor_;

@@ -34,6 +34,9 @@ struct Trajectory {
   uint32_t steps = 0;  // T
   bool success = false;  // at the last step
   double total_reward = 0;
+  // demos convert's tracked conversion: the largest distance (m) between
+  // the target's TCP and the recording's; negative for any other.
+  double tracking_error = -1;
 
   uint32_t action_dim = 0, condition_count = 0;
   std::vector<double> actions;  // T x action_dim, as the policy gave them (unclipped)

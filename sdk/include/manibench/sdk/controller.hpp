@@ -46,6 +46,21 @@ class Controller {
                        std::vector<DriveCommand>& drives) = 0;
 };
 
+// ABI 1.7: a controller whose compute ends in another controller's path
+// (mobile_panda_ee ends in mobile_panda's filter and drives) derives from
+// this too, and reports after each compute the base controller's action
+// that computes the same drive commands, so that its demonstrations convert
+// exactly into the base's actions (`demos convert --controller`).
+class ControllerLayer {
+ public:
+  virtual ~ControllerLayer() = default;
+  // The base controller's registered name.
+  virtual std::string getBaseController() const = 0;
+  // The base's normalized action of the last compute (its action size);
+  // may throw Error(MB_UNSUPPORTED) before the first compute.
+  virtual Eigen::VectorXd getBaseAction() const = 0;
+};
+
 namespace detail {
 
 struct ControllerHandle {
@@ -54,10 +69,14 @@ struct ControllerHandle {
   uint32_t flags;
   std::size_t joint_count;
   std::vector<DriveCommand> drives;
+  const ControllerLayer* layer;  // null: no layer
+  std::string base_controller;   // the layer's base, kept for get_info
   ControllerHandle(std::unique_ptr<Controller> c, const ControllerSpec& spec,
                    std::size_t joints)
       : controller(std::move(c)), action(spec.action), flags(spec.flags),
-        joint_count(joints), drives(joints) {}
+        joint_count(joints), drives(joints),
+        layer(dynamic_cast<const ControllerLayer*>(controller.get())),
+        base_controller(layer ? layer->getBaseController() : "") {}
 };
 
 inline ControllerHandle* asController(mb_controller* c) {
@@ -107,6 +126,7 @@ struct ControllerTrampolines {
       info.action_segment_count = h.action.count();
       info.action_segments = h.action.data();
       info.flags = h.flags;
+      info.base_controller = h.layer ? h.base_controller.c_str() : nullptr;
       writeOutputStruct(out, info);
     });
   }
@@ -135,6 +155,18 @@ struct ControllerTrampolines {
                             h.drives);
       checkVectorSize("drive commands", h.joint_count, h.drives.size());
       std::copy(h.drives.begin(), h.drives.end(), out);
+    });
+  }
+  static mb_status getBaseAction(mb_controller* c, double* out, uint32_t dim,
+                                 mb_error* err) {
+    return guard(err, [&] {
+      const ControllerHandle& h = *asController(c);
+      if (h.layer == nullptr)
+        throw Error("get_base_action: this controller is no layer over another",
+                    MB_UNSUPPORTED);
+      const Eigen::VectorXd action = h.layer->getBaseAction();
+      checkVectorSize("base action", uint32_t(action.size()), dim);
+      std::copy(action.data(), action.data() + action.size(), out);
     });
   }
   // ABI 1.2: the last drive commands (a controller may leave some as they
@@ -177,6 +209,7 @@ bool registerController(const char* name, const char* summary) {
   d->compute = &ControllerTrampolines<T>::compute;
   d->get_state = &ControllerTrampolines<T>::getState;
   d->set_state = &ControllerTrampolines<T>::setState;
+  d->get_base_action = &ControllerTrampolines<T>::getBaseAction;
   return true;
 }
 
