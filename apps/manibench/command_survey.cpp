@@ -174,6 +174,15 @@ SurveyEpisode runSurveyEpisode(mb::Environment& env, mb::ActingPolicy& policy, c
     e.steps = r.steps;
     e.reward = r.total_reward;
     e.outcome = tracker.classify(r.success);
+    // The task's own conditions left unmet at the end, for a failure the
+    // signals cannot tell apart (a bucket on the platform with its ball
+    // out is not_static by progress).
+    if (!r.success) {
+      std::string unmet;
+      for (std::size_t c = 0; c + 1 < r.condition_names.size() && c < r.final_flags.size(); ++c)
+        if (!r.final_flags[c]) unmet += (unmet.empty() ? "" : " ") + r.condition_names[c];
+      if (!unmet.empty()) e.message = "unmet at the end: " + unmet;
+    }
   } catch (const std::logic_error&) {
     throw;
   } catch (const std::exception& error) {

@@ -72,6 +72,15 @@ SurveyReport::SurveyReport(std::string task, std::string policy, std::vector<uin
 
 void SurveyReport::addCategory(const std::string& category, const std::string& dir, double listing_s,
                                const std::string& error) {
+  // Two folders of one category (two downloads' Bucket folders) are one
+  // category: their objects are summed, not listed once per folder.
+  for (Category& c : categories_)
+    if (c.name == category) {
+      c.dir += ", " + dir;
+      c.listing_s += listing_s;
+      if (!error.empty()) c.error += (c.error.empty() ? "" : "; ") + error;
+      return;
+    }
   categories_.push_back({category, dir, error, listing_s});
 }
 

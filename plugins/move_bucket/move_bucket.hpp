@@ -66,6 +66,9 @@ struct BucketModel {
   // PartNet-Mobility buckets, whose files are on disk.
   std::map<std::string, std::string> files;
   std::string body_link = "bucket";  // the link the ball sits in
+  // The links whose collision pieces make the body (fixed to body_link; a
+  // grip on any of them holds the bucket): body_link alone when empty.
+  std::vector<std::string> body_parts;
   // The bail (handle), when the bucket has one: its revolute joint.
   std::string bail_joint;
   double bail_lower = 0, bail_upper = 0;  // rad
@@ -226,6 +229,7 @@ class MoveBucketTask : public sdk::Task {
   std::shared_ptr<const BucketModel> bucket_;
   mb_id robot_ = -1, bucket_id_ = -1, ball_id_ = -1, platform_id_ = -1;
   mb_id body_link_ = -1, ball_link_ = -1;
+  std::vector<mb_id> body_parts_;  // BucketModel::body_parts, or body_link_
   int bail_index_ = -1;             // in the bucket's joint vector
   uint32_t bucket_joint_count_ = 0;
   double initial_height_ = 0;       // root height at reset

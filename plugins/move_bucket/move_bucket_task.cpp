@@ -99,6 +99,9 @@ void MoveBucketTask::buildScene(SceneView& scene, const std::string& object_id) 
   robot_ = robot_state_->addTo(scene);
   bucket_id_ = scene.addUrdfString(bucket_->urdf, bucket_->base_dir, "bucket", Pose(), /*fixed_base=*/false);
   body_link_ = scene.findLink(bucket_id_, bucket_->body_link);
+  body_parts_ = {body_link_};
+  if (!bucket_->body_parts.empty()) body_parts_.clear();
+  for (const std::string& part : bucket_->body_parts) body_parts_.push_back(scene.findLink(bucket_id_, part));
   bucket_joint_count_ = scene.getJointCount(bucket_id_);
   bail_index_ = bucket_->bail_joint.empty() ? -1 : int(scene.findJoint(bucket_id_, bucket_->bail_joint));
   ball_id_ = scene.addUrdfString(writeBallUrdf(), "", "ball", Pose(), /*fixed_base=*/false);
@@ -226,8 +229,12 @@ std::vector<double> MoveBucketTask::measureProgress(const SceneView& scene) cons
   const RewardInputs m = measure(scene, 0);
   // 1 N each finger: a touch, well under the grippers' squeeze.
   constexpr double kTouch = 1.0;
-  const bool holding =
-      robot_state_->isHolding(scene, body_link_, 0, kTouch) && robot_state_->isHolding(scene, body_link_, 1, kTouch);
+  auto holds = [&](std::size_t arm) {
+    for (const mb_id part : body_parts_)
+      if (robot_state_->isHolding(scene, part, arm, kTouch)) return true;
+    return false;
+  };
+  const bool holding = holds(0) && holds(1);
   const double lift = std::clamp(m.lift / RewardConstants::kLiftHeight, 0.0, 1.0);
   const double way = std::max(initial_platform_distance_ - RewardConstants::kOnPlatform, 1e-6);
   const double carried = std::clamp((initial_platform_distance_ - m.platform_distance) / way, -1.0, 1.0);

@@ -238,6 +238,7 @@ BucketModel loadPartNetBucket(const std::string& folder, const std::string& id, 
   model.id = id;
   model.base_dir = object.dir;
   model.body_link = kFrameLink;
+  model.body_parts.assign(body_links.begin(), body_links.end());
   model.lower = box.lo - origin;
   model.upper = box.hi - origin;
   const double height = model.upper.z();

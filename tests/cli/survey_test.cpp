@@ -117,6 +117,32 @@ TEST_F(SurveyTest, AnObjectTheTaskCannotUseIsRefusedWithItsReason) {
   EXPECT_EQ(readOutcomes(out).size(), 2u);
 }
 
+// Two folders of one category (two downloads of it) are one category: one
+// row in the table, each object listed once.
+TEST_F(SurveyTest, TwoFoldersOfOneCategoryAreOneCategory) {
+  for (const char* half : {"a", "b"}) {
+    fs::create_directories(dir_ / half);
+    fs::copy(kMini, dir_ / half / "Cabinets", fs::copy_options::recursive);
+  }
+  fs::remove_all(dir_ / "a" / "Cabinets" / "100002");
+  fs::remove(dir_ / "a" / "Cabinets" / "test.txt");  // it names 100002
+  fs::remove_all(dir_ / "b" / "Cabinets" / "100001");
+  const fs::path out = dir_ / "out";
+  const auto r = runCli({"survey", "OpenCabinetDrawer-v0", (dir_ / "a" / "Cabinets").string(),
+                         (dir_ / "b" / "Cabinets").string(), "--policy", "zero", "--episodes-per-object", "1", "--set",
+                         "task.partnet_scale=1", "--set", "episode.max_steps=5", "--out", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  auto count = [&](const std::string& what) {
+    std::size_t n = 0;
+    for (std::size_t at = r.out.find(what); at != std::string::npos; at = r.out.find(what, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(count("\n  100001_link_1 "), 1u) << r.out;
+  EXPECT_EQ(count("\n  100002_link_1 "), 1u) << r.out;
+  EXPECT_EQ(count("\n  Cabinets "), 1u) << r.out;
+  EXPECT_EQ(readOutcomes(out).size(), 2u);
+}
+
 TEST_F(SurveyTest, UsageErrors) {
   EXPECT_EQ(runCli({"survey", "OpenCabinetDrawer-v0"}).exit_code, 2);
   const auto r = runCli({"survey", "OpenCabinetDrawer-v0", (dir_ / "nothing").string()});
