@@ -270,6 +270,7 @@ class MoveBucketExpert : public mobile_panda::Expert<ExpertPhase> {
   std::array<double, 2> finger_sign_{-1, -1};  // per arm: fingers along +-the grip axis
   double grasp_lift_ = 0;       // lift when the grippers closed
   double carry_speed_ = 0;      // m/s, ramped up and down
+  Eigen::Vector2d carry_goal_ = Eigen::Vector2d::Zero();  // the base's goal while carrying (world)
   double held_yaw_ = 0;         // base yaw while holding
   uint32_t settled_steps_ = 0;
 };

@@ -161,18 +161,32 @@ void MoveBucketExpert::lift(const View& v, Command& c) {
 }
 
 // The base drives the held bucket over the platform's centre, its speed
-// ramped up and down.
+// ramped up and down. The goal is the base's own position, not the
+// bucket's: a bucket held by its rim swings under the grippers, and
+// chasing the swinging bucket kept 7 of the 28 surveyed episodes of real
+// buckets circling the platform at 0.4 m/s until the time ran out. Once
+// the base stands at its goal and the bucket has stopped swinging, the
+// bucket is lowered if it is well inside B.4's 0.3 m (a third of it), else
+// the goal moves by what is left and the base drives again.
 void MoveBucketExpert::carry(const View& v, Command& c) {
   constexpr double dt = 0.05;  // one env step
+  constexpr double kInside = RewardConstants::kOnPlatform / 3;
   c.gripper = -1.0;
   c.lift_rate = std::clamp(3.0 * (grasp_lift_ + kLiftBy - v.robot.lift), -0.3, 0.3);
-  const Eigen::Vector2d error = v.platform.head<2>() - v.bucket.head<2>();
+  if (phase_steps_ == 1) carry_goal_ = v.robot.base + (v.platform.head<2>() - v.bucket.head<2>());
+  const Eigen::Vector2d error = carry_goal_ - v.robot.base;
   const double distance = error.norm();
   const double wanted = std::min(kCarrySpeed, std::sqrt(2 * kCarryAcceleration * std::max(distance - 0.005, 0.0)));
   carry_speed_ = std::min(wanted, carry_speed_ + kCarryAcceleration * dt);
   c.base_velocity = distance > 1e-6 ? Eigen::Vector2d(carry_speed_ * error / distance) : Eigen::Vector2d::Zero();
   c.yaw_rate = std::clamp(2.5 * wrapAngle(held_yaw_ - v.robot.yaw), -0.5, 0.5);
-  if (distance < 0.015 && v.bucket_velocity.head<2>().norm() < 0.05) enter(Phase::kLower);
+  if (distance >= 0.01 || v.bucket_velocity.head<2>().norm() >= 0.05) return;
+  const Eigen::Vector2d left = v.platform.head<2>() - v.bucket.head<2>();
+  if (left.norm() < kInside) {
+    enter(Phase::kLower);
+  } else {
+    carry_goal_ += left;
+  }
 }
 
 void MoveBucketExpert::lower(const View& v, Command& c) {
