@@ -163,6 +163,15 @@ TEST(ConfigEnvironment, BodyMaterialsReachTheSceneAndBadNamesAreErrors) {
   env->reset("0", 0);
   EXPECT_NO_THROW(env->step(Eigen::VectorXd::Zero(2)));
 
+  // A pattern names every link it starts (PushChair's wheel_*, however
+  // many wheels a chair has); one that matches none is no error.
+  const TempFile pattern(
+      "physics:\n  contact:\n    bodies:\n      - {articulation: arm, link: \"fore*\", static_friction: 2}\n"
+      "      - {articulation: arm, link: \"wheel_*\", static_friction: 2}\n");
+  auto patterned = makeEnvironment({{pattern.path()}, {}});
+  patterned->reset("0", 0);
+  EXPECT_NO_THROW(patterned->step(Eigen::VectorXd::Zero(2)));
+
   const TempFile no_link("physics:\n  contact:\n    bodies:\n      - {articulation: arm, link: hand}\n");
   try {
     makeEnvironment({{no_link.path()}, {}});
