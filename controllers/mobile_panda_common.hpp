@@ -67,7 +67,7 @@ inline std::array<double, kPandaArmJoints> readArmDamping(const sdk::Config& con
 // At 1000 N/m (5-15 N) real PartNet doors did not open: their handles are
 // fins that the pads hold by friction alone, and the fingers slid to the
 // fin's edge while the door, damped with up to 20 N m s, stood (door expert
-// 15/100 on ../shared/partnet's 10 doors; 89/100 at 5000 N/m, drawers
+// 15/100 on the development set's 10 real doors; 89/100 at 5000 N/m, drawers
 // 100/100 either way); a bucket slipped out of the fingers. The damping
 // keeps a closing finger under 0.25 m/s (5000 x 0.04 / 800), as a real
 // hand's: at the 3 m/s that 5000 N/m reaches with 50 N s/m, a pad moves

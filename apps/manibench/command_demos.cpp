@@ -430,6 +430,7 @@ int convert(int argc, char** argv) {
                                    info, hooks, args.options.count("keep-failed") > 0);
   }
   if (progress) std::cerr << "\n";
+  for (const std::string& note : result.redone) std::cout << "redone: " << note << "\n";
   for (const std::string& failure : result.failed) std::cout << "not converted: " << failure << "\n";
   for (const std::string& drop : result.dropped) std::cout << "left out: " << drop << "\n";
   std::cout << "wrote " << result.converted << " trajectories";
@@ -439,6 +440,8 @@ int convert(int argc, char** argv) {
   if (controller) std::cout << " for controller " << args.options.at("controller");
   std::cout << " to " << out << " in " << std::fixed << std::setprecision(2) << result.seconds << " s\n";
   std::cout.unsetf(std::ios::fixed);
+  if (!result.failed.empty())
+    std::cout << result.failed.size() << " of the input's trajectories not converted (listed above)\n";
   if (result.interrupted) return 130;
   return result.failed.empty() ? 0 : 1;
 }

@@ -43,7 +43,7 @@ class Pool {
  public:
   Pool(const WorkerContext& context, unsigned count)
       : context_(context),
-        processes_(count, [this](std::size_t i, int fd) -> int { runWorker(fd, slots_[i], context_); }),
+        processes_(count, [this](std::size_t i, int fd) { return runWorker(fd, slots_[i], context_); }),
         workers_(count) {
     void* memory = mmap(nullptr, sizeof(Slot) * count, PROT_READ | PROT_WRITE,
                         MAP_SHARED | MAP_ANONYMOUS, -1, 0);
@@ -55,8 +55,7 @@ class Pool {
   }
   ~Pool() {
     // The workers go before the slots they write.
-    for (std::size_t i = 0; i < workers_.size(); ++i) processes_.kill(i);
-    for (std::size_t i = 0; i < workers_.size(); ++i) processes_.stop(i, false);
+    processes_.stopAll();
     munmap(slots_, sizeof(Slot) * workers_.size());
   }
   Pool(const Pool&) = delete;
@@ -140,7 +139,7 @@ class Coordinator {
   // Handles one message of worker i, then gives it its next episode.
   void handleMessage(std::size_t i, const std::string& payload);
   // Worker i's socket ended: record the episode it was running, restart it.
-  void handleExit(std::size_t i);
+  void handleExit(std::size_t i, int status);
   // Kills workers whose call is past its time limit; their end of stream
   // records the episode.
   void killOverdue();
@@ -291,7 +290,7 @@ void Coordinator::handleMessage(std::size_t i, const std::string& payload) {
   dispatch(i);
 }
 
-void Coordinator::handleExit(std::size_t i) {
+void Coordinator::handleExit(std::size_t i, int status) {
   if (result_.interrupted) return;
   Worker& w = pool_.workers()[i];
   const bool was_ready = w.ready;
@@ -300,7 +299,6 @@ void Coordinator::handleExit(std::size_t i) {
   const std::string kill_message = w.kill_message;
   const uint32_t phase = pool_.slot(i).phase.load();
   const uint32_t step = pool_.slot(i).step.load();
-  const int status = pool_.stop(i, false);
   if (!was_ready) {
     stopRun("a worker died while building the environment and policy (" +
             (kill_message.empty() ? describeExit(status) : kill_message) + ")");
@@ -360,7 +358,7 @@ void Coordinator::run() {
   for (std::size_t i = 0; i < workers.size(); ++i) pool_.start(i);
 
   const auto on_frame = [this](std::size_t i, const std::string& payload) { handleMessage(i, payload); };
-  const auto on_end = [this](std::size_t i) { handleExit(i); };
+  const auto on_end = [this](std::size_t i, int status) { handleExit(i, status); };
   while (!result_.interrupted && !(isLocalDone() && isRemoteDone())) {
     if (hooks_.should_stop && hooks_.should_stop()) {
       result_.interrupted = true;

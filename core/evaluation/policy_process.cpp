@@ -169,8 +169,10 @@ void readObservation(const PolicyBlockHeader& header, const std::byte* data, Eig
 }
 
 // The policy process's side: everything from the fork on (spawnChild has
-// tied it to its worker and made its process group). Never returns.
-[[noreturn]] void servePolicy(const PolicyProcessSettings& settings, std::byte* block,
+// tied it to its worker and made its process group). Returns only when the
+// policy cannot be made (its exit status); otherwise it serves until its
+// worker kills it.
+int servePolicy(const PolicyProcessSettings& settings, std::byte* block,
                               std::size_t block_bytes, const std::string& private_dir) {
   auto& header = *reinterpret_cast<PolicyBlockHeader*>(block);
   char* message = reinterpret_cast<char*>(block + getMessageOffset());
@@ -197,12 +199,10 @@ void readObservation(const PolicyBlockHeader& header, const std::byte* data, Eig
                                               settings.policy_config, settings.layout);
   } catch (const PluginCallError& e) {
     answer(e.status(), e.what());
-    std::fflush(nullptr);
-    _exit(0);
+    return 0;
   } catch (const std::exception& e) {
     answer(MB_ERROR, e.what());
-    std::fflush(nullptr);
-    _exit(0);
+    return 0;
   }
   answer(MB_OK, "");
 
@@ -291,9 +291,8 @@ SandboxedPolicy::SandboxedPolicy(const PolicyProcessSettings& settings) : settin
   ChildOptions options;
   options.channel = false;
   options.own_process_group = true;
-  const Child child = spawnChild(options, [this](int) -> int {
-    servePolicy(settings_, block_, block_bytes_, private_dir_);
-  });
+  const Child child =
+      spawnChild(options, [this](int) { return servePolicy(settings_, block_, block_bytes_, private_dir_); });
   pid_ = child.pid;
   if (pid_ < 0) {
     munmap(block_, block_bytes_);
@@ -325,9 +324,7 @@ void SandboxedPolicy::kill() {
   if (pid_ <= 0) return;
   ::kill(-pid_, SIGKILL);
   ::kill(pid_, SIGKILL);
-  int status = 0;
-  while (waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
-  }
+  waitForChild(pid_);
   pid_ = -1;
 }
 
@@ -408,7 +405,7 @@ void SandboxedPolicy::call(uint32_t command, double timeout) {
     seen = h.done_seq.load();
     if (seen == seq_) break;
     int status = 0;
-    if (waitpid(pid_, &status, WNOHANG) == pid_) failDead(status);
+    if (findChildExit(pid_, status)) failDead(status);
     if (double(getMonotonicNs() - start) * 1e-9 > timeout) {
       std::ostringstream text;
       text << "no return within " << timeout << " s; the policy process was killed";

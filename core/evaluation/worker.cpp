@@ -231,7 +231,7 @@ EvaluationTaskInfo describeTask(const Environment& env, const std::string& split
 
 }  // namespace
 
-void runWorker(int fd, Slot& slot, const WorkerContext& context) {
+int runWorker(int fd, Slot& slot, const WorkerContext& context) {
   enterPhase(slot, kSetup);
   std::unique_ptr<Environment> env;
   std::unique_ptr<ActingPolicy> policy;
@@ -248,10 +248,7 @@ void runWorker(int fd, Slot& slot, const WorkerContext& context) {
     }
     enterPhase(slot, kIdle);
     wire::sendFrame(fd, w);
-    if (!policy) {
-      std::fflush(nullptr);
-      _exit(0);
-    }
+    if (!policy) return 0;
   }
   std::string payload;
   while (wire::receiveFrame(fd, payload)) {
@@ -287,8 +284,7 @@ void runWorker(int fd, Slot& slot, const WorkerContext& context) {
     }
   }
   policy.reset();  // a sandboxed policy's process ends, its folder goes
-  std::fflush(nullptr);
-  _exit(0);
+  return 0;
 }
 
 }  // namespace manibench::evaluation_detail

@@ -47,7 +47,8 @@ struct WorkerContext {
 };
 
 // The worker process's whole life on socket `fd`: set up, report kReady (or
-// kSetupError), run episodes until the socket closes. Never returns.
-[[noreturn]] void runWorker(int fd, Slot& slot, const WorkerContext& context);
+// kSetupError), run episodes until the socket closes; returns the
+// process's exit status (WorkerPool's body: the pool's exit path ends it).
+int runWorker(int fd, Slot& slot, const WorkerContext& context);
 
 }  // namespace manibench::evaluation_detail

@@ -103,27 +103,53 @@ std::string describeSignal(int sig) {
 }
 
 std::string describeExit(int status) {
+  if (status == -1) return "gone, its status unknown (the process that started it has gone)";
   if (WIFSIGNALED(status)) return "killed by " + describeSignal(WTERMSIG(status));
   if (WIFEXITED(status)) return "exited with status " + std::to_string(WEXITSTATUS(status));
   return "stopped (wait status " + std::to_string(status) + ")";
 }
 
-WorkerPool::WorkerPool(std::size_t count, Body body, ChildOptions options)
-    : body_(std::move(body)), options_(std::move(options)), workers_(count) {}
+int waitForChild(pid_t pid) {
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0) {
+    // ECHILD: not (or no longer) this process's child; nothing to wait for.
+    if (errno != EINTR) return 0;
+  }
+  return status;
+}
+
+bool findChildExit(pid_t pid, int& status) {
+  int got = 0;
+  pid_t r = -1;
+  while ((r = waitpid(pid, &got, WNOHANG)) < 0 && errno == EINTR) {
+  }
+  if (r != pid) return false;
+  status = got;
+  return true;
+}
+
+WorkerPool::WorkerPool(std::size_t count, Body body, ChildOptions options, Launch launch)
+    : body_(std::move(body)), options_(std::move(options)), workers_(count) {
+  if (launch == Launch::kZygote)
+    zygote_ = std::make_unique<Zygote>([this](std::size_t i, int fd) { return body_(i, fd); });
+}
 
 WorkerPool::~WorkerPool() {
-  // All killed before any is waited for: one slow to go does not hold the
-  // others' kill back.
-  for (std::size_t i = 0; i < workers_.size(); ++i) kill(i);
-  for (std::size_t i = 0; i < workers_.size(); ++i) stop(i, false);
+  stopAll();
+  zygote_.reset();
 }
 
 void WorkerPool::start(std::size_t i) {
-  ChildOptions options = options_;
-  options.channel = true;
-  for (const Worker& w : workers_)
-    if (w.fd >= 0) options.close_in_child.push_back(w.fd);
-  const Child child = spawnChild(options, [this, i](int fd) { return body_(i, fd); });
+  Child child;
+  if (zygote_) {
+    child = zygote_->spawn(i);
+  } else {
+    ChildOptions options = options_;
+    options.channel = true;
+    for (const Worker& w : workers_)
+      if (w.fd >= 0) options.close_in_child.push_back(w.fd);
+    child = spawnChild(options, [this, i](int fd) { return body_(i, fd); });
+  }
   if (child.pid < 0) throw std::runtime_error("cannot start a worker (" + child.error + ")");
   Worker& w = workers_[i];
   w = Worker();
@@ -138,11 +164,15 @@ int WorkerPool::stop(std::size_t i, bool kill) {
   w.fd = -1;
   if (w.pid > 0) {
     if (kill) ::kill(w.pid, SIGKILL);
-    while (waitpid(w.pid, &status, 0) < 0 && errno == EINTR) {
-    }
+    status = zygote_ ? zygote_->reap(w.pid) : waitForChild(w.pid);
   }
   w.pid = -1;
   return status;
+}
+
+void WorkerPool::stopAll() {
+  for (std::size_t i = 0; i < workers_.size(); ++i) kill(i);
+  for (std::size_t i = 0; i < workers_.size(); ++i) stop(i, false);
 }
 
 void WorkerPool::kill(std::size_t i) {
@@ -153,14 +183,21 @@ bool WorkerPool::send(std::size_t i, const wire::Writer& message) {
   return workers_[i].fd >= 0 && wire::sendFrame(workers_[i].fd, message);
 }
 
-void WorkerPool::read(std::size_t i, const std::function<void(std::size_t, const std::string&)>& on_frame,
-                      const std::function<void(std::size_t)>& on_end) {
+wire::Received WorkerPool::receive(std::size_t i, std::string& payload,
+                                   std::chrono::steady_clock::time_point deadline) {
+  Worker& w = workers_[i];
+  if (w.fd < 0) return wire::Received::kClosed;
+  return wire::receiveFrame(w.fd, payload, deadline);
+}
+
+void WorkerPool::read(std::size_t i, const FrameHandler& on_frame, const EndHandler& on_end) {
   Worker& w = workers_[i];
   char chunk[65536];
   const ssize_t got = ::read(w.fd, chunk, sizeof(chunk));
   if (got < 0 && errno == EINTR) return;
   if (got <= 0) {
-    on_end(i);
+    const int status = stop(i, false);
+    on_end(i, status);
     return;
   }
   w.buffer.append(chunk, static_cast<std::size_t>(got));
@@ -170,8 +207,7 @@ void WorkerPool::read(std::size_t i, const std::function<void(std::size_t, const
   while (workers_[i].fd == fd && wire::takeFrame(workers_[i].buffer, payload)) on_frame(i, payload);
 }
 
-bool WorkerPool::poll(int timeout_ms, const std::function<void(std::size_t, const std::string&)>& on_frame,
-                      const std::function<void(std::size_t)>& on_end) {
+bool WorkerPool::poll(int timeout_ms, const FrameHandler& on_frame, const EndHandler& on_end) {
   std::vector<pollfd> fds;
   std::vector<std::size_t> owners;
   for (std::size_t i = 0; i < workers_.size(); ++i)

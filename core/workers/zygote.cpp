@@ -12,16 +12,40 @@
 namespace manibench {
 namespace {
 
-bool readByte(int fd, char& byte) {
-  for (;;) {
-    const ssize_t n = ::read(fd, &byte, 1);
+// A request to the zygote: start worker `value` (an index), or reap worker
+// `value` (a pid). The answers: a started worker's pid with its channel
+// (SCM_RIGHTS), pid 0 alone when none started; a reaped worker's wait
+// status.
+struct Request {
+  uint64_t kind = 0;  // 64 bits: no padding goes over the socket
+  uint64_t value = 0;
+};
+enum : uint64_t { kSpawn = 1, kReap = 2 };
+
+bool readAll(int fd, void* to, std::size_t bytes) {
+  char* p = static_cast<char*>(to);
+  while (bytes > 0) {
+    const ssize_t n = ::read(fd, p, bytes);
     if (n < 0 && errno == EINTR) continue;
-    return n == 1;
+    if (n <= 0) return false;
+    p += n;
+    bytes -= std::size_t(n);
   }
+  return true;
 }
 
-// The pid of a started worker and, with it, its channel as SCM_RIGHTS; pid
-// 0 alone when none started.
+bool writeAll(int fd, const void* from, std::size_t bytes) {
+  const char* p = static_cast<const char*>(from);
+  while (bytes > 0) {
+    const ssize_t n = ::send(fd, p, bytes, MSG_NOSIGNAL);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    p += n;
+    bytes -= std::size_t(n);
+  }
+  return true;
+}
+
 bool sendWorker(int control, pid_t pid, int fd) {
   msghdr message{};
   iovec data{&pid, sizeof pid};
@@ -37,20 +61,27 @@ bool sendWorker(int control, pid_t pid, int fd) {
     c->cmsg_len = CMSG_LEN(sizeof(int));
     std::memcpy(CMSG_DATA(c), &fd, sizeof(int));
   }
-  return sendmsg(control, &message, MSG_NOSIGNAL) >= 0;
+  ssize_t n = -1;
+  while ((n = sendmsg(control, &message, MSG_NOSIGNAL)) < 0 && errno == EINTR) {
+  }
+  return n >= 0;
 }
 
-// The zygote's life: each byte read on `control` is a request for a worker.
-int runZygote(int control, const std::function<int(int fd)>& body) {
-  signal(SIGCHLD, SIG_IGN);  // workers are reaped by the kernel
-  char request = 0;
-  while (readByte(control, request)) {
+// The zygote's life: one request after another, until the parent closes
+// the control socket. Its workers are its children: it reaps each when the
+// parent asks, and a zombie left when it goes is reaped by init.
+int runZygote(int control, const std::function<int(std::size_t, int)>& body) {
+  Request request;
+  while (readAll(control, &request, sizeof request)) {
+    if (request.kind == kReap) {
+      const int status = waitForChild(pid_t(request.value));
+      if (!writeAll(control, &status, sizeof status)) break;
+      continue;
+    }
     ChildOptions options;
     options.close_in_child = {control};
-    const Child child = spawnChild(options, [&body](int fd) {
-      signal(SIGCHLD, SIG_DFL);  // a worker's own children are its to reap
-      return body(fd);
-    });
+    const std::size_t index = std::size_t(request.value);
+    const Child child = spawnChild(options, [&body, index](int fd) { return body(index, fd); });
     const pid_t pid = child.pid > 0 ? child.pid : 0;
     const bool sent = sendWorker(control, pid, child.fd);
     if (pid > 0) close(child.fd);
@@ -61,7 +92,7 @@ int runZygote(int control, const std::function<int(int fd)>& body) {
 
 }  // namespace
 
-Zygote::Zygote(std::function<int(int fd)> body) {
+Zygote::Zygote(std::function<int(std::size_t index, int fd)> body) {
   ChildOptions options;
   options.ignore_termination = true;
   const Child zygote = spawnChild(options, [&body](int control) { return runZygote(control, body); });
@@ -72,14 +103,14 @@ Zygote::Zygote(std::function<int(int fd)> body) {
 
 Zygote::~Zygote() {
   close(control_);
-  int status = 0;
-  while (waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
-  }
+  waitForChild(pid_);
 }
 
-Child Zygote::spawn() {
+Child Zygote::spawn(std::size_t index) {
   Child child;
-  const char request = 1;
+  Request request;
+  request.kind = kSpawn;
+  request.value = index;
   pid_t pid = 0;
   msghdr message{};
   iovec data{&pid, sizeof pid};
@@ -89,9 +120,7 @@ Child Zygote::spawn() {
   message.msg_control = control_buffer;
   message.msg_controllen = sizeof control_buffer;
   ssize_t n = -1;
-  while ((n = ::send(control_, &request, 1, MSG_NOSIGNAL)) < 0 && errno == EINTR) {
-  }
-  if (n == 1)
+  if (writeAll(control_, &request, sizeof request))
     while ((n = recvmsg(control_, &message, MSG_CMSG_CLOEXEC)) < 0 && errno == EINTR) {
     }
   const cmsghdr* c = n > 0 ? CMSG_FIRSTHDR(&message) : nullptr;
@@ -102,6 +131,15 @@ Child Zygote::spawn() {
   std::memcpy(&child.fd, CMSG_DATA(c), sizeof(int));
   child.pid = pid;
   return child;
+}
+
+int Zygote::reap(pid_t pid) {
+  Request request;
+  request.kind = kReap;
+  request.value = uint64_t(pid);
+  int status = -1;
+  if (!writeAll(control_, &request, sizeof request) || !readAll(control_, &status, sizeof status)) return -1;
+  return status;
 }
 
 }  // namespace manibench

@@ -6,12 +6,6 @@
 #include <manibench/wire_format.hpp>
 #include <manibench/worker_pool.hpp>
 
-#include <errno.h>
-#include <poll.h>
-#include <signal.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -110,32 +104,28 @@ int runWorker(int fd, const EnvironmentWorkers::Factory& factory) {
 
 EnvironmentWorkers::EnvironmentWorkers(Factory factory, unsigned count) {
   if (count == 0) throw LearningError("at least one environment worker is needed");
+  ChildOptions options;
+  options.ignore_termination = true;  // the learner stops them by closing their channels
   try {
-    zygote_ = std::make_unique<Zygote>([factory](int fd) { return runWorker(fd, factory); });
+    pool_ = std::make_unique<WorkerPool>(
+        count, [factory](std::size_t, int fd) { return runWorker(fd, factory); }, options, Launch::kZygote);
+    for (unsigned i = 0; i < count; ++i) pool_->start(i);
   } catch (const std::runtime_error& e) {
     throw LearningError(std::string("cannot start the environment workers: ") + e.what());
   }
-  for (unsigned i = 0; i < count; ++i) workers_.push_back(spawn());
+  lost_.assign(count, false);
 }
 
-EnvironmentWorkers::~EnvironmentWorkers() {
-  // The workers read end of stream and leave, then the zygote.
-  for (Worker& w : workers_) close(w.fd);
-  zygote_.reset();
-}
+// The pool closes the channels (the workers read end of stream and leave),
+// kills what still runs, reaps them, then the zygote.
+EnvironmentWorkers::~EnvironmentWorkers() = default;
 
-EnvironmentWorkers::Worker EnvironmentWorkers::spawn() {
-  const Child child = zygote_->spawn();
-  if (child.pid < 0) throw LearningError("cannot start an environment worker (" + child.error + ")");
-  Worker w;
-  w.fd = child.fd;
-  w.pid = child.pid;
-  return w;
-}
+unsigned EnvironmentWorkers::size() const { return unsigned(pool_->size()); }
+
+pid_t EnvironmentWorkers::getPid(unsigned worker) const { return pool_->getPid(worker); }
 
 void EnvironmentWorkers::send(unsigned worker, const wire::Writer& message) {
-  Worker& w = workers_.at(worker);
-  if (!w.lost && !wire::sendFrame(w.fd, message)) w.lost = true;
+  if (!lost_.at(worker) && !pool_->send(worker, message)) lost_[worker] = true;
 }
 
 void EnvironmentWorkers::sendReset(unsigned worker, const std::string& object_id, uint64_t seed) {
@@ -168,26 +158,30 @@ void EnvironmentWorkers::setReplyTimeout(double seconds) {
 }
 
 WorkerReply EnvironmentWorkers::receive(unsigned worker) {
-  Worker& w = workers_.at(worker);
   std::string message;
   const Clock::time_point deadline =
       reply_timeout_ > 0 ? Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                               std::chrono::duration<double>(reply_timeout_))
                          : Clock::time_point::max();
-  const wire::Received read = w.lost ? wire::Received::kClosed : wire::receiveFrame(w.fd, message, deadline);
+  const wire::Received read =
+      lost_.at(worker) ? wire::Received::kClosed : pool_->receive(worker, message, deadline);
   if (read != wire::Received::kFrame) {
-    const pid_t pid = w.pid;
+    const pid_t pid = pool_->getPid(worker);
     // A worker that hangs (a task stuck in a loop or a system call) is
-    // killed: it is alive, so the pid is still its own. One that died is
-    // gone already (the zygote's children are reaped by the kernel).
-    if (read == wire::Received::kTimedOut) ::kill(pid, SIGKILL);
-    close(w.fd);
-    w = spawn();
+    // killed; one whose channel ended is reaped for its status.
+    const int status = pool_->stop(worker, read == wire::Received::kTimedOut);
+    lost_[worker] = false;
+    try {
+      pool_->start(worker);
+    } catch (const std::runtime_error& e) {
+      throw LearningError("environment worker " + std::to_string(worker) + " (pid " + std::to_string(pid) + ") " +
+                          describeExit(status) + ", and no other could be started: " + e.what());
+    }
     const std::string what = read == wire::Received::kTimedOut
                                  ? ") did not answer within " + formatSeconds(reply_timeout_) + " s; killed it"
-                                 : ") died";
+                                 : ") " + describeExit(status);
     throw WorkerDied(worker, "environment worker " + std::to_string(worker) + " (pid " + std::to_string(pid) + what +
-                                 "; started pid " + std::to_string(w.pid) + " in its place");
+                                 "; started pid " + std::to_string(pool_->getPid(worker)) + " in its place");
   }
   wire::Reader r(message);
   WorkerReply reply;

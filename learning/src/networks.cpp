@@ -126,7 +126,7 @@ void initLinear(torch::nn::Linear& linear) {
 // unchanged bit for bit. PointNet training at batch 128 on 2 threads (the
 // per-point layers take [B, N, F]) went from 0.94x python3-torch to
 // 0.98-1.00x, PointNet + Transformer from 1.97x to 2.12x
-// (bench/learning_speed.py, quiet VM, 2026-11-27; profiled: mm + add where
+// (bench/learning_speed.py on a quiet VM; profiled: mm + add where
 // python3-torch ran addmm).
 torch::Tensor applyLinear(const torch::nn::Linear& linear, const torch::Tensor& x) {
   return torch::linear(x, linear->weight, linear->bias);

@@ -57,7 +57,7 @@ struct Times {
 class SacTrainer {
  public:
   SacTrainer(const PluginRegistry& registry, const SacOptions& options, const SacHooks& hooks)
-      : options_(options), hooks_(hooks), dir_(options.out_dir), device_(parseDevice(options.device)) {
+      : options_(options), hooks_(hooks), dir_(options.out_dir) {
     checkOptions();
     EnvironmentOptions env_options = makeEnvironmentOptions(registry);
     {
@@ -68,12 +68,14 @@ class SacTrainer {
       setSpecLayout(probe, spec_);
       objects_ = selectObjects(probe);
     }
-    // The workers first: libtorch has started no thread in this process yet.
+    // The workers first: libtorch (a CUDA query included) has started no
+    // thread pool in this process yet.
     const std::string id = options_.environment_id;
     workers_ = std::make_unique<EnvironmentWorkers>(
         [&registry, id, env_options] { return std::make_unique<Environment>(registry, id, env_options); },
         options_.workers);
     workers_->setReplyTimeout(options_.worker_timeout);
+    device_ = parseDevice(options_.device);
     setUpTrainingCompute(options_.threads);
     say(describeCompute(calcComputeInfo(), device_));
     say(spec_.describe() + "; " + std::to_string(objects_.size()) + " object(s), " +
@@ -510,7 +512,7 @@ class SacTrainer {
   SacOptions options_;
   SacHooks hooks_;
   fs::path dir_;
-  torch::Device device_;
+  torch::Device device_ = torch::Device(torch::kCPU);  // parsed once the workers run
   ObservationSpec spec_;
   std::vector<std::string> objects_;
   std::unique_ptr<EnvironmentWorkers> workers_;

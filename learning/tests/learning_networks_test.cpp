@@ -398,19 +398,6 @@ TEST(LearningCheckpoints, ACheckpointLoadsOntoTheDeviceAskedFor) {
   std::remove(path.c_str());
 }
 
-// What the trainer's prefetching does on CUDA: pinned, copied without
-// blocking, then used; the batch arrives intact.
-TEST(LearningDevices, APinnedBatchCopiedWithoutBlockingArrivesIntact) {
-  if (!torch::cuda::is_available()) GTEST_SKIP() << "this libtorch sees no GPU";
-  const TransitionBatch batch = makeTransitions(4, makeCloudSpec());
-  const TransitionBatch pinned = batch.map([](const torch::Tensor& t) { return t.pin_memory(); });
-  const TransitionBatch there = pinned.to(torch::kCUDA, /*non_blocking=*/true);
-  EXPECT_TRUE(there.obs.xyz.is_cuda());
-  EXPECT_TRUE(torch::equal(there.obs.xyz.cpu(), batch.obs.xyz));
-  EXPECT_TRUE(torch::equal(there.next_obs.seg.cpu(), batch.next_obs.seg));
-  EXPECT_TRUE(torch::equal(there.actions.cpu(), batch.actions));
-}
-
 // The saved random state of every device in use sets it back.
 TEST(LearningCheckpoints, GeneratorStatesRestoreTheDraws) {
   std::vector<torch::Device> devices{torch::Device("cpu")};

@@ -154,7 +154,7 @@ TEST_F(Sac, ADyingWorkerIsReportedAndReplaced) {
   EXPECT_GE(r.env_steps, 400);
   ASSERT_NE(killed, 0);
   const auto died = std::find_if(messages.begin(), messages.end(), [&](const std::string& m) {
-    return contains(m, "environment worker 1 (pid " + std::to_string(killed) + ") died");
+    return contains(m, "environment worker 1 (pid " + std::to_string(killed) + ") killed by signal 9 (SIGKILL");
   });
   ASSERT_NE(died, messages.end());
   EXPECT_TRUE(contains(*died, "is dropped")) << *died;
@@ -163,7 +163,7 @@ TEST_F(Sac, ADyingWorkerIsReportedAndReplaced) {
   EXPECT_TRUE(replacement_alive);
   ASSERT_NE(killed_at_checkpoint, 0);
   EXPECT_TRUE(std::any_of(messages.begin(), messages.end(), [&](const std::string& m) {
-    return contains(m, "environment worker 0 (pid " + std::to_string(killed_at_checkpoint) + ") died");
+    return contains(m, "environment worker 0 (pid " + std::to_string(killed_at_checkpoint) + ") killed by signal 9 (SIGKILL");
   }));
   int checkpoints = 0;
   for (const auto& entry : fs::directory_iterator(path("dying/checkpoints")))

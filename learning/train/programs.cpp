@@ -2,6 +2,8 @@
 
 #include "cli.hpp"
 
+#include <manibench/worker_pool.hpp>
+
 #include <nlohmann/json.hpp>
 
 #include <fcntl.h>
@@ -110,9 +112,7 @@ int runManibench(const std::vector<std::string>& arguments, const std::string& l
   const int error = posix_spawn(&pid, program.c_str(), &actions, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
   if (error != 0) throw LearningError("cannot start " + program + ": " + std::strerror(error));
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
+  const int status = waitForChild(pid);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
@@ -122,7 +122,7 @@ EvaluationOutcome runPolicyEvaluation(const std::string& environment, const std:
   // torch_policy plugin, not a submission; the sandbox's default 60 s of CPU
   // per episode is sized for submissions. BCQ with PointNet + Transformer
   // chooses each action among 100 samples through the decoder and a critic
-  // (Table 7): about 1.8 s of CPU per step here (2026-11-27), so sandboxed
+  // (Table 7): about 1.8 s of CPU per step on the 2-core VM, so sandboxed
   // every episode was killed at step 33 and the training logged 0 success
   // for a policy that had not run.
   std::vector<std::string> args = {"eval", environment, "--policy", "torch_policy", "--policy-config", policy_config,

@@ -6,8 +6,13 @@
 // succeed, and one that does not is left out unless kept.
 #include <gtest/gtest.h>
 
+#include <signal.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
+#include <fstream>
+#include <sstream>
 
 #include "demos_support.hpp"
 
@@ -160,6 +165,88 @@ TEST_P(TrackedConversion, JointVelocityDemonstrationsTrackedInEndEffectorActions
   EXPECT_FALSE(first.success);
   EXPECT_EQ(first.steps, 20u);
   EXPECT_GE(first.tracking_error, 0);
+  std::filesystem::remove_all(dir);
+}
+
+// This process's children (the conversion workers), from /proc.
+std::vector<pid_t> listChildren() {
+  std::vector<pid_t> children;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::ifstream in(task.path() / "children");
+    pid_t pid = 0;
+    while (in >> pid) children.push_back(pid);
+  }
+  return children;
+}
+
+// Issue 51's case: a conversion worker killed mid-run. Its trajectory is
+// handed out again to a worker started in its place: every trajectory is
+// in the output, the same as a run nobody killed, and the redone one is
+// named. Interrupted, a run keeps what it finished and names the rest.
+TEST(ConversionFaults, AKilledWorkersTrajectoryIsRedoneAndAnInterruptionNamesTheRest) {
+  const DemoSetup setup{"OpenCabinetDrawer-v0", "open_cabinet_expert", "mobile_panda_ee"};
+  const PluginRegistry& registry = getBuildTreeRegistry();
+  const auto dir = testing::makeDemoDir("faults");
+  const std::string source = (dir / "ee.h5").string();
+  std::vector<std::string> objects;
+  {
+    Environment probe(registry, setup.task);
+    objects = probe.listObjects("train");
+  }
+  ASSERT_GE(objects.size(), 2u);
+  objects.resize(2);
+  ASSERT_TRUE(testing::generateDemoFile(setup, source, 1, 2, objects).isComplete(1));
+  DemoFileInfo info;
+  {
+    const DemoReader reader(source);
+    info = reader.getInfo();
+  }
+  const std::vector<std::string> to_joints = {"control.controller=mobile_panda"};
+  const std::string clean = (dir / "clean.h5").string(), killed = (dir / "killed.h5").string();
+  ASSERT_EQ(convertDemonstrations(registry, source, clean, to_joints, {}, 1, info).converted, objects.size());
+
+  // One worker converts everything; it is killed once it has finished the
+  // first trajectory, as it is handed the second.
+  ConversionHooks hooks;
+  std::size_t kills = 0;
+  hooks.on_progress = [&](std::size_t finished, std::size_t, double) {
+    const std::vector<pid_t> children = listChildren();
+    if (finished == 1 && kills == 0 && !children.empty()) {
+      ::kill(children.front(), SIGKILL);
+      ++kills;
+    }
+  };
+  const ConversionResult redone = convertDemonstrations(registry, source, killed, to_joints, {}, 1, info, hooks);
+  ASSERT_EQ(kills, 1u);
+  EXPECT_TRUE(redone.failed.empty()) << redone.failed.front();
+  EXPECT_EQ(redone.converted, objects.size());
+  EXPECT_EQ(redone.worker_restarts, 1u);
+  ASSERT_EQ(redone.redone.size(), 1u);
+  EXPECT_NE(redone.redone.front().find("killed by signal 9 (SIGKILL"), std::string::npos) << redone.redone.front();
+  {
+    const DemoReader a(clean), b(killed);
+    ASSERT_EQ(b.getTrajectoryNames(), a.getTrajectoryNames());
+    for (const std::string& name : a.getTrajectoryNames()) {
+      const Trajectory x = a.read(name), y = b.read(name);
+      EXPECT_EQ(y.actions, x.actions) << name;
+      EXPECT_EQ(y.object_id, x.object_id) << name;
+    }
+  }
+
+  // Stopped once the first trajectory is done: it is kept, the other named.
+  ConversionHooks stop;
+  std::size_t done = 0;
+  stop.on_progress = [&](std::size_t finished, std::size_t, double) { done = finished; };
+  stop.should_stop = [&] { return done >= 1; };
+  const std::string cut = (dir / "cut.h5").string();
+  const ConversionResult interrupted = convertDemonstrations(registry, source, cut, to_joints, {}, 1, info, stop);
+  EXPECT_TRUE(interrupted.interrupted);
+  EXPECT_EQ(interrupted.converted, 1u);
+  ASSERT_EQ(interrupted.failed.size(), objects.size() - 1);
+  EXPECT_NE(interrupted.failed.front().find("interrupted"), std::string::npos) << interrupted.failed.front();
+  const DemoReader kept(cut);
+  EXPECT_EQ(kept.getTrajectoryNames().size(), 1u);
+  EXPECT_FALSE(std::filesystem::exists(cut + ".parts"));
   std::filesystem::remove_all(dir);
 }
 

@@ -78,7 +78,7 @@ wire::Writer makeText(const std::string& text) {
 // Polls until `done` or ten seconds have passed.
 void pollUntil(WorkerPool& pool, const std::function<bool()>& done,
                const std::function<void(std::size_t, const std::string&)>& on_frame,
-               const std::function<void(std::size_t)>& on_end) {
+               const WorkerPool::EndHandler& on_end) {
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
   while (!done() && std::chrono::steady_clock::now() < end) pool.poll(100, on_frame, on_end);
 }
@@ -101,7 +101,7 @@ TEST(WorkerPool, EchoesReportsADeathAndStartsAgain) {
   std::vector<std::string> got(2);
   std::vector<int> ends(2, -1);
   const auto on_frame = [&](std::size_t i, const std::string& payload) { got[i] = readText(payload); };
-  const auto on_end = [&](std::size_t i) { ends[i] = pool.stop(i, false); };
+  const auto on_end = [&](std::size_t i, int status) { ends[i] = status; };
   ASSERT_TRUE(pool.send(0, makeText("ab")));
   ASSERT_TRUE(pool.send(1, makeText(std::string(300000, 'z'))));  // more than a socket buffer
   pollUntil(pool, [&] { return !got[0].empty() && !got[1].empty(); }, on_frame, on_end);
@@ -126,30 +126,76 @@ TEST(WorkerPool, EchoesReportsADeathAndStartsAgain) {
   EXPECT_EQ(WEXITSTATUS(status), 3);
 }
 
-// The zygote forks workers on request, also after one died; its workers
+// The zygote forks workers on request, also after one died, and reaps
+// them for the parent: a killed one's status is its signal. Its workers
 // leave when their channel closes.
-TEST(Zygote, StartsWorkersAndReplacesADeadOne) {
-  Zygote zygote([](int fd) {
+TEST(Zygote, StartsWorkersReapsAndReplacesADeadOne) {
+  Zygote zygote([](std::size_t index, int fd) {
     std::string payload;
-    while (wire::receiveFrame(fd, payload)) wire::sendFrame(fd, makeText(readText(payload) + "!"));
-    return 0;
+    while (wire::receiveFrame(fd, payload))
+      wire::sendFrame(fd, makeText(readText(payload) + "!" + std::to_string(index)));
+    return 4;
   });
-  Child first = zygote.spawn();
+  Child first = zygote.spawn(7);
   ASSERT_GT(first.pid, 0) << first.error;
   std::string payload;
   ASSERT_TRUE(wire::sendFrame(first.fd, makeText("hi")));
   ASSERT_TRUE(wire::receiveFrame(first.fd, payload));
-  EXPECT_EQ(readText(payload), "hi!");
+  EXPECT_EQ(readText(payload), "hi!7");
   kill(first.pid, SIGKILL);
   EXPECT_FALSE(wire::receiveFrame(first.fd, payload));  // its end of stream
   close(first.fd);
-  const Child second = zygote.spawn();
+  const int killed = zygote.reap(first.pid);
+  ASSERT_TRUE(WIFSIGNALED(killed)) << describeExit(killed);
+  EXPECT_EQ(WTERMSIG(killed), SIGKILL);
+  const Child second = zygote.spawn(1);
   ASSERT_GT(second.pid, 0) << second.error;
   EXPECT_NE(second.pid, first.pid);
   ASSERT_TRUE(wire::sendFrame(second.fd, makeText("again")));
   ASSERT_TRUE(wire::receiveFrame(second.fd, payload));
-  EXPECT_EQ(readText(payload), "again!");
+  EXPECT_EQ(readText(payload), "again!1");
   close(second.fd);
+  const int left = zygote.reap(second.pid);
+  ASSERT_TRUE(WIFEXITED(left)) << describeExit(left);
+  EXPECT_EQ(WEXITSTATUS(left), 4);
+}
+
+// A pool whose workers a zygote forks: the same event loop, the same wait
+// statuses, and receive() for a user that waits on one worker.
+TEST(WorkerPool, ThroughAZygoteReportsASignal) {
+  WorkerPool pool(
+      2,
+      [](std::size_t, int fd) {
+        std::string payload;
+        while (wire::receiveFrame(fd, payload)) {
+          if (readText(payload) == "hang") pause();
+          wire::sendFrame(fd, makeText(readText(payload) + "?"));
+        }
+        return 0;
+      },
+      {}, Launch::kZygote);
+  pool.start(0);
+  pool.start(1);
+  std::string payload;
+  ASSERT_TRUE(pool.send(0, makeText("a")));
+  ASSERT_EQ(pool.receive(0, payload, std::chrono::steady_clock::time_point::max()), wire::Received::kFrame);
+  EXPECT_EQ(readText(payload), "a?");
+  // One that does not answer: timed out, then killed and reaped.
+  ASSERT_TRUE(pool.send(1, makeText("hang")));
+  ASSERT_EQ(pool.receive(1, payload, std::chrono::steady_clock::now() + std::chrono::milliseconds(200)),
+            wire::Received::kTimedOut);
+  const int hung = pool.stop(1, true);
+  ASSERT_TRUE(WIFSIGNALED(hung)) << describeExit(hung);
+  EXPECT_EQ(WTERMSIG(hung), SIGKILL);
+  // One killed from outside: poll hands its end over with the signal.
+  const pid_t victim = pool.getPid(0);
+  kill(victim, SIGABRT);  // the zygote's workers ignore SIGTERM, as it does
+  int status = -2;
+  pollUntil(pool, [&] { return status != -2; }, [](std::size_t, const std::string&) {},
+            [&](std::size_t, int s) { status = s; });
+  ASSERT_TRUE(WIFSIGNALED(status)) << describeExit(status);
+  EXPECT_EQ(WTERMSIG(status), SIGABRT);
+  EXPECT_NE(describeExit(status).find("SIGABRT"), std::string::npos);
 }
 
 // PR_SET_PDEATHSIG: a child's child dies with the child that started it.

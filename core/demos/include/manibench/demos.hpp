@@ -157,7 +157,13 @@ struct ConversionResult {
   // Tracked conversion: trajectories that no longer succeed and were left
   // out ("traj_3: ..."; kept, and not listed, with keep_failed).
   std::vector<std::string> dropped;
-  std::vector<std::string> failed;  // "traj_3: why"
+  // "traj_3: why": a conversion that failed, one whose workers died twice,
+  // and, after an interruption, every trajectory not finished.
+  std::vector<std::string> failed;
+  // Converted, after the worker first converting it died: "traj_3: the
+  // worker converting it was killed by signal 9 (SIGKILL); ...".
+  std::vector<std::string> redone;
+  std::size_t worker_restarts = 0;  // workers started in place of dead ones
   bool interrupted = false;
   double seconds = 0;
 };

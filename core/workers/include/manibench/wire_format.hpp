@@ -82,6 +82,8 @@ class Writer {
 class Reader {
  public:
   explicit Reader(const std::string& data) : data_(data) {}
+  // It keeps a reference: a temporary would be gone before the reading.
+  explicit Reader(std::string&&) = delete;
   uint8_t u8() { return get<uint8_t>(); }
   uint32_t u32() { return get<uint32_t>(); }
   uint64_t u64() { return get<uint64_t>(); }

@@ -12,15 +12,17 @@
 // policy after the fork, because EGL, llvmpipe's threads and GNU OpenMP's
 // pool do not survive one. A parent that has such state by the time it
 // forks (the learner, once libtorch runs) forks early a small process that
-// forks the workers for it (Zygote, below: learning's environment workers).
+// forks the workers for it (Launch::kZygote: learning's environment workers).
 #pragma once
 
 #include <manibench/wire_format.hpp>
 
 #include <sys/types.h>
 
+#include <chrono>
 #include <cstddef>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -65,13 +67,42 @@ std::string describeSignal(int sig);
 // "killed by signal 11 (...)", "exited with status 3": a wait status.
 std::string describeExit(int status);
 
+// The one place a child is waited for (manibench's own children: workers,
+// the zygote, the policy process, the programs a trainer runs). Waits for
+// child `pid`, retrying when a signal interrupts: its wait status.
+int waitForChild(pid_t pid);
+// Without waiting: true, with its wait status, when child `pid` has ended
+// (it is reaped); false while it runs.
+bool findChildExit(pid_t pid, int& status);
+
+class Zygote;
+
+// Where a pool's workers are forked.
+enum class Launch {
+  // By this process, when each is started.
+  kHere,
+  // By a zygote this pool forks at once, in its constructor (Zygote, below):
+  // for a parent that will have threads that must not cross a fork (the
+  // learner, once libtorch runs) by the time it replaces a worker.
+  kZygote,
+};
+
 // W worker processes, each running `body(index, fd)` with a framed channel.
+// The pool owns them: it starts, kills and reaps each, and hands the one who
+// runs the event loop each worker's end with its wait status. A worker
+// leaves only through spawnChild's exit path: its body returns its status.
 class WorkerPool {
  public:
   using Body = std::function<int(std::size_t index, int fd)>;
-  // Starts none yet: start(i) each.
-  WorkerPool(std::size_t count, Body body, ChildOptions options = {});
-  // Kills the workers still running and waits for them.
+  using FrameHandler = std::function<void(std::size_t index, const std::string& payload)>;
+  // Worker `index` has ended and been reaped: `status` is its wait status.
+  // The handler may start it again.
+  using EndHandler = std::function<void(std::size_t index, int status)>;
+  // Starts none yet: start(i) each. Launch::kZygote forks the zygote now
+  // (make the pool before libtorch runs: its OpenMP pool is what must not
+  // cross the fork) and throws std::runtime_error when it cannot.
+  WorkerPool(std::size_t count, Body body, ChildOptions options = {}, Launch launch = Launch::kHere);
+  // stopAll(): nothing outlives the pool.
   ~WorkerPool();
   WorkerPool(const WorkerPool&) = delete;
   WorkerPool& operator=(const WorkerPool&) = delete;
@@ -83,19 +114,28 @@ class WorkerPool {
   // when it cannot.
   void start(std::size_t i);
   // Closes worker i's channel (a waiting worker reads end of stream and
-  // leaves), kills it first when `kill`, waits for it: its wait status.
+  // leaves), kills it first when `kill`, reaps it: its wait status (0 for
+  // a worker not running).
   int stop(std::size_t i, bool kill);
+  // Every running worker killed first, then each reaped: one slow to go
+  // does not hold the others' kill back.
+  void stopAll();
   // SIGKILLs worker i without waiting: its channel ends, which poll reports.
   void kill(std::size_t i);
-  // Sends worker i one frame; false when it is gone (poll then reports it).
+  // Sends worker i one frame; false when it is gone (poll or receive then
+  // reports it).
   bool send(std::size_t i, const wire::Writer& message);
+  // Worker i's next frame, waiting until `deadline`, for a user that asks
+  // one worker and waits for its answer (a worker is read either this way
+  // or by poll, not both). Anything but kFrame: the worker is
+  // not stopped yet (stop it, kill it first on kTimedOut, for its status).
+  wire::Received receive(std::size_t i, std::string& payload, std::chrono::steady_clock::time_point deadline);
   // Waits up to `timeout_ms` for the running workers' channels; hands each
-  // whole frame to on_frame(i, payload) and each ended channel to
-  // on_end(i), which is to stop(i, false) it (and may start it again). A
-  // handler that stops worker i ends the handling of what i sent. Returns
-  // false when no worker is running (nothing was waited for).
-  bool poll(int timeout_ms, const std::function<void(std::size_t, const std::string&)>& on_frame,
-            const std::function<void(std::size_t)>& on_end);
+  // whole frame to on_frame(i, payload) and each ended channel, once the
+  // worker is reaped, to on_end(i, status). A handler that stops (or
+  // restarts) worker i ends the handling of what i sent. Returns false when
+  // no worker is running (nothing was waited for).
+  bool poll(int timeout_ms, const FrameHandler& on_frame, const EndHandler& on_end);
 
  private:
   struct Worker {
@@ -103,11 +143,11 @@ class WorkerPool {
     int fd = -1;
     std::string buffer;  // bytes received, not yet a whole frame
   };
-  void read(std::size_t i, const std::function<void(std::size_t, const std::string&)>& on_frame,
-            const std::function<void(std::size_t)>& on_end);
+  void read(std::size_t i, const FrameHandler& on_frame, const EndHandler& on_end);
 
   Body body_;
   ChildOptions options_;
+  std::unique_ptr<Zygote> zygote_;  // Launch::kZygote
   std::vector<Worker> workers_;
 };
 
@@ -115,23 +155,27 @@ class WorkerPool {
 // not cross a fork (libtorch's GNU OpenMP pool: the children hang), that
 // forks the workers for it later, the first ones and the replacements: each
 // is started by spawnChild in the zygote and tied to it, and its channel is
-// handed to the parent (SCM_RIGHTS). The zygote and its workers ignore
-// SIGINT, SIGTERM and SIGHUP (they reach the whole process group; the
-// parent decides): when the parent closes a channel, or goes, they read
-// end of stream and leave.
+// handed to the parent (SCM_RIGHTS). The zygote reaps its workers for the
+// parent (reap). The zygote and its workers ignore SIGINT, SIGTERM and
+// SIGHUP (they reach the whole process group; the parent decides): when the
+// parent closes a channel, or goes, they read end of stream and leave.
+// WorkerPool's Launch::kZygote is its one user.
 class Zygote {
  public:
-  // Forks the zygote now; `body(fd)` runs in each worker. Throws
+  // Forks the zygote now; `body(index, fd)` runs in each worker. Throws
   // std::runtime_error when it cannot.
-  explicit Zygote(std::function<int(int fd)> body);
-  // Closes the control socket and waits for the zygote to leave.
+  explicit Zygote(std::function<int(std::size_t index, int fd)> body);
+  // Closes the control socket and reaps the zygote.
   ~Zygote();
   Zygote(const Zygote&) = delete;
   Zygote& operator=(const Zygote&) = delete;
 
-  // A new worker: its pid and the parent's end of its channel, or pid -1
-  // and why (the zygote has gone or could not fork).
-  Child spawn();
+  // A new worker running body(index, ...): its pid and the parent's end of
+  // its channel, or pid -1 and why (the zygote has gone or could not fork).
+  Child spawn(std::size_t index);
+  // Waits (in the zygote) for worker `pid` to end: its wait status, or -1
+  // when the zygote has gone.
+  int reap(pid_t pid);
 
  private:
   pid_t pid_ = -1;

@@ -41,10 +41,10 @@ void setFlushDenormals();
 // hundreds of MB per tensor (128 clouds x 1200 points x 512 floats: 315 MB),
 // which glibc mmaps and unmaps on every allocation, so every iteration
 // page-faulted them in afresh. PointNet + Transformer BC on one thread,
-// 2026-11-27, loaded machine: 22 s of its 61 s of CPU went to the kernel;
+// on a loaded 2-core machine: 22 s of its 61 s of CPU went to the kernel;
 // kept, 1.9 of 44 s, and 0.128 -> 0.189 iterations/s, the same losses. The
 // cost: the process keeps its peak (2.6 -> 3.5 GB resident there). It is
-// process-wide: training processes, and (since 2026-11-28) a process that
+// process-wide: training processes, and a process that
 // loads an inference policy (loadInferencePolicy: the torch_policy
 // plugin's environment or policy process), where the networks' activations
 // otherwise cost more in page faults than in arithmetic; it changes no

@@ -5,14 +5,16 @@
 //
 // Why processes started by a zygote: libtorch's GNU OpenMP pool must not
 // be started in a process that then forks (the children hang), yet a worker
-// that dies has to be replaced while the learner trains. So the pool forks
-// one small process (the zygote) before the learner touches libtorch; every
-// worker, the first ones and the replacements, is forked by the zygote and
-// its socket handed to the learner (SCM_RIGHTS). Workers never touch
-// libtorch. The hand-over is one Unix stream socket per worker carrying
-// frames of the one wire format (<manibench/wire_format.hpp>): an action of
-// A doubles out, an observation, the reward and the flags back. The zygote
-// is the core's (Zygote, <manibench/worker_pool.hpp>); it and the workers
+// that dies has to be replaced while the learner trains. So the workers are
+// the core's WorkerPool with Launch::kZygote (<manibench/worker_pool.hpp>):
+// it forks one small process (the zygote) before the learner touches
+// libtorch; every
+// worker, the first ones and the replacements, is forked by the zygote, its
+// socket handed to the learner, and reaped by the zygote for its wait
+// status (a killed worker is reported with its signal). Workers never touch
+// libtorch. Each channel carries frames of the one wire format
+// (<manibench/wire_format.hpp>): an action of A doubles out, an
+// observation, the reward and the flags back. The zygote and the workers
 // are tied to their parents (PR_SET_PDEATHSIG).
 //
 // When the learner goes, the zygote and the workers read end-of-file and
@@ -31,7 +33,7 @@
 
 namespace manibench {
 class Environment;
-class Zygote;
+class WorkerPool;
 namespace wire {
 class Writer;
 }
@@ -73,8 +75,8 @@ class EnvironmentWorkers {
   EnvironmentWorkers(const EnvironmentWorkers&) = delete;
   EnvironmentWorkers& operator=(const EnvironmentWorkers&) = delete;
 
-  unsigned size() const { return unsigned(workers_.size()); }
-  pid_t getPid(unsigned worker) const { return workers_.at(worker).pid; }
+  unsigned size() const;
+  pid_t getPid(unsigned worker) const;
 
   // Requests; each is answered by one receive(worker), in order. Several
   // workers may be sent to before any is received from: they run in
@@ -91,17 +93,13 @@ class EnvironmentWorkers {
   void setReplyTimeout(double seconds);
 
  private:
-  struct Worker {
-    int fd = -1;
-    pid_t pid = 0;
-    bool lost = false;  // a send failed: the process is gone (receive reports it)
-  };
-  Worker spawn();
   void send(unsigned worker, const wire::Writer& message);
 
   double reply_timeout_ = 0;
-  std::unique_ptr<Zygote> zygote_;  // core/workers' zygote: forks the workers
-  std::vector<Worker> workers_;
+  // core/workers' pool, its workers forked by its zygote (Launch::kZygote)
+  std::unique_ptr<WorkerPool> pool_;
+  // Per worker: a send failed, the process is gone (receive reports it).
+  std::vector<bool> lost_;
 };
 
 }  // namespace manibench::learning
