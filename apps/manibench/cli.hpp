@@ -140,6 +140,8 @@ inline constexpr const char* kPolicyUsage =
 // The policy sandbox's options, shared by eval and demos generate
 // (docs/evaluation.md, "Sandbox"): the flag and the help text.
 inline constexpr const char* kTrustedPolicyFlag = "trusted-policy";
+// eval's: episodes run to their time limit (EvaluationOptions::early_done).
+inline constexpr const char* kNoEarlyDoneFlag = "no-early-done";
 inline constexpr const char* kSandboxUsage =
     R"(  --trusted-policy        run the policy in the worker's process, beside the
                           environment (faster; for your own code only): by

@@ -52,6 +52,9 @@ Options:
   --episodes-per-object N levels 0..N-1 of every object (default 5)
   --levels LIST           these levels instead, e.g. 0-9 or 3,7,12 or 0-4,9
   --seed S                base seed of the episode seeds (default 0)
+  --no-early-done         run every episode to its time limit instead of
+                          ending it at its first success (ManiSkill3's
+                          protocol): success_once and success_at_end differ
   --workers N             worker processes (default 1)
   --step-timeout SEC      a policy call (reset, act) longer than this fails
                           its episode (default 10)
@@ -272,7 +275,8 @@ std::vector<std::string> describeEvalCommand(const Arguments& args) {
   // the work is spread (neither changes a result: docs/evaluation.md).
   static const std::vector<std::string> kLeftOut = {"out", "workers", "shard", "resume", "no-progress",
                                                     "benchmark"};
-  static const std::vector<std::string> kFlags = {"no-progress", "benchmark", "resume", kTrustedPolicyFlag};
+  static const std::vector<std::string> kFlags = {"no-progress", "benchmark", "resume", kTrustedPolicyFlag,
+                                                  kNoEarlyDoneFlag};
   std::vector<std::string> command = args.positional;
   for (const auto& [key, value] : args.options) {
     if (std::find(kLeftOut.begin(), kLeftOut.end(), key) != kLeftOut.end()) continue;
@@ -290,7 +294,7 @@ Arguments parseEvalArguments(int argc, char** argv, int first) {
                          "levels", "seed", "workers", "step-timeout", "env-timeout", "out", "controller", "config",
                          "set", "policy-cpu-limit", "policy-memory-limit", "policy-output-limit", "policy-read",
                          "shard"},
-                        {"no-progress", "benchmark", "resume", kTrustedPolicyFlag}, kEvalUsage,
+                        {"no-progress", "benchmark", "resume", kTrustedPolicyFlag, kNoEarlyDoneFlag}, kEvalUsage,
                         {"config", "set", "policy-read"});
 }
 

@@ -162,6 +162,8 @@ void compareRecords(const EpisodeRecord& was, const EpisodeRecord& is) {
   if (std::memcmp(&was.total_reward, &is.total_reward, sizeof(double)) != 0)
     differ("return", text(was.total_reward), text(is.total_reward));
   if (was.success != is.success) differ("success", was.success ? "1" : "0", is.success ? "1" : "0");
+  if (was.success_once != is.success_once)
+    differ("success_once", was.success_once ? "1" : "0", is.success_once ? "1" : "0");
   for (std::size_t c = 0; c < was.flags.size() || c < is.flags.size(); ++c) {
     const int a = c < was.flags.size() ? was.flags[c] : -1, b = c < is.flags.size() ? is.flags[c] : -1;
     if (a != b) differ("condition " + std::to_string(c), std::to_string(a), std::to_string(b));

@@ -59,7 +59,12 @@ PolicyRun preparePolicyRun(PluginRegistry& registry, const Arguments& args, cons
     const TaskInstance probe(registry, run.task_id.task, run.environment.task_config);
     selectFixedObjects(run.task_id, probe.listObjects("train"), probe.listObjects("test"));
   }
-  run.factory = [&registry, task, sources = run.sources] { return makeEnvironment(registry, task, sources, true); };
+  // Without the early done the workers' environments do not stop on
+  // success: every episode runs to the time limit.
+  options.early_done = !args.options.count(kNoEarlyDoneFlag);
+  run.factory = [&registry, task, sources = run.sources, stop = options.early_done] {
+    return makeEnvironment(registry, task, sources, stop);
+  };
   // Under mpirun the ranks share the work; rank 0 alone prints and writes.
   if (MpiRanks::isStartedByMpi()) run.mpi = std::make_unique<MpiRanks>();
   run.writer = !run.mpi || run.mpi->getRank() == 0;

@@ -83,6 +83,8 @@ EvaluationResult parseHeader(const Json& h) {
   o.config_notes = h.at("configuration").get<std::vector<std::string>>();
   o.action_noise = h.at("action_noise");
   o.record_successes = h.at("record_successes");
+  // Journals from before the option ran with the early done.
+  o.early_done = h.value("early_done", true);
   o.shard = h.at("shard");
   o.shards = h.at("shards");
   o.workers = h.at("workers");
@@ -139,6 +141,9 @@ std::string formatJournalHeader(const EvaluationResult& result) {
   h["success_conditions"] = result.task.condition_names;
   h["action_noise"] = o.action_noise;
   h["record_successes"] = o.record_successes;
+  // Only when off: the headers of default runs stay as they were, so
+  // that journals written before the option still resume and merge.
+  if (!o.early_done) h["early_done"] = false;
   h["shard"] = o.shard;
   h["shards"] = o.shards;
   h["workers"] = o.workers;
@@ -164,6 +169,7 @@ std::string formatJournalEpisode(const EpisodeRecord& r) {
   e["return"] = r.total_reward;
   e["success"] = r.success;
   e["flags"] = r.flags;
+  e["success_once"] = r.success_once;
   e["failure"] = r.failure;
   e["failure_step"] = r.failure_step;
   putText(e, "message", r.message);
@@ -232,6 +238,8 @@ EvaluationJournal readJournal(const std::string& path) {
       r.steps = json.at("steps");
       r.total_reward = json.at("return");
       r.success = json.at("success");
+      // Journals from before the field: the early done made them equal.
+      r.success_once = json.value("success_once", r.success);
       r.flags = json.at("flags").get<std::vector<uint8_t>>();
       r.failure = json.at("failure");
       r.failure_step = json.at("failure_step");

@@ -44,7 +44,7 @@ void transferRun(Stream& s, Spec& spec) {
 // whole), then its outcome.
 template <class Stream, class Record>
 void transferResult(Stream& s, Record& r) {
-  s.fields(r.spec.index, r.steps, r.total_reward, r.success, r.flags, r.failure, r.failure_step,
+  s.fields(r.spec.index, r.steps, r.total_reward, r.success, r.success_once, r.flags, r.failure, r.failure_step,
            r.message, r.seconds, r.sources);
 }
 

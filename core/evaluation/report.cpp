@@ -91,6 +91,7 @@ EvaluationSummary summarize(const std::string& object_id,
   for (const EpisodeRecord* r : episodes) {
     ++s.episodes;
     if (r->success) ++s.successes;
+    if (r->success_once) ++s.successes_once;
     if (r->failed()) ++s.failures;
     for (std::size_t c = 0; c < conditions && c < r->flags.size(); ++c)
       s.condition_rates[c] += r->flags[c] ? 1 : 0;
@@ -100,6 +101,7 @@ EvaluationSummary summarize(const std::string& object_id,
   if (s.episodes > 0) {
     const double n = s.episodes;
     s.success_rate = s.successes / n;
+    s.success_once_rate = s.successes_once / n;
     for (double& rate : s.condition_rates) rate /= n;
     s.mean_return = total_return / n;
     s.mean_steps = total_steps / n;
@@ -113,6 +115,11 @@ void writeSummaryJson(std::ostream& out, const EvaluationSummary& s,
       << ", \"successes\": " << s.successes << ", \"failures\": " << s.failures
       << ", \"success_rate\": " << jsonNumber(s.success_rate, 6) << ", \"success_interval\": ["
       << jsonNumber(s.success_low, 6) << ", " << jsonNumber(s.success_high, 6) << "],\n"
+      << indent << " \"success_once_rate\": " << jsonNumber(s.success_once_rate, 6)
+      << ", \"success_once_interval\": [" << jsonNumber(s.success_once_low, 6) << ", "
+      << jsonNumber(s.success_once_high, 6) << "], \"success_at_end_rate\": " << jsonNumber(s.success_rate, 6)
+      << ", \"success_at_end_interval\": [" << jsonNumber(s.success_low, 6) << ", "
+      << jsonNumber(s.success_high, 6) << "],\n"
       << indent << " \"condition_rates\": {";
   for (std::size_t c = 0; c < conditions.size(); ++c)
     out << (c ? ", " : "") << escapeJson(conditions[c]) << ": "
@@ -149,13 +156,16 @@ void summarizeEvaluation(EvaluationResult& result) {
     if (!groups[object].empty())
       result.objects.push_back(summarize(object, groups[object], conditions));
   result.overall = summarize("all", all, conditions);
-  std::vector<uint32_t> successes, episodes;
+  std::vector<uint32_t> successes, successes_once, episodes;
   for (EvaluationSummary& s : result.objects) {
     calcWilsonInterval(s.successes, s.episodes, s.success_low, s.success_high);
+    calcWilsonInterval(s.successes_once, s.episodes, s.success_once_low, s.success_once_high);
     successes.push_back(s.successes);
+    successes_once.push_back(s.successes_once);
     episodes.push_back(s.episodes);
   }
   calcOverallInterval(successes, episodes, result.overall.success_low, result.overall.success_high);
+  calcOverallInterval(successes_once, episodes, result.overall.success_once_low, result.overall.success_once_high);
 }
 
 void printEvaluationTable(std::ostream& out, const EvaluationResult& result) {
@@ -210,13 +220,15 @@ void printEvaluationTable(std::ostream& out, const EvaluationResult& result) {
 
 void writeSummaryCsv(std::ostream& out, const EvaluationResult& result) {
   const std::vector<std::string>& conditions = result.task.condition_names;
-  out << "object,episodes,successes,failures,success_rate,success_low,success_high";
+  out << "object,episodes,successes,failures,success_rate,success_low,success_high,successes_once,"
+         "success_once_rate,success_once_low,success_once_high";
   for (const std::string& c : conditions) out << "," << escapeCsv("condition_" + c);
   out << ",mean_return,mean_steps\n";
   auto row = [&](const EvaluationSummary& s) {
     out << escapeCsv(s.object_id) << "," << s.episodes << "," << s.successes << "," << s.failures
         << "," << formatRate(s.success_rate) << "," << formatRate(s.success_low) << ","
-        << formatRate(s.success_high);
+        << formatRate(s.success_high) << "," << s.successes_once << "," << formatRate(s.success_once_rate)
+        << "," << formatRate(s.success_once_low) << "," << formatRate(s.success_once_high);
     for (double rate : s.condition_rates) out << "," << formatRate(rate);
     out << "," << formatReturn(s.mean_return) << "," << formatRate(s.mean_steps) << "\n";
   };
@@ -226,13 +238,13 @@ void writeSummaryCsv(std::ostream& out, const EvaluationResult& result) {
 
 void writeEpisodesCsv(std::ostream& out, const EvaluationResult& result) {
   const std::vector<std::string>& conditions = result.task.condition_names;
-  out << "index,object,level,seed,steps,return,success";
+  out << "index,object,level,seed,steps,return,success,success_once,success_at_end";
   for (const std::string& c : conditions) out << "," << escapeCsv(c);
   out << ",failure,failure_step,message\n";
   for (const EpisodeRecord& r : result.episodes) {
     out << r.spec.index << "," << escapeCsv(r.spec.object_id) << "," << r.spec.level << ","
         << r.spec.seed << "," << r.steps << "," << formatReturn(r.total_reward) << ","
-        << (r.success ? 1 : 0);
+        << (r.success ? 1 : 0) << "," << (r.success_once ? 1 : 0) << "," << (r.success ? 1 : 0);
     for (std::size_t c = 0; c < conditions.size(); ++c)
       out << "," << (c < r.flags.size() && r.flags[c] ? 1 : 0);
     out << "," << escapeCsv(r.failure) << ",";
@@ -271,6 +283,9 @@ void writeEvaluationJson(std::ostream& out, const EvaluationResult& result) {
   out << "  \"objects\": " << jsonArray(objects, quote) << ",\n";
   out << "  \"levels\": " << jsonArray(o.levels, [](uint64_t v) { return std::to_string(v); })
       << ",\n";
+  // ManiSkill v1's B.4 (true, the default) or to the time limit
+  // (--no-early-done): what success_once and success_at_end mean.
+  out << "  \"early_done\": " << (o.early_done ? "true" : "false") << ",\n";
   out << "  \"step_timeout_s\": " << jsonNumber(o.step_timeout, 6) << ",\n";
   // Where the policy ran: a sandboxed process with its limits, or the
   // worker's own process (--trusted-policy).

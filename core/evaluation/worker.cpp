@@ -118,6 +118,7 @@ After runWorkerEpisode(Environment& env, ActingPolicy& policy, Slot& slot,
     const EpisodeResult result =
         runEpisode(env, policy, record.spec.object_id, record.spec.seed, hooks);
     record.success = result.success;
+    record.success_once = result.success_once;
     record.flags = result.final_flags;
     record.flags.resize(conditions, 0);
     if (recorder && record.success) record.trajectory = std::make_shared<Trajectory>(recorder->take());
@@ -125,6 +126,7 @@ After runWorkerEpisode(Environment& env, ActingPolicy& policy, Slot& slot,
     const uint32_t phase = slot.phase.load();
     record.failure_step = slot.step.load();
     record.success = false;
+    record.success_once = false;
     record.flags.assign(conditions, 0);
     // The policy object may be in any state after failing: a new one.
     after = After::kNewPolicy;
@@ -157,6 +159,7 @@ After runWorkerEpisode(Environment& env, ActingPolicy& policy, Slot& slot,
       if (!record.failed()) {
         record.failure = failure::kEnvironmentError;
         record.success = false;
+        record.success_once = false;
         record.flags.assign(conditions, 0);
         record.failure_step = record.steps;
         record.message = std::string("hashing the scene's files: ") + e.what();

@@ -28,6 +28,7 @@ EpisodeResult runEpisode(Environment& env, ActingPolicy& policy, const std::stri
     result.final_flags = step.flags;
     result.final_values = step.values;
     result.success = step.success;
+    result.success_once = result.success_once || step.success;
     result.steps = env.getElapsedSteps();
     const bool go_on = !hooks.on_step || hooks.on_step(step, result);
     if (step.isDone() || !go_on) break;

@@ -169,3 +169,51 @@ def test_a_misbehaving_python_policy_fails_only_its_episode(tmp_path, what, fail
         episodes = {e["object"]: e for e in csv.DictReader(f)}
     assert episodes["8"]["failure"] == failure and episodes["8"]["failure_step"] == "1"
     assert episodes["9"]["failure"] == "" and int(episodes["9"]["steps"]) > 3
+
+
+# reach_expert's inverse kinematics (plugins/reach/reach_expert.cpp) for 50
+# steps (it reaches in under 40), then full speed away from the target.
+REACH_THEN_LEAVE_POLICY = """
+import numpy as np
+
+class UserPolicy:
+    def reset(self, seed):
+        self.step = 0
+
+    def act(self, obs):
+        self.step += 1
+        if self.step > 50:
+            return np.array([1.0, 1.0])
+        s = obs.astype(np.float64)
+        q, target, shoulder, (l1, l2) = s[0:2], s[7:10], s[12:15], s[10:12]
+        u, w = target[0] - shoulder[0], -(target[2] - shoulder[2])
+        c2 = np.clip((u * u + w * w - l1 * l1 - l2 * l2) / (2 * l1 * l2), -1, 1)
+        best = None
+        for sign in (1.0, -1.0):
+            q2 = sign * np.arccos(c2)
+            q1 = np.arctan2(w, u) - np.arctan2(l2 * np.sin(q2), l1 + l2 * np.cos(q2))
+            c = np.array([q1, q2])
+            if best is None or np.linalg.norm(c - q) < np.linalg.norm(best - q):
+                best = c
+        return np.clip(2.0 * (best - q), -1, 1)
+"""
+
+
+def test_without_the_early_done_success_once_counts_a_success_the_end_lost(tmp_path):
+    """ManiSkill3's two metrics (docs/evaluation.md, "Protocols"): a policy
+    that reaches, then leaves, succeeds once but not at the end."""
+    summary, episodes = evaluate(tmp_path, REACH_THEN_LEAVE_POLICY, "--objects", "8", "--no-early-done")
+    assert summary["early_done"] is False and len(episodes) == 2
+    for e in episodes:
+        assert e["steps"] == "100" and e["failure"] == ""
+        assert e["success_once"] == "1" and e["success_at_end"] == "0" and e["success"] == "0"
+    overall = summary["overall"]
+    assert overall["success_once_rate"] == 1 and overall["success_at_end_rate"] == 0
+    low, high = overall["success_once_interval"]
+    assert 0 < low < 1 and high == 1
+    # With the early done the same policy's episodes end at the reach: a success.
+    (tmp_path / "results").rename(tmp_path / "full")
+    summary, episodes = evaluate(tmp_path, REACH_THEN_LEAVE_POLICY, "--objects", "8")
+    assert summary["early_done"] is True
+    assert all(e["success"] == e["success_once"] == e["success_at_end"] == "1" for e in episodes)
+    assert all(int(e["steps"]) <= 50 for e in episodes)

@@ -94,7 +94,11 @@ struct EpisodeRecord {
   EpisodeSpec spec;
   uint32_t steps = 0;  // environment steps completed
   double total_reward = 0;
-  bool success = false;
+  bool success = false;  // at the episode's last step: success_at_end
+  // At any step of the episode (success_once). With the early done (the
+  // default) an episode ends at its first success, so the two are equal;
+  // without it (EvaluationOptions::early_done) success_once >= success.
+  bool success_once = false;
   // The final step's flag per success condition; all 0 for a failed episode
   // (its conditions were never evaluated at a terminal step).
   std::vector<uint8_t> flags;
@@ -125,6 +129,11 @@ struct EvaluationSummary {
   // pooled Wilson interval where that is wider (calcOverallInterval);
   // docs/evaluation.md, "Intervals".
   double success_low = 0, success_high = 0;
+  // The same for success_once (success at any step; success_rate is
+  // success_at_end), with its interval computed the same way.
+  uint32_t successes_once = 0;
+  double success_once_rate = 0;
+  double success_once_low = 0, success_once_high = 0;
   std::vector<double> condition_rates;  // per success condition
   double mean_return = 0;
   double mean_steps = 0;
@@ -151,6 +160,11 @@ struct EvaluationOptions {
   // seed; recorded trajectories keep the policy's own actions beside the
   // executed ones (demos generate --action-noise).
   double action_noise = 0;
+  // An episode ends at its first success (ManiSkill v1's B.4 protocol, the
+  // default); false: it runs to the time limit (--no-early-done), and
+  // success_once and success_at_end can differ (ManiSkill3's two metrics).
+  // The environment factory must match (stop_on_success).
+  bool early_done = true;
   // The policy runs in a sandboxed process of its own (policy_process.hpp,
   // docs/evaluation.md "Sandbox"); false: in the worker's process, beside
   // the environment (--trusted-policy), as fast as it gets but with the

@@ -29,7 +29,10 @@ struct EpisodeResult {
   uint64_t seed = 0;
   uint32_t steps = 0;
   double total_reward = 0;
-  bool success = false;
+  bool success = false;  // at the last step
+  // At any step: differs from `success` only in an environment that does
+  // not stop on success (ManiSkill3's success_once beside success_at_end).
+  bool success_once = false;
   std::vector<std::string> condition_names;
   std::vector<uint8_t> final_flags;
   std::vector<double> final_values;
