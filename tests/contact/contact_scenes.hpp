@@ -178,11 +178,12 @@ struct PileScene {
           scene.addUrdfString(singleLink("body", inertial(0.5, 1e-3) + shapes[i % shapes.size()]),
                               "", "body" + std::to_string(i),
                               at(0.45 + 0.07 * std::cos(angle), 0.07 * std::sin(angle),
-                                 0.15 + 0.11 * i, Eigen::Vector3d(0.1 * i, 0.2 * i, 0.3 * i)),
+                                 calcStartHeight(i), Eigen::Vector3d(0.1 * i, 0.2 * i, 0.3 * i)),
                               false));
     }
     scene.finalize();
   }
+  static double calcStartHeight(int i) { return 0.15 + 0.11 * i; }
   static PhysicsSettings makeSettings(const std::string& integrator) {
     PhysicsSettings settings;
     settings.integrator = parseIntegrator(integrator);
@@ -236,10 +237,15 @@ inline void expectPileIsBitIdentical(const std::string& integrator, int ticks) {
   const std::vector<double> a = first.snapshot(), b = second.snapshot();
   EXPECT_TRUE(isBitIdentical(a, b)) << integrator;
   // It was contact-rich: everything fell and came to rest on something.
+  // Below where it started, not below a fixed height: the bodies are
+  // dropped in a column, and whether it topples within the run is chaotic
+  // (on some CPUs a body rests on an unfallen tower at 0.98 m after 3 s
+  // of CPodes, where elsewhere all lay below 0.6 m).
   int resting = 0;
-  for (int body : first.bodies) {
+  for (size_t i = 0; i < first.bodies.size(); ++i) {
+    const int body = first.bodies[i];
     const double z = first.scene.getRootPose(body).position.z();
-    EXPECT_LT(z, 0.6) << integrator;
+    EXPECT_LT(z, PileScene::calcStartHeight(static_cast<int>(i))) << integrator << " body " << i;
     EXPECT_GT(z, 0.0) << integrator;
     if (first.scene.calcContactForce(first.scene.findLink(body, "body"), -1).norm() > 0) ++resting;
   }
