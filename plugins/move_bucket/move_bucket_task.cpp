@@ -52,7 +52,7 @@ MoveBucketTask::MoveBucketTask(const Config& config)
                 [this](const std::string& folder, const std::string& id) {
                   return loadPartNetBucket(folder, id, facts_.calcScale(id), cache_dir_);
                 },
-                nullptr, [this](BucketModel& model) { writeMeshFiles(model, cache_dir_); }}) {
+                nullptr, [this](BucketModel& model) { writeMeshFiles(model, cache_dir_); }, nullptr}) {
   config.requireKnownKeys({"partnet_dir", "robot_dir", "cache_dir", "partnet_scale", "object_facts", "hold_steps"},
                          "MoveBucket: task");
   if (hold_steps_ == 0) throw Error("MoveBucket: task.hold_steps must be positive", MB_INVALID_ARGUMENT);

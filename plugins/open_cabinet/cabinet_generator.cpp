@@ -166,6 +166,13 @@ std::vector<const TargetLink*> CabinetModel::getTargets(TargetKind kind) const {
   return out;
 }
 
+std::vector<std::string> CabinetModel::getRefused(TargetKind kind) const {
+  std::vector<std::string> out;
+  for (const auto& [k, why] : refused)
+    if (k == kind) out.push_back(why);
+  return out;
+}
+
 std::vector<std::string> listGeneratedCabinets(TargetKind kind, const std::string& split) {
   return (kind == TargetKind::kDoor ? kDoorIds : kDrawerIds).list(split);
 }

@@ -43,6 +43,9 @@ struct CabinetModel {
   std::string urdf;      // URDF text
   std::string base_dir;  // for relative mesh paths ("" for generated ones)
   std::vector<TargetLink> targets;  // doors and drawers with handles
+  // Handled doors and drawers that are no target, each with its reason.
+  std::vector<std::pair<TargetKind, std::string>> refused;
+  std::vector<std::string> getRefused(TargetKind kind) const;
   // Where the cabinet frame goes in the world (puts its bottom on the
   // ground), and its axis-aligned extent there (front faces -x), m.
   Eigen::Vector3d placement = Eigen::Vector3d::Zero();
@@ -228,6 +231,7 @@ class OpenCabinetExpert : public mobile_panda::Expert<ExpertPhase> {
   // The whole robot servos the TCP to the goal.
   Eigen::VectorXd calcAction(const View& v, const Command& c) const;
   bool calcGraspTurned(const View& v) const;  // which of the hand's two grasps is nearer
+  double calcFacingYaw(const View& v) const;   // the base's yaw goal
 
   bool grasp_turned_ = false;  // grasps with the hand turned half a turn about its axis
 
@@ -237,6 +241,8 @@ class OpenCabinetExpert : public mobile_panda::Expert<ExpertPhase> {
   double yaw_follow_ = 1.0;     // how much the base turns with a door
   double door_speed_ = 0.3;   // m/s of the handle along its arc
   double base_follow_ = 1.0;   // how much the base follows while pulling
+  double pull_lift_ = 0;           // the lift when the pull began
+  double pull_handle_height_ = 0;  // the handle's height then
 };
 
 }  // namespace open_cabinet

@@ -51,6 +51,7 @@ struct OpenCabinetExpert::View {
   Eigen::Vector3d handle, hx;  // the handle's grasp frame: position, x (out of the handle)
   bool door = false;
   double open_fraction = 0;
+  double angle = 0;              // a door's: its joint from closed (rad)
   Eigen::Vector3d axis, origin;  // the target joint's
   double qdot = 0;               // its speed
   double fingers = 0;            // opening, m
@@ -79,6 +80,7 @@ OpenCabinetExpert::View OpenCabinetExpert::read(const sdk::Observation& observat
   v.door = s[L::kTargetJointType] < 0.5;
   const double q = s[L::kTargetJoint], lower = s[L::kTargetJoint + 2], upper = s[L::kTargetJoint + 3];
   v.open_fraction = (q - lower) / (upper - lower);
+  v.angle = v.door ? q - lower : 0.0;
   v.axis = getVector3(s, L::kJointAxis);
   v.origin = getVector3(s, L::kJointOrigin);
   v.qdot = s[L::kTargetJoint + 1];
@@ -112,6 +114,22 @@ bool OpenCabinetExpert::calcGraspTurned(const View& v) const {
   return angle(turned_in_base) < angle(grasp_in_base);
 }
 
+// The yaw that faces the handle: the closed door's facing (its grasp
+// frame's x turned back by the joint's angle, level) turned by the door's
+// turn about the vertical. A door hinged on a vertical side turns the base
+// with it, as before; a flap hinged at its top or bottom does not turn it
+// at all: its grasp frame's x tilts up or down as it opens, and level
+// it points straight up or down at 90 degrees, where the yaw read from it
+// would flip by half a turn.
+double OpenCabinetExpert::calcFacingYaw(const View& v) const {
+  Eigen::Vector3d facing = v.hx;
+  if (v.door) {
+    const Eigen::Vector3d closed = Eigen::AngleAxisd(-v.angle, v.axis) * v.hx;
+    facing = Eigen::AngleAxisd(v.angle * v.axis.z(), Eigen::Vector3d::UnitZ()) * Eigen::Vector3d(closed.x(), closed.y(), 0);
+  }
+  return std::atan2(-facing.y(), -facing.x());
+}
+
 // To 12 cm in front of the grip (after a slip: open in place first).
 void OpenCabinetExpert::approach(const View& v, Command& c) {
   c.goal = v.handle + 0.12 * v.hx;
@@ -129,9 +147,13 @@ void OpenCabinetExpert::grasp(const View& v, Command& c) {
   if ((c.goal - v.tcp).norm() < 0.01 || phase_steps_ > 20) enter(Phase::kClose);
 }
 
-void OpenCabinetExpert::closeFingers(const View&, Command& c) {
+void OpenCabinetExpert::closeFingers(const View& v, Command& c) {
   c.gripper = -1.0;
-  if (phase_steps_ > 5) enter(Phase::kPull);
+  if (phase_steps_ > 5) {
+    enter(Phase::kPull);
+    pull_lift_ = v.robot.lift;
+    pull_handle_height_ = v.handle.z();
+  }
 }
 
 void OpenCabinetExpert::pull(const View& v, Command& c) {
@@ -157,10 +179,9 @@ Eigen::VectorXd OpenCabinetExpert::calcAction(const View& v, const Command& c) c
   const Eigen::Vector3d& goal = c.goal;
   const bool door = v.door;
   // Base: keep the goal at the nominal offset from the base.
-  const bool holding = phase_ == Phase::kClose || phase_ == Phase::kPull || phase_ == Phase::kHold;
   // Facing the handle; while a door turns, the base turns with it (the
   // arm alone runs out of wrist range), compensated in the arm below.
-  const double yaw_goal = std::atan2(-v.hx.y(), -v.hx.x());
+  const double yaw_goal = calcFacingYaw(v);
   const Eigen::Matrix2d goal_rotation = Eigen::Rotation2Dd(yaw_goal).toRotationMatrix();
   const Eigen::Vector2d base_goal = goal.head<2>() - goal_rotation * nominal_offset_;
   Eigen::Vector2d base_velocity = 3.0 * (base_goal - robot.base);
@@ -177,9 +198,20 @@ Eigen::VectorXd OpenCabinetExpert::calcAction(const View& v, const Command& c) c
   if (phase_ == Phase::kPull) yaw_rate *= yaw_follow_;
   if (phase_ == Phase::kHold || phase_ == Phase::kClose) yaw_rate = 0.0;
   yaw_rate = std::clamp(yaw_rate, -1.0, 1.0);
-  // Lift: the goal's height at the arm's nominal height.
-  const double lift_goal = std::clamp(goal.z() - nominal_height_, 0.0, 1.5);
-  const double lift_rate = holding ? 0.0 : 3.0 * (lift_goal - robot.lift);
+  // Lift: the goal's height at the arm's nominal height; still while the
+  // fingers close, pull and hold, except where the handle's motion has a
+  // vertical part (more than a tenth of its speed): a flap hinged at its
+  // top or bottom moves the handle up or down by its height, and at a
+  // fixed lift the hand ran out of reach at 85 % open. There it rises and
+  // falls as the handle has since the grasp; the arm takes the lift's
+  // motion out below. Drawers and doors on a vertical hinge move their
+  // handle level and keep the lift where the grasp left it.
+  double lift_goal = std::clamp(goal.z() - nominal_height_, 0.0, 1.5);
+  const bool lift_follows = phase_ == Phase::kPull && std::abs(v.motion.z()) > 0.1;
+  if (lift_follows) lift_goal = std::clamp(pull_lift_ + v.handle.z() - pull_handle_height_, 0.0, 1.5);
+  const bool lift_still = phase_ == Phase::kClose || phase_ == Phase::kHold || (phase_ == Phase::kPull && !lift_follows);
+  const double lift_rate =
+      lift_still ? 0.0 : std::clamp(3.0 * (lift_goal - robot.lift), -MobilePandaSpeeds::kLift, MobilePandaSpeeds::kLift);
   // Arm: the rest of the way, in the base frame.
   const double gain = phase_ == Phase::kPull && door ? door_speed_ / kDoorLead : 5.0;
   Eigen::Vector3d tcp_velocity = clipNorm(gain * (goal - tcp), kEeSpeed);
@@ -190,6 +222,7 @@ Eigen::VectorXd OpenCabinetExpert::calcAction(const View& v, const Command& c) c
   const Eigen::Vector3d lever = tcp - Eigen::Vector3d(robot.base.x(), robot.base.y(), tcp.z());
   arm_velocity -= Eigen::Vector3d(base_velocity.x(), base_velocity.y(), 0) +
                   Eigen::Vector3d(0, 0, yaw_rate).cross(lever);
+  if (lift_follows) arm_velocity.z() -= lift_rate;
   Eigen::Vector3d angular = 4.0 * v.orientation_error.angle() * v.orientation_error.axis();
   angular.z() -= yaw_rate;  // the base turns the hand too
   if (phase_ == Phase::kPull && door) angular += v.axis * v.qdot;  // turn with the door

@@ -34,11 +34,13 @@ OpenCabinetTask::OpenCabinetTask(const Config& config, TargetKind kind)
                  [facts = ObjectFacts(config, "open_cabinet")](const std::string& folder, const std::string& id) {
                    return loadPartNetCabinet(folder, id, facts);
                  },
-                 [](const CabinetModel& cabinet) {
-                   return cabinet.getTargets(TargetKind::kDoor).empty() && cabinet.getTargets(TargetKind::kDrawer).empty()
-                              ? "no door or drawer with a handle part (a visual or semantics.txt label naming 'handle')"
-                              : "";
-                 }, nullptr}) {
+                 [kind](const CabinetModel& cabinet) -> std::string {
+                   if (!cabinet.getTargets(TargetKind::kDoor).empty() || !cabinet.getTargets(TargetKind::kDrawer).empty())
+                     return "";
+                   if (!cabinet.refused.empty()) return "no door or drawer it can open: " + cabinet.refused.front().second;
+                   return "no door or drawer with a handle part (a visual or semantics.txt label naming 'handle')";
+                 },
+                 nullptr, [kind](const CabinetModel& cabinet) { return cabinet.getRefused(kind); }}) {
   config.requireKnownKeys(
       {"partnet_dir", "partnet_scale", "object_facts", "robot_dir", "static_speed", "static_angular_speed",
        "hold_steps"},

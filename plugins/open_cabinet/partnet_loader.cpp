@@ -12,6 +12,8 @@
 #include <manibench/kit/partnet.hpp>
 
 #include <algorithm>
+#include <iomanip>
+#include <limits>
 #include <sstream>
 
 namespace open_cabinet {
@@ -135,9 +137,40 @@ CabinetModel loadPartNetCabinet(const std::string& folder, const std::string& id
     doors = kept_doors;
     drawers = kept_drawers;
   }
+  // A target that, opened to B.4's threshold, would reach into the ground
+  // cannot be opened where the task stands the cabinet: a flap hinged at
+  // its bottom edge whose front (panel, handle) lies in front of the hinge
+  // turns below it, and the ground's contact holds it part-way (docs/
+  // partnet.md: two flaps of the survey stopped at 40-55 %, under any
+  // pull). Refused with the depth, so that a survey counts only doors a
+  // robot can open.
+  std::vector<TargetLink> reachable;
+  for (const TargetLink& t : cabinet.targets) {
+    const partnet::Joint* joint = object.findJoint(t.joint);
+    std::map<std::string, double> q = closed;
+    if (joint->limited) q[t.joint] = joint->lower + kOpenFraction * (joint->upper - joint->lower);
+    const Eigen::Isometry3d link_pose = object.calcLinkPoses(q).at(t.link);
+    double lowest = std::numeric_limits<double>::infinity();
+    for (const partnet::Link& link : object.links)
+      if (link.name == t.link)
+        for (const partnet::Shape& v : link.visuals)
+          for (const Eigen::Vector3d& p : object.calcShapePoints(v)) lowest = std::min(lowest, (link_pose * p).z());
+    const double depth = -(lowest + cabinet.placement.z());
+    if (depth > 0) {
+      std::ostringstream why;
+      why << t.link << ": it reaches " << std::fixed << std::setprecision(1) << 100 * depth
+          << " cm into the ground before it opens " << int(100 * kOpenFraction) << " %";
+      cabinet.refused.emplace_back(t.kind, why.str());
+      (t.kind == TargetKind::kDoor ? doors : drawers)--;
+    } else {
+      reachable.push_back(t);
+    }
+  }
+  cabinet.targets = std::move(reachable);
   std::ostringstream summary;
   summary << "PartNet-Mobility " << id << " at scale " << scale << (facts.hasOwnScale(id) ? " (its object facts')" : "") << ", " << doors
           << " doors, " << drawers << " drawers with handles";
+  for (const auto& [kind, why] : cabinet.refused) summary << "; refused: " << why;
   cabinet.summary = summary.str();
   return cabinet;
 }

@@ -43,7 +43,7 @@ PushChairTask::PushChairTask(const Config& config)
                [facts = ObjectFacts(config, "push_chair")](const std::string& folder, const std::string& id) {
                  return loadPartNetChair(folder, id, facts.calcScale(id));
                },
-               nullptr, nullptr}) {
+               nullptr, nullptr, nullptr}) {
   config.requireKnownKeys(
       {"partnet_dir", "partnet_scale", "object_facts", "robot_dir", "static_speed", "static_angular_speed",
        "hold_steps"},

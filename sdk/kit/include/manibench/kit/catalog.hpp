@@ -36,6 +36,10 @@ class ObjectCatalog {
     std::function<std::string(const Model&)> check;
     // Runs on every model once it is made (writing its mesh files, say).
     std::function<void(Model&)> finish;
+    // What of a PartNet model the family can use it leaves out (a part it
+    // cannot make a task of), each with its reason: named once per process
+    // on stderr as a skipped object is. May be empty.
+    std::function<std::vector<std::string>(const Model&)> notes;
   };
 
   // `task` and `noun` name the objects in warnings ("OpenCabinetDrawer",
@@ -66,19 +70,21 @@ class ObjectCatalog {
     std::vector<std::string> ids;
     for (const std::string& id : partnet::listObjectIds(partnet_dir_, split)) {
       std::string reason;
+      std::vector<std::string> notes;
       try {
         const std::shared_ptr<const Model> model = get(id);
         if (source_.check) reason = source_.check(*model);
+        if (source_.notes && reason.empty()) notes = source_.notes(*model);
       } catch (const std::exception& e) {
         models_.erase(id);
         reason = e.what();
       }
-      if (reason.empty()) {
-        ids.push_back(id);
-      } else if (skipped_.insert(id).second) {
-        std::cerr << "manibench: warning: " << task_ << ": skipping PartNet " << noun_ << " " << id << " ("
-                  << (std::filesystem::path(partnet_dir_) / id).string() << "): " << reason << "\n";
-      }
+      if (reason.empty()) ids.push_back(id);
+      if (!skipped_.insert(id).second) continue;
+      const std::string what = "manibench: warning: " + task_ + ": " + (reason.empty() ? "" : "skipping ") + "PartNet " +
+                               noun_ + " " + id + " (" + (std::filesystem::path(partnet_dir_) / id).string() + "): ";
+      if (!reason.empty()) std::cerr << what << reason << "\n";
+      for (const std::string& note : notes) std::cerr << what << "leaving out " << note << "\n";
     }
     return ids;
   }
@@ -87,7 +93,7 @@ class ObjectCatalog {
   std::string task_, noun_, partnet_dir_;
   Source source_;
   mutable std::map<std::string, std::shared_ptr<Model>> models_;
-  mutable std::set<std::string> skipped_;
+  mutable std::set<std::string> skipped_;  // named on stderr already
 };
 
 // The task key `partnet_dir`: empty (the family's generator) or a folder;
