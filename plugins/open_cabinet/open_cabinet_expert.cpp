@@ -33,6 +33,14 @@ constexpr double kFingerTravel = 0.04;
 // top over a drawer, a door's frame (the survey's not_grasped: 12 of 28
 // table drawer episodes, 10 of 50 cabinet door episodes, before).
 constexpr double kFingerClearance = 0.015;
+// The level hand's TCP comes no lower than this above the ground: its
+// palm spans some 20 cm across the grip, and on a horizontal bar the
+// fingers close vertically (on the survey's lowest level bar the TCP
+// stopped at 0.100 m over a handle at 0.063 m: docs/partnet.md). Lower
+// grips are grasped tilted, by up to kLowGripTilt for a grip at the
+// ground.
+constexpr double kLowestLevelGrasp = 0.11;
+constexpr double kLowGripTilt = M_PI / 3;
 
 }  // namespace
 
@@ -58,6 +66,7 @@ struct OpenCabinetExpert::View {
   double open_action = 1;        // the gripper action that opens the fingers just around the handle
   Eigen::Vector3d motion;        // the handle's direction of motion as the joint opens
   Eigen::Matrix3d grasp_rotation;       // the TCP's at the grasp
+  Eigen::Vector3d out;                  // the way the hand comes to the grip from (hx unless tilted)
   Eigen::AngleAxisd orientation_error;  // from the TCP to the grasp orientation
 };
 
@@ -93,6 +102,21 @@ OpenCabinetExpert::View OpenCabinetExpert::read(const sdk::Observation& observat
   v.motion = motion.norm() > 1e-9 ? Eigen::Vector3d(motion.normalized()) : Eigen::Vector3d(hx);
   v.grasp_rotation = (Eigen::Matrix3d() << hz, hy, -hx).finished();
   if (grasp_turned_) v.grasp_rotation = v.grasp_rotation * Eigen::Vector3d(-1, -1, 1).asDiagonal();
+  v.out = hx;
+  // A level grip lower than the hand's reach down: tilted about the grip
+  // (the TCP's x) so that the hand comes from above, the fingers still
+  // closing across the grip.
+  if (std::abs(hz.z()) < 0.5 && v.handle.z() < kLowestLevelGrasp) {
+    const double tilt = kLowGripTilt * std::clamp((kLowestLevelGrasp - v.handle.z()) / kLowestLevelGrasp, 0.0, 1.0);
+    for (const double sign : {1.0, -1.0}) {
+      const Eigen::Matrix3d r = v.grasp_rotation * Eigen::AngleAxisd(sign * tilt, Eigen::Vector3d::UnitX()).toRotationMatrix();
+      if (-r.col(2).z() > 0) {
+        v.grasp_rotation = r;
+        v.out = -r.col(2);
+        break;
+      }
+    }
+  }
   v.orientation_error = Eigen::AngleAxisd(v.grasp_rotation * v.robot.tcp_rotation[0].transpose());
   return v;
 }
@@ -132,7 +156,7 @@ double OpenCabinetExpert::calcFacingYaw(const View& v) const {
 
 // To 12 cm in front of the grip (after a slip: open in place first).
 void OpenCabinetExpert::approach(const View& v, Command& c) {
-  c.goal = v.handle + 0.12 * v.hx;
+  c.goal = v.handle + 0.12 * v.out;
   if (phase_ == Phase::kPreGrasp && phase_steps_ < 5) {
     c.goal = v.tcp;
     return;
@@ -143,7 +167,7 @@ void OpenCabinetExpert::approach(const View& v, Command& c) {
 }
 
 void OpenCabinetExpert::grasp(const View& v, Command& c) {
-  c.goal = v.handle + 0.005 * v.hx;
+  c.goal = v.handle + 0.005 * v.out;
   if ((c.goal - v.tcp).norm() < 0.01 || phase_steps_ > 20) enter(Phase::kClose);
 }
 
