@@ -98,20 +98,33 @@ class StderrCapture {
   int saved_ = -1;
 };
 
-// Object ids -> reasons from the catalog's warning lines.
-std::map<std::string, std::string> parseSkipWarnings(const std::string& text) {
+// What the catalog's warning lines say, by object id (kit/catalog.hpp):
+// the objects it skipped with the reason, and the targets it left out of
+// objects it kept ("link_0: it reaches 2.5 cm into the ground ...").
+struct ListingWarnings {
   std::map<std::string, std::string> skipped;
+  std::map<std::string, std::vector<std::string>> left_out;
+};
+
+ListingWarnings parseListingWarnings(const std::string& text) {
+  ListingWarnings warnings;
   std::istringstream in(text);
   for (std::string line; std::getline(in, line);) {
-    const std::size_t at = line.find(": skipping PartNet ");
-    if (at == std::string::npos) continue;
-    std::istringstream words(line.substr(at + 19));
+    const bool skipping = line.find(": skipping PartNet ") != std::string::npos;
+    const std::size_t at = line.find(skipping ? ": skipping PartNet " : ": PartNet ");
+    const std::size_t reason = line.find("): ", at);
+    if (at == std::string::npos || reason == std::string::npos) continue;
+    std::istringstream words(line.substr(line.find("PartNet ", at) + 8));
     std::string noun, id;
     words >> noun >> id;
-    const std::size_t reason = line.find("): ", at);
-    if (!id.empty()) skipped[id] = reason == std::string::npos ? line : line.substr(reason + 3);
+    if (id.empty()) continue;
+    const std::string what = line.substr(reason + 3);
+    if (skipping)
+      warnings.skipped[id] = what;
+    else if (what.rfind("leaving out ", 0) == 0)
+      warnings.left_out[id].push_back(what.substr(12));
   }
-  return skipped;
+  return warnings;
 }
 
 // The object an id belongs to: "40147_link_0" -> "40147".
@@ -219,9 +232,19 @@ void surveyCategory(SurveyRun& run, const std::string& dir, SurveyReport& report
     build_error = e.what();  // no object of the folder loads
   }
   const double listing_s = mb::secondsSince(listing);
-  std::map<std::string, std::string> refused = parseSkipWarnings(capture.finish());
+  ListingWarnings warnings = parseListingWarnings(capture.finish());
+  std::map<std::string, std::string>& refused = warnings.skipped;
   if (env)
     for (const auto& [id, reason] : env->getSkippedObjects()) refused[getGroup(id)] = reason;
+  // An object whose every target was left out has no id in the listing:
+  // refused, with the reasons, rather than missing from the survey.
+  for (const auto& [id, notes] : warnings.left_out) {
+    const bool listed = std::any_of(ids.begin(), ids.end(), [&](const std::string& i) { return getGroup(i) == id; });
+    if (listed || refused.count(id)) continue;
+    std::string reason = "every target left out:";
+    for (const std::string& note : notes) reason += (reason.back() == ':' ? " " : "; ") + note;
+    refused[id] = reason;
+  }
   report.addCategory(category, dir, listing_s, build_error);
   for (const auto& [id, reason] : refused) report.addRefused(category, id, reason);
   if (!env) return;
@@ -234,6 +257,7 @@ void surveyCategory(SurveyRun& run, const std::string& dir, SurveyReport& report
       SurveyObject object;
       object.category = category;
       object.object = group;
+      if (warnings.left_out.count(group)) object.left_out = warnings.left_out.at(group);
       try {
         const mb::Clock::time_point cold = mb::Clock::now();
         env->loadObject(id);

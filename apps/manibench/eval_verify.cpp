@@ -168,6 +168,8 @@ void compareRecords(const EpisodeRecord& was, const EpisodeRecord& is) {
     const int a = c < was.flags.size() ? was.flags[c] : -1, b = c < is.flags.size() ? is.flags[c] : -1;
     if (a != b) differ("condition " + std::to_string(c), std::to_string(a), std::to_string(b));
   }
+  if (std::memcmp(&was.max_opened, &is.max_opened, sizeof(double)) != 0)
+    differ("max_opened", text(was.max_opened), text(is.max_opened));
   if (was.failure != is.failure) differ("failure", "'" + was.failure + "'", "'" + is.failure + "'");
   if (was.failure_step != is.failure_step)
     differ("failure step", std::to_string(was.failure_step), std::to_string(is.failure_step));

@@ -104,7 +104,10 @@ std::vector<SurveyReport::Summary> SurveyReport::summarize() const {
     Summary s;
     s.category = c.name;
     for (const SurveyObject& o : objects_)
-      if (o.category == c.name) (o.refused ? s.refused : s.objects)++;
+      if (o.category == c.name) {
+        (o.refused ? s.refused : s.objects)++;
+        s.left_out += int(o.left_out.size());
+      }
     std::map<std::string, bool> solved;
     for (const SurveyEpisode& e : episodes_) {
       if (e.category != c.name) continue;
@@ -118,6 +121,7 @@ std::vector<SurveyReport::Summary> SurveyReport::summarize() const {
     all.objects += s.objects;
     all.refused += s.refused;
     all.targets += s.targets;
+    all.left_out += s.left_out;
     all.targets_solved += s.targets_solved;
     all.episodes += s.episodes;
     all.successes += s.successes;
@@ -135,6 +139,10 @@ void SurveyReport::print(std::ostream& out) const {
     if (!c.error.empty()) out << "  " << c.name << ": no object loads: " << c.error << "\n";
     for (const SurveyObject& o : objects_)
       if (o.category == c.name && o.refused) out << "  " << std::left << std::setw(22) << o.object << " refused: " << o.reason << "\n";
+    for (const SurveyObject& o : objects_)
+      if (o.category == c.name)
+        for (const std::string& note : o.left_out)
+          out << "  " << std::left << std::setw(22) << o.object << " left out " << note << "\n";
     std::vector<std::string> ids;
     for (const SurveyEpisode& e : episodes_)
       if (e.category == c.name && (ids.empty() || ids.back() != e.object_id)) ids.push_back(e.object_id);
@@ -160,15 +168,18 @@ void SurveyReport::print(std::ostream& out) const {
   }
   out << "\nper category:\n"
       << "  " << std::left << std::setw(18) << "category" << std::right << std::setw(8) << "objects" << std::setw(8)
-      << "refused" << std::setw(8) << "targets" << std::setw(9) << "episodes" << std::setw(10) << "success"
+      << "refused" << std::setw(8) << "targets" << std::setw(10) << "left out" << std::setw(9) << "episodes"
+      << std::setw(10) << "success"
       << std::setw(14) << "solved" << "  failures\n";
   for (const Summary& s : summarize())
     out << "  " << std::left << std::setw(18) << s.category << std::right << std::setw(8) << s.objects
-        << std::setw(8) << s.refused << std::setw(8) << s.targets << std::setw(9) << s.episodes << std::setw(10)
+        << std::setw(8) << s.refused << std::setw(8) << s.targets << std::setw(10) << s.left_out << std::setw(9)
+        << s.episodes << std::setw(10)
         << percent(s.successes, s.episodes) << std::setw(14)
         << (std::to_string(s.targets_solved) + "/" + std::to_string(s.targets)) << "  "
         << describeOutcomes(s.outcomes) << "\n";
-  out << "(solved: targets with a success within the levels)\n";
+  out << "(solved: targets with a success within the levels; left out: parts the task does not make targets,\n"
+         " named above with the reason)\n";
 }
 
 std::vector<std::string> SurveyReport::write(const std::string& dir) const {
@@ -186,11 +197,14 @@ std::vector<std::string> SurveyReport::write(const std::string& dir) const {
              << csvField(e.message) << "\n";
   writeFile(fs::path(dir) / "episodes.csv", episodes.str(), written);
   std::ostringstream objects;
-  objects << "category,object,status,first_load_s,again_s,reason\n";
-  for (const SurveyObject& o : objects_)
+  objects << "category,object,status,first_load_s,again_s,reason,left_out\n";
+  for (const SurveyObject& o : objects_) {
+    std::string left_out;
+    for (const std::string& note : o.left_out) left_out += (left_out.empty() ? "" : "; ") + note;
     objects << csvField(o.category) << "," << csvField(o.object) << "," << (o.refused ? "refused" : "loaded") << ","
             << (o.refused ? "" : formatNumber(o.first_load_s, 4)) << "," << (o.refused ? "" : formatNumber(o.again_s, 4))
-            << "," << csvField(o.reason) << "\n";
+            << "," << csvField(o.reason) << "," << csvField(left_out) << "\n";
+  }
   writeFile(fs::path(dir) / "objects.csv", objects.str(), written);
 
   nlohmann::json json;
@@ -205,6 +219,7 @@ std::vector<std::string> SurveyReport::write(const std::string& dir) const {
                                   {"objects", s.objects},
                                   {"refused", s.refused},
                                   {"targets", s.targets},
+                                  {"targets_left_out", s.left_out},
                                   {"targets_solved", s.targets_solved},
                                   {"episodes", s.episodes},
                                   {"successes", s.successes},

@@ -26,6 +26,9 @@ struct SurveyObject {
   std::string category, object;
   bool refused = false;
   std::string reason;  // why it was refused
+  // Its parts the task leaves out as targets, each with why ("link_0: it
+  // reaches 2.5 cm into the ground before it opens 90 %").
+  std::vector<std::string> left_out;
   double first_load_s = 0, again_s = 0;  // its scene built in this process the first time, then again
 };
 
@@ -48,6 +51,7 @@ class SurveyReport {
     std::string category;
     int objects = 0, refused = 0;  // physical objects loaded, refused
     int targets = 0;               // task object ids with episodes
+    int left_out = 0;              // targets of loaded objects left out (no episodes)
     int targets_solved = 0;        // of those, with a success in the levels
     int episodes = 0, successes = 0;
     std::map<std::string, int> outcomes;

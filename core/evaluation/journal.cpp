@@ -3,11 +3,13 @@
 // numbers (doubles round-trip through nlohmann's shortest representation).
 // Shards and resumed runs are merged from journals, not from the CSV files,
 // whose rounded returns would not give the single run's means bit for bit.
+#include <cmath>
 #include <fcntl.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -170,6 +172,8 @@ std::string formatJournalEpisode(const EpisodeRecord& r) {
   e["success"] = r.success;
   e["flags"] = r.flags;
   e["success_once"] = r.success_once;
+  // Only where the task measures an opening (NaN has no JSON form).
+  if (std::isfinite(r.max_opened)) e["max_opened"] = r.max_opened;
   e["failure"] = r.failure;
   e["failure_step"] = r.failure_step;
   putText(e, "message", r.message);
@@ -241,6 +245,7 @@ EvaluationJournal readJournal(const std::string& path) {
       // Journals from before the field: the early done made them equal.
       r.success_once = json.value("success_once", r.success);
       r.flags = json.at("flags").get<std::vector<uint8_t>>();
+      if (json.contains("max_opened")) r.max_opened = json.at("max_opened").get<double>();
       r.failure = json.at("failure");
       r.failure_step = json.at("failure_step");
       r.message = getText(json, "message");

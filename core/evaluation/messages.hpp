@@ -45,7 +45,7 @@ void transferRun(Stream& s, Spec& spec) {
 template <class Stream, class Record>
 void transferResult(Stream& s, Record& r) {
   s.fields(r.spec.index, r.steps, r.total_reward, r.success, r.success_once, r.flags, r.failure, r.failure_step,
-           r.message, r.seconds, r.sources);
+           r.message, r.seconds, r.sources, r.max_opened);
 }
 
 // After kResult's record: a recorded trajectory (a u8 says whether one

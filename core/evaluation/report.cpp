@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <iterator>
 #include <manibench/evaluation.hpp>
 #include <manibench/statistics.hpp>
 #include <map>
@@ -81,12 +82,27 @@ std::string jsonArray(const std::vector<T>& items, F format) {
   return out + "]";
 }
 
+constexpr std::size_t kFractions = std::size(kOpeningFractions);
+
+// "opened_0.25": an opening-curve column's name.
+std::string openedColumn(double fraction) { return "opened_" + formatNumber(fraction, 6); }
+
 EvaluationSummary summarize(const std::string& object_id,
                             const std::vector<const EpisodeRecord*>& episodes,
-                            std::size_t conditions) {
+                            std::size_t conditions, bool opening) {
   EvaluationSummary s;
   s.object_id = object_id;
   s.condition_rates.assign(conditions, 0);
+  if (opening) {
+    s.opened_counts.assign(kFractions, 0);
+    for (const EpisodeRecord* r : episodes)
+      for (std::size_t f = 0; f < kFractions; ++f)
+        if (r->max_opened >= kOpeningFractions[f]) ++s.opened_counts[f];  // NaN: not reached
+    for (const uint32_t count : s.opened_counts)
+      s.opened_rates.push_back(episodes.empty() ? 0.0 : double(count) / double(episodes.size()));
+    s.opened_low.assign(kFractions, 0);
+    s.opened_high.assign(kFractions, 0);
+  }
   double total_return = 0, total_steps = 0;
   for (const EpisodeRecord* r : episodes) {
     ++s.episodes;
@@ -124,8 +140,18 @@ void writeSummaryJson(std::ostream& out, const EvaluationSummary& s,
   for (std::size_t c = 0; c < conditions.size(); ++c)
     out << (c ? ", " : "") << escapeJson(conditions[c]) << ": "
         << jsonNumber(c < s.condition_rates.size() ? s.condition_rates[c] : 0, 6);
-  out << "},\n"
-      << indent << " \"mean_return\": " << jsonNumber(s.mean_return, 9)
+  out << "},\n";
+  // The opening curve (kOpeningFractions), where the task measures openings.
+  if (!s.opened_counts.empty()) {
+    out << indent << " \"opening_curve\": [";
+    for (std::size_t f = 0; f < s.opened_counts.size(); ++f)
+      out << (f ? ", " : "") << "{\"fraction\": " << jsonNumber(kOpeningFractions[f], 6)
+          << ", \"episodes\": " << s.opened_counts[f] << ", \"rate\": " << jsonNumber(s.opened_rates[f], 6)
+          << ", \"interval\": [" << jsonNumber(s.opened_low[f], 6) << ", " << jsonNumber(s.opened_high[f], 6)
+          << "]}";
+    out << "],\n";
+  }
+  out << indent << " \"mean_return\": " << jsonNumber(s.mean_return, 9)
       << ", \"mean_steps\": " << jsonNumber(s.mean_steps, 6) << "}";
 }
 
@@ -151,21 +177,31 @@ void summarizeEvaluation(EvaluationResult& result) {
     groups[r.spec.object_id].push_back(&r);
     all.push_back(&r);
   }
+  // The opening curve where the task measures openings (any episode has).
+  const bool opening = std::any_of(result.episodes.begin(), result.episodes.end(),
+                                   [](const EpisodeRecord& r) { return std::isfinite(r.max_opened); });
   result.objects.clear();
   for (const std::string& object : order)
     if (!groups[object].empty())
-      result.objects.push_back(summarize(object, groups[object], conditions));
-  result.overall = summarize("all", all, conditions);
+      result.objects.push_back(summarize(object, groups[object], conditions, opening));
+  result.overall = summarize("all", all, conditions, opening);
   std::vector<uint32_t> successes, successes_once, episodes;
+  std::vector<std::vector<uint32_t>> opened(result.overall.opened_counts.size());
   for (EvaluationSummary& s : result.objects) {
     calcWilsonInterval(s.successes, s.episodes, s.success_low, s.success_high);
     calcWilsonInterval(s.successes_once, s.episodes, s.success_once_low, s.success_once_high);
+    for (std::size_t f = 0; f < s.opened_counts.size(); ++f) {
+      calcWilsonInterval(s.opened_counts[f], s.episodes, s.opened_low[f], s.opened_high[f]);
+      opened[f].push_back(s.opened_counts[f]);
+    }
     successes.push_back(s.successes);
     successes_once.push_back(s.successes_once);
     episodes.push_back(s.episodes);
   }
   calcOverallInterval(successes, episodes, result.overall.success_low, result.overall.success_high);
   calcOverallInterval(successes_once, episodes, result.overall.success_once_low, result.overall.success_once_high);
+  for (std::size_t f = 0; f < opened.size(); ++f)
+    calcOverallInterval(opened[f], episodes, result.overall.opened_low[f], result.overall.opened_high[f]);
 }
 
 void printEvaluationTable(std::ostream& out, const EvaluationResult& result) {
@@ -177,8 +213,11 @@ void printEvaluationTable(std::ostream& out, const EvaluationResult& result) {
     object_width = std::max(object_width, s.object_id.size() + 2);
   std::vector<std::size_t> widths;
   for (const std::string& c : conditions) widths.push_back(std::max<std::size_t>(c.size() + 2, 9));
+  // Without the early done success_once differs from success (at the end).
+  const bool once = !result.options.early_done;
   out << std::left << std::setw(int(object_width)) << "object" << std::right << std::setw(9)
       << "episodes" << std::setw(10) << "success" << std::setw(17) << "95% interval";
+  if (once) out << std::setw(7) << "once" << std::setw(17) << "95% interval";
   for (std::size_t c = 0; c < conditions.size(); ++c)
     out << std::setw(int(widths[c])) << conditions[c];
   out << std::setw(9) << "failed" << std::setw(13) << "mean return" << std::setw(12) << "mean steps"
@@ -187,6 +226,9 @@ void printEvaluationTable(std::ostream& out, const EvaluationResult& result) {
     out << std::left << std::setw(int(object_width)) << s.object_id << std::right << std::setw(9)
         << s.episodes << std::setw(10) << std::fixed << std::setprecision(3) << s.success_rate
         << std::setw(17) << formatInterval(s.success_low, s.success_high);
+    if (once)
+      out << std::setw(7) << s.success_once_rate << std::setw(17)
+          << formatInterval(s.success_once_low, s.success_once_high);
     for (std::size_t c = 0; c < conditions.size(); ++c)
       out << std::setw(int(widths[c])) << s.condition_rates[c];
     out << std::setw(9) << s.failures << std::setw(13) << std::setprecision(3) << s.mean_return
@@ -194,10 +236,19 @@ void printEvaluationTable(std::ostream& out, const EvaluationResult& result) {
     out.unsetf(std::ios::fixed);
   };
   for (const EvaluationSummary& s : result.objects) row(s);
-  std::size_t width = object_width + 9 + 10 + 17 + 9 + 13 + 12;
+  std::size_t width = object_width + 9 + 10 + 17 + 9 + 13 + 12 + (once ? 7 + 17 : 0);
   for (std::size_t w : widths) width += w;
   out << std::string(width, '-') << "\n";
   row(result.overall);
+  const EvaluationSummary& all = result.overall;
+  if (!all.opened_counts.empty()) {
+    out << "\nopened at least (at any step):";
+    for (std::size_t f = 0; f < all.opened_counts.size(); ++f)
+      out << (f ? "," : "") << " " << formatNumber(100 * kOpeningFractions[f], 3) << " % " << std::fixed
+          << std::setprecision(3) << all.opened_rates[f] << " " << formatInterval(all.opened_low[f], all.opened_high[f]);
+    out.unsetf(std::ios::fixed);
+    out << "\n";
+  }
 
   std::map<std::string, std::size_t> reasons;
   const EpisodeRecord* first = nullptr;
@@ -223,6 +274,11 @@ void writeSummaryCsv(std::ostream& out, const EvaluationResult& result) {
   out << "object,episodes,successes,failures,success_rate,success_low,success_high,successes_once,"
          "success_once_rate,success_once_low,success_once_high";
   for (const std::string& c : conditions) out << "," << escapeCsv("condition_" + c);
+  if (!result.overall.opened_counts.empty())
+    for (const double fraction : kOpeningFractions) {
+      const std::string column = openedColumn(fraction);
+      out << "," << column << "," << column << "_low," << column << "_high";
+    }
   out << ",mean_return,mean_steps\n";
   auto row = [&](const EvaluationSummary& s) {
     out << escapeCsv(s.object_id) << "," << s.episodes << "," << s.successes << "," << s.failures
@@ -230,6 +286,9 @@ void writeSummaryCsv(std::ostream& out, const EvaluationResult& result) {
         << formatRate(s.success_high) << "," << s.successes_once << "," << formatRate(s.success_once_rate)
         << "," << formatRate(s.success_once_low) << "," << formatRate(s.success_once_high);
     for (double rate : s.condition_rates) out << "," << formatRate(rate);
+    for (std::size_t f = 0; f < s.opened_counts.size(); ++f)
+      out << "," << formatRate(s.opened_rates[f]) << "," << formatRate(s.opened_low[f]) << ","
+          << formatRate(s.opened_high[f]);
     out << "," << formatReturn(s.mean_return) << "," << formatRate(s.mean_steps) << "\n";
   };
   for (const EvaluationSummary& s : result.objects) row(s);
@@ -240,13 +299,15 @@ void writeEpisodesCsv(std::ostream& out, const EvaluationResult& result) {
   const std::vector<std::string>& conditions = result.task.condition_names;
   out << "index,object,level,seed,steps,return,success,success_once,success_at_end";
   for (const std::string& c : conditions) out << "," << escapeCsv(c);
-  out << ",failure,failure_step,message\n";
+  out << ",max_opened,failure,failure_step,message\n";
   for (const EpisodeRecord& r : result.episodes) {
     out << r.spec.index << "," << escapeCsv(r.spec.object_id) << "," << r.spec.level << ","
         << r.spec.seed << "," << r.steps << "," << formatReturn(r.total_reward) << ","
         << (r.success ? 1 : 0) << "," << (r.success_once ? 1 : 0) << "," << (r.success ? 1 : 0);
     for (std::size_t c = 0; c < conditions.size(); ++c)
       out << "," << (c < r.flags.size() && r.flags[c] ? 1 : 0);
+    // Empty where the task measures no opening, and for failed episodes.
+    out << "," << (std::isnan(r.max_opened) ? "" : formatNumber(r.max_opened, 9));
     out << "," << escapeCsv(r.failure) << ",";
     if (r.failure_step >= 0) out << r.failure_step;
     out << "," << escapeCsv(r.message) << "\n";

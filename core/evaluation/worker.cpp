@@ -6,6 +6,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -82,9 +83,19 @@ After runWorkerEpisode(Environment& env, ActingPolicy& policy, Slot& slot,
     slot.step.store(step);
     enterPhase(slot, toWorkerPhase(phase));
   };
-  hooks.on_step = [&slot, &record](const StepResult&, const EpisodeResult& so_far) {
+  // The opening curve's input: the task's `opened` signal, after the reset
+  // and each step (measureProgress reads the scene and changes nothing).
+  const std::vector<std::string>& signals = env.getTaskDescription().progress_signals;
+  const auto opened_signal = std::find(signals.begin(), signals.end(), "opened");
+  const auto measureOpened = [&] {
+    if (opened_signal == signals.end()) return;
+    const double opened = env.measureProgress()[std::size_t(opened_signal - signals.begin())];
+    record.max_opened = std::isnan(record.max_opened) ? opened : std::max(record.max_opened, opened);
+  };
+  hooks.on_step = [&slot, &record, &measureOpened](const StepResult&, const EpisodeResult& so_far) {
     record.total_reward = so_far.total_reward;
     slot.total_reward.store(record.total_reward);
+    measureOpened();
     return true;
   };
   // Exploration noise: N(0, action_noise^2) on every action value, from a
@@ -104,6 +115,7 @@ After runWorkerEpisode(Environment& env, ActingPolicy& policy, Slot& slot,
   bool scene_ready = false;  // the episode's scene is built: its sources count
   hooks.on_reset = [&] {
     scene_ready = true;
+    measureOpened();
     if (recorder) recorder->onReset(record.spec.object_id, record.spec.level, record.spec.seed);
   };
   if (record_trajectory) {
@@ -128,6 +140,7 @@ After runWorkerEpisode(Environment& env, ActingPolicy& policy, Slot& slot,
     record.success = false;
     record.success_once = false;
     record.flags.assign(conditions, 0);
+    record.max_opened = std::numeric_limits<double>::quiet_NaN();
     // The policy object may be in any state after failing: a new one.
     after = After::kNewPolicy;
     if (const auto* process = dynamic_cast<const PolicyProcessFailure*>(&e)) {
@@ -161,6 +174,7 @@ After runWorkerEpisode(Environment& env, ActingPolicy& policy, Slot& slot,
         record.success = false;
         record.success_once = false;
         record.flags.assign(conditions, 0);
+        record.max_opened = std::numeric_limits<double>::quiet_NaN();
         record.failure_step = record.steps;
         record.message = std::string("hashing the scene's files: ") + e.what();
       }

@@ -159,7 +159,8 @@ class OpenCabinetTask : public sdk::Task {
   std::vector<sdk::Condition> evaluateSuccess(const SceneView& scene) override;
   // reached (the gripper within kContactDistance of the grip), holding
   // (both fingers press on the target link), progress (the opened fraction
-  // over B.4's), blocked (the robot's body touches anything).
+  // over B.4's), blocked (the robot's body touches anything), opened (the
+  // opened fraction of the joint range: the evaluation's opening curve).
   std::vector<double> measureProgress(const SceneView& scene) const override;
 
   // The reward as a function of the quantities it reads (C.1.1), for tests:

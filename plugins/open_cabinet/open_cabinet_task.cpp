@@ -72,7 +72,7 @@ sdk::TaskSpec OpenCabinetTask::describe() const {
   spec.observation.insert(spec.observation.end(), object.begin(), object.end());
   spec.success_conditions = {"open_enough", "static", "success"};
   spec.success_hold_steps = hold_steps_;
-  spec.progress_signals = {"reached", "holding", "progress", "blocked"};
+  spec.progress_signals = {"reached", "holding", "progress", "blocked", "opened"};
   spec.masks = {"handle", "target_link", "robot"};
   // ManiSkill v1 friction: cabinet 1, finger pads 2; the robot's head cameras.
   spec.default_config = "physics:\n  contact:\n    bodies:\n"
@@ -205,7 +205,7 @@ std::vector<double> OpenCabinetTask::measureProgress(const SceneView& scene) con
   constexpr double kTouch = 1.0;
   return {m.handle_distance < kContactDistance ? 1.0 : 0.0,
           robot_->isHolding(scene, target_link_, 0, kTouch) ? 1.0 : 0.0, m.open_fraction / kOpenFraction,
-          robot_->calcBodyContactForce(scene) > kTouch ? 1.0 : 0.0};
+          robot_->calcBodyContactForce(scene) > kTouch ? 1.0 : 0.0, m.open_fraction};
 }
 
 }  // namespace open_cabinet

@@ -51,6 +51,11 @@ def read_eval(directory: str) -> dict[str, Any]:
         if row.get("success_low") not in (None, ""):
             values["success_interval"] = (float(row["success_low"]), float(row["success_high"]))
         values.update({c: float(row["condition_" + c]) for c in conditions})
+        # The opening curve (doors, drawers): opened_<fraction> with its
+        # interval, in summary.csv's order; none for other tasks.
+        values["opening_curve"] = [(float(c[len("opened_"):]), float(row[c]), float(row[c + "_low"]),
+                                    float(row[c + "_high"]))
+                                   for c in row if c.startswith("opened_") and not c.endswith(("_low", "_high"))]
         if row["object"] == "all":
             overall = values
         else:
@@ -74,9 +79,14 @@ def plot_eval(directories: list[str]):
     for r in results:
         objects += [o for o in r["objects"] if o not in objects]
     width = 0.8 / len(results)
-    fig, axes = plt.subplots(len(metrics), 1, figsize=(max(6.0, 0.45 * len(objects) + 2), 2.4 * len(metrics)),
-                             squeeze=False, sharex=True)
-    for ax, metric in zip(axes[:, 0], metrics):
+    # With an opening curve, one more panel at the bottom: the overall rate
+    # of episodes that opened at least each fraction, per result folder.
+    curve = any(r["overall"] and r["overall"]["opening_curve"] for r in results)
+    rows = len(metrics) + (1 if curve else 0)
+    fig, axes = plt.subplots(rows, 1, figsize=(max(6.0, 0.45 * len(objects) + 2), 2.4 * rows), squeeze=False)
+    for ax in axes[1:len(metrics), 0]:
+        ax.sharex(axes[0, 0])
+    for ax, metric in zip(axes[:len(metrics), 0], metrics):
         ax.manibench_metric = "success_rate" if metric == "success_rate" else "condition_" + metric
         for i, r in enumerate(results):
             label = r["split"] or os.path.basename(os.path.normpath(directories[i]))
@@ -98,8 +108,29 @@ def plot_eval(directories: list[str]):
         ax.grid(axis="y", alpha=0.3)
     axes[0, 0].legend(loc="upper right", fontsize="small")
     axes[0, 0].set_title(f"{results[0]['task']}: {results[0]['policy']}, rate per object")
-    axes[-1, 0].set_xticks(range(len(objects)))
-    axes[-1, 0].set_xticklabels(objects, rotation=60, ha="right", fontsize="small")
+    for ax in axes[:len(metrics) - 1, 0]:
+        ax.tick_params(labelbottom=False)
+    bottom = axes[len(metrics) - 1, 0]
+    bottom.set_xticks(range(len(objects)))
+    bottom.set_xticklabels(objects, rotation=60, ha="right", fontsize="small")
+    if curve:
+        ax = axes[-1, 0]
+        ax.manibench_metric = "opening_curve"
+        for i, r in enumerate(results):
+            points = r["overall"]["opening_curve"] if r["overall"] else []
+            if not points:
+                continue
+            label = f"{r['policy']} ({r['split'] or os.path.basename(os.path.normpath(directories[i]))})"
+            xs, ys = [p[0] for p in points], [p[1] for p in points]
+            yerr = [[y - p[2] for y, p in zip(ys, points)], [p[3] - y for y, p in zip(ys, points)]]
+            ax.errorbar(xs, ys, yerr=yerr, marker="o", capsize=3, label=label)
+        ax.set_xlim(0, 1)
+        ax.set_ylim(0, 1.05)
+        ax.set_xlabel("fraction of the joint's range opened (at any step)")
+        ax.set_ylabel("episodes")
+        ax.set_title("opening curve, all objects (95 % intervals)", fontsize="medium")
+        ax.grid(alpha=0.3)
+        ax.legend(loc="lower left", fontsize="small")
     fig.tight_layout()
     return fig
 

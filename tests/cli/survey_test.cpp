@@ -117,6 +117,25 @@ TEST_F(SurveyTest, AnObjectTheTaskCannotUseIsRefusedWithItsReason) {
   EXPECT_EQ(readOutcomes(out).size(), 2u);
 }
 
+// A target the task leaves out (a flap that would open into the ground) is
+// named with its reason: an object whose only door it is appears refused,
+// not missing; the folder's other object is surveyed.
+TEST_F(SurveyTest, AnObjectWhoseEveryTargetIsLeftOutIsNamedWithTheReason) {
+  testing::FixtureCopy data("partnet_mini");
+  testing::makeFlap(data, true);
+  const fs::path out = dir_ / "out";
+  const auto r = runCli({"survey", "OpenCabinetDoor-v0", data.folder(), "--policy", "zero", "--episodes-per-object",
+                         "1", "--set", "task.partnet_scale=1", "--set", "episode.max_steps=5", "--out", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("100001                 refused: every target left out: link_0: it reaches "), std::string::npos)
+      << r.out;
+  const std::string objects = readFile(out / "objects.csv");
+  EXPECT_NE(objects.find(",100001,refused,,,every target left out: link_0: it reaches "), std::string::npos) << objects;
+  EXPECT_NE(objects.find(",100002,loaded,"), std::string::npos) << objects;
+  EXPECT_EQ(readOutcomes(out).size(), 1u);  // 100002's door
+  EXPECT_NE(readFile(out / "survey.json").find("\"targets_left_out\": 0"), std::string::npos);
+}
+
 // Two folders of one category (two downloads of it) are one category: one
 // row in the table, each object listed once.
 TEST_F(SurveyTest, TwoFoldersOfOneCategoryAreOneCategory) {

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -171,6 +172,51 @@ TEST(Environment, SwappingTheControllerChangesBehaviour) {
   for (int i = 0; i < 60; ++i) env.step(Eigen::VectorXd::Zero(2));
   const Eigen::VectorXd q1 = env.getScene().getJointPositions(0);
   EXPECT_LT(q1.cwiseAbs().maxCoeff(), 0.01) << q1.transpose();
+}
+
+// The evaluation reads the task's progress signals after the reset and
+// every step (the opening curve's `opened`): reading them changes nothing
+// that follows, bit for bit, and `opened` is the opened fraction the
+// open_enough condition compares with B.4's 90 %.
+TEST(Environment, MeasuringProgressAfterEveryStepLeavesTheEpisodeAsItIs) {
+  EnvironmentOptions options;
+  options.stop_on_success = false;
+  options.controller = "mobile_panda_ee";  // the expert's
+  Environment env(getBuildTreeRegistry(), "OpenCabinetDrawer-v0", options);
+  const std::string object = env.listObjects("test").front();
+  env.reset(object, 3);
+  PolicyInstance expert = makePolicy(env, "open_cabinet_expert");
+  const std::vector<std::string>& signals = env.getTaskDescription().progress_signals;
+  const auto opened = std::find(signals.begin(), signals.end(), "opened");
+  ASSERT_NE(opened, signals.end());
+  const std::size_t index = std::size_t(opened - signals.begin());
+  const auto run = [&](bool measure) {
+    std::vector<double> rewards;
+    double max_opened = -1;
+    std::size_t compared = 0;
+    EpisodeHooks hooks;
+    hooks.on_step = [&](const StepResult& step, const EpisodeResult&) {
+      rewards.push_back(step.reward);
+      if (measure) {
+        const double value = env.measureProgress()[index];
+        EXPECT_EQ(value, step.values.front()) << "step " << rewards.size();  // open_enough's value
+        max_opened = std::max(max_opened, value);
+        ++compared;
+      }
+      return true;
+    };
+    const EpisodeResult r = runEpisode(env, expert, object, 3, hooks);
+    if (measure) {
+      EXPECT_EQ(compared, r.steps);
+      EXPECT_GE(max_opened, 0.9) << "the expert opens the drawer";
+    }
+    rewards.push_back(r.total_reward);
+    return std::make_pair(rewards, env.saveState());
+  };
+  const auto plain = run(false), measured = run(true);
+  ASSERT_EQ(plain.first.size(), measured.first.size());
+  EXPECT_EQ(0, std::memcmp(plain.first.data(), measured.first.data(), plain.first.size() * sizeof(double)));
+  EXPECT_EQ(plain.second, measured.second) << "the final state";
 }
 
 }  // namespace

@@ -21,6 +21,9 @@ using testing::readFile;
 // The Reach expert on two episodes of one object: cheap, and it succeeds.
 const std::vector<std::string> kReach = {"Reach-v0", "--policy", "reach_expert", "--objects", "8", "--levels", "0-1"};
 
+// Two procedural drawer cabinets of the test split.
+const char* const kDrawerObjects = "2100_link_0,2101_link_2";
+
 std::vector<std::string> with(const std::vector<std::string>& extra) { return joinArguments(kReach, extra); }
 
 TEST(EvalProtocols, WithoutTheEarlyDoneEpisodesRunToTheLimitAndSuccessOnceIsTheEarlyDoneSuccess) {
@@ -81,6 +84,67 @@ TEST(EvalProtocols, WithoutTheEarlyDoneEpisodesRunToTheLimitAndSuccessOnceIsTheE
   const auto v = testing::runCli({"eval", "--verify", full.path().string()});
   EXPECT_EQ(v.exit_code, 0) << v.err << v.out;
   EXPECT_TRUE(contains(v.out, "verified: 2 episode(s) re-run")) << v.out;
+}
+
+// The opening curve (doors and drawers): each episode's max_opened is the
+// most of its range the target opened at any step; the summaries count the
+// episodes that reached each fraction, per object and overall, with their
+// intervals. The expert's curve lies above the random policy's; a task
+// without an opening (Reach) has none.
+TEST(EvalProtocols, TheOpeningCurveCountsTheEpisodesThatOpenedEachFraction) {
+  const std::vector<std::string> drawers = {"OpenCabinetDrawer-v0", "--objects", kDrawerObjects, "--levels", "0-1",
+                                            "--no-early-done"};
+  TempDir expert, random;
+  const auto a = runEval(expert, joinArguments(drawers, {"--policy", "open_cabinet_expert"}));
+  ASSERT_EQ(a.exit_code, 0) << a.err << a.out;
+  const auto b = runEval(random, joinArguments(drawers, {"--policy", "random"}));
+  ASSERT_EQ(b.exit_code, 0) << b.err << b.out;
+  const std::vector<std::string> fractions = {"0.25", "0.5", "0.75", "0.9"};
+  std::map<const TempDir*, double> at_90;
+  for (const TempDir* dir : {&expert, &random}) {
+    const auto episodes = readCsv(*dir / "episodes.csv");
+    ASSERT_EQ(episodes.size(), 4u);
+    for (const auto& e : episodes) {
+      ASSERT_FALSE(e.at("max_opened").empty()) << e.at("index");
+      const double opened = std::stod(e.at("max_opened"));
+      EXPECT_GE(opened, -0.01);
+      EXPECT_LE(opened, 1.01);
+      if (e.at("success") == "1") EXPECT_GE(opened, 0.9) << "B.4's success opens 90 %";
+    }
+    for (const auto& row : readCsv(*dir / "summary.csv")) {
+      double previous = 1;
+      for (const std::string& f : fractions) {
+        std::size_t n = 0, reached = 0;
+        for (const auto& e : episodes)
+          if (row.at("object") == "all" || e.at("object") == row.at("object")) {
+            ++n;
+            reached += std::stod(e.at("max_opened")) >= std::stod(f);
+          }
+        const double rate = std::stod(row.at("opened_" + f));
+        EXPECT_DOUBLE_EQ(rate, double(reached) / double(n)) << row.at("object") << " " << f;
+        EXPECT_LE(std::stod(row.at("opened_" + f + "_low")), rate);
+        EXPECT_GE(std::stod(row.at("opened_" + f + "_high")), rate);
+        EXPECT_LE(rate, previous) << "a larger fraction is reached no more often";
+        previous = rate;
+      }
+      EXPECT_GE(std::stod(row.at("opened_0.9")), std::stod(row.at("success_rate")));
+      if (row.at("object") == "all") at_90[dir] = std::stod(row.at("opened_0.9"));
+    }
+    EXPECT_TRUE(contains(readFile(*dir / "summary.json"), "\"opening_curve\": [{\"fraction\": 0.25, \"episodes\": "))
+        << readFile(*dir / "summary.json");
+  }
+  EXPECT_TRUE(contains(a.out, "opened at least (at any step): 25 % ")) << a.out;
+  EXPECT_TRUE(contains(a.out, "   once     95% interval")) << a.out;  // success_once beside success
+  EXPECT_GT(at_90[&expert], at_90[&random]) << a.out << b.out;
+  const auto v = testing::runCli({"eval", "--verify", expert.path().string()});
+  EXPECT_EQ(v.exit_code, 0) << v.err << v.out;
+
+  TempDir reach;
+  const auto r = runEval(reach, kReach);
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  for (const auto& e : readCsv(reach / "episodes.csv")) EXPECT_EQ(e.at("max_opened"), "");
+  EXPECT_FALSE(contains(readFile(reach / "summary.csv"), "opened_"));
+  EXPECT_FALSE(contains(r.out, "opened at least"));
 }
 
 }  // namespace

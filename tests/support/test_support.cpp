@@ -54,6 +54,14 @@ void FixtureCopy::replace(const std::string& name, const std::string& from, cons
   std::ofstream(file(name)) << text;
 }
 
+void makeFlap(FixtureCopy& copy, bool bottom) {
+  const std::string y = bottom ? "-0.395" : "0.395";
+  for (int i = 0; i < 4; ++i)
+    copy.replace("100001/mobility.urdf", "<origin xyz=\"0.295 0 -0.22\"/>", "<origin xyz=\"0 " + std::string(bottom ? "0.395" : "-0.395") + " -0.2\"/>");
+  copy.replace("100001/mobility.urdf", "<origin xyz=\"-0.295 0 0.22\"/>\n    <axis xyz=\"0 -1 0\"/>",
+               "<origin xyz=\"0 " + y + " 0.2\"/>\n    <axis xyz=\"" + (bottom ? "1" : "-1") + " 0 0\"/>");
+}
+
 CommandResult runCli(const std::vector<std::string>& arguments,
                      const std::vector<std::string>& environment,
                      const std::function<void()>& in_child) {

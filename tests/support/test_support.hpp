@@ -52,6 +52,13 @@ class FixtureCopy {
   std::string folder_;
 };
 
+// In a copy of partnet_mini: 100001's door made a flap across the
+// cabinet's width, hinged along its bottom or top edge at the panel's back
+// face (its handle 5.5-7.5 cm in front of the hinge), opening outward.
+// Hinged at its bottom, the task leaves it out (it would open into the
+// ground).
+void makeFlap(FixtureCopy& copy, bool bottom);
+
 // This process's resident memory (VmRSS), kB; -1 if unknown.
 long readRssKb();
 

@@ -76,17 +76,6 @@ TEST(OpenCabinetScenario, PartNetFolderReplacesTheGenerator) {
   expectExpertSucceeds(d, "100001_link_0", 1);  // 5 of seeds 0-5 succeed (3 with the fingers wide open): mesh handles slip more
 }
 
-// 100001's door made a flap across the cabinet's width, hinged along its
-// bottom or top edge at the panel's back face (its handle 5.5-7.5 cm in
-// front of the hinge), opening outward.
-void makeFlap(mb::testing::FixtureCopy& copy, bool bottom) {
-  const std::string y = bottom ? "-0.395" : "0.395";
-  for (int i = 0; i < 4; ++i)
-    copy.replace("100001/mobility.urdf", "<origin xyz=\"0.295 0 -0.22\"/>", "<origin xyz=\"0 " + std::string(bottom ? "0.395" : "-0.395") + " -0.2\"/>");
-  copy.replace("100001/mobility.urdf", "<origin xyz=\"-0.295 0 0.22\"/>\n    <axis xyz=\"0 -1 0\"/>",
-               "<origin xyz=\"0 " + y + " 0.2\"/>\n    <axis xyz=\"" + (bottom ? "1" : "-1") + " 0 0\"/>");
-}
-
 // A flap hinged at its bottom edge turns its front below the hinge, 1 cm
 // above the ground: at B.4's 90 % (81 degrees) its handle would stand in
 // the ground, so it is no target, and the listing says why. Hinged at its
@@ -94,7 +83,7 @@ void makeFlap(mb::testing::FixtureCopy& copy, bool bottom) {
 // follows the handle up; the base keeps facing the cabinet).
 TEST(OpenCabinetScenario, AFlapThatWouldOpenIntoTheGroundIsNoTargetAndOneHingedAtItsTopOpens) {
   mb::testing::FixtureCopy bottom("partnet_mini");
-  makeFlap(bottom, true);
+  mb::testing::makeFlap(bottom, true);
   ::testing::internal::CaptureStderr();
   ExpertSetup b = makeExpertSetup("OpenCabinetDoor-v0", {"task.partnet_dir=" + bottom.folder(), "task.partnet_scale=1"});
   EXPECT_TRUE(b.env->listObjects("train").empty());
@@ -107,7 +96,7 @@ TEST(OpenCabinetScenario, AFlapThatWouldOpenIntoTheGroundIsNoTargetAndOneHingedA
   EXPECT_EQ(warnings.find("OpenCabinetDrawer: PartNet cabinet 100001"), std::string::npos) << "a door is no drawer: " << warnings;
 
   mb::testing::FixtureCopy top("partnet_mini");
-  makeFlap(top, false);
+  mb::testing::makeFlap(top, false);
   ::testing::internal::CaptureStderr();
   ExpertSetup t = makeExpertSetup("OpenCabinetDoor-v0", {"task.partnet_dir=" + top.folder(), "task.partnet_scale=1"});
   EXPECT_EQ(t.env->listObjects("train"), std::vector<std::string>{"100001_link_0"});

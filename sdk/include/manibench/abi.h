@@ -318,7 +318,10 @@ typedef struct mb_task_info {
    *   "blocked"  1 while the robot touches the object elsewhere than by
    *              the fingers (an arm on a table top, a base on a door)
    *   "fallen"   1 while the object lies knocked over (past the task's
-   *              upright limit) */
+   *              upright limit)
+   *   "opened"   the fraction of the target joint's range it is open
+   *              (doors, drawers): the evaluation's opening curve, read
+   *              after the reset and every step (docs/evaluation.md) */
   uint32_t progress_signal_count;
   const char* const* progress_signals;
 } mb_task_info;

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <functional>
 #include <iosfwd>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -102,6 +103,12 @@ struct EpisodeRecord {
   // The final step's flag per success condition; all 0 for a failed episode
   // (its conditions were never evaluated at a terminal step).
   std::vector<uint8_t> flags;
+  // The most of its range the target opened at any point of the episode:
+  // the task's `opened` progress signal (abi.h; doors and drawers), read
+  // after the reset and after every step. NaN when the task has no such
+  // signal, and for a failed episode (which counts as opening nothing, as
+  // its success is 0). The opening curve's input (kOpeningFractions).
+  double max_opened = std::numeric_limits<double>::quiet_NaN();
   std::string failure;        // empty, or one of failure::k*
   int64_t failure_step = -1;  // the step being taken when it failed
   std::string message;        // what went wrong, for people
@@ -115,6 +122,13 @@ struct EpisodeRecord {
   std::shared_ptr<const Trajectory> trajectory;
   bool failed() const { return !failure.empty(); }
 };
+
+// The opening curve's fractions (docs/evaluation.md, "Protocols"): the
+// share of episodes whose target opened at least this much of its range
+// at some step, beside B.4's success (90 % and static), as ARNOLD reports
+// success at several goal states. Reported for tasks with an `opened`
+// progress signal; episodes.csv's max_opened gives any other fraction.
+inline constexpr double kOpeningFractions[] = {0.25, 0.5, 0.75, 0.9};
 
 // Aggregate of a group of episodes (one object, or all).
 struct EvaluationSummary {
@@ -135,6 +149,11 @@ struct EvaluationSummary {
   double success_once_rate = 0;
   double success_once_low = 0, success_once_high = 0;
   std::vector<double> condition_rates;  // per success condition
+  // Per kOpeningFractions entry, the episodes whose max_opened reached it,
+  // their rate and its interval (computed as the success rate's); empty
+  // when no episode of the evaluation measured an opening.
+  std::vector<uint32_t> opened_counts;
+  std::vector<double> opened_rates, opened_low, opened_high;
   double mean_return = 0;
   double mean_steps = 0;
 };
