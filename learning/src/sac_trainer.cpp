@@ -125,8 +125,20 @@ class SacTrainer {
     replay_->load(dir_ / "checkpoints" / replayName(env_steps_));
     restoreWorkers(loaded);
     truncateCsv(dir_ / "log.csv", env_steps_);
-    if (fs::exists(dir_ / "eval.csv")) truncateCsv(dir_ / "eval.csv", env_steps_);
+    // The evaluation this checkpoint was in when the run stopped or was
+    // killed runs again (its row, if the kill came after it, goes first).
+    const bool pending = hooks_.evaluate && findPendingEvaluation(dir_) == env_steps_;
+    if (fs::exists(dir_ / "eval.csv")) truncateCsv(dir_ / "eval.csv", env_steps_ - (pending ? 1 : 0));
     say("resuming from " + newest + " (" + std::to_string(env_steps_) + " env steps)");
+    if (pending && !evaluateNewest()) {
+      SacResult result;
+      result.env_steps = env_steps_;
+      result.updates = updates_;
+      result.episodes = episodes_;
+      result.interrupted = true;
+      result.checkpoint = newest;
+      return result;
+    }
     return run();
   }
 
@@ -413,18 +425,30 @@ class SacTrainer {
     last_checkpoint_ = path.string();
   }
 
-  // The newest checkpoint's deterministic actor (the workers wait meanwhile).
-  void evaluateNewest() {
+  // The newest checkpoint's deterministic actor (the workers wait
+  // meanwhile); false if the evaluation was interrupted (nothing recorded;
+  // the pending mark stays for --resume).
+  bool evaluateNewest() {
     const fs::path out = dir_ / "eval" / fs::path(checkpointName(env_steps_)).stem();
+    markEvaluationPending(dir_, env_steps_);
     const EvaluationOutcome outcome = hooks_.evaluate(options_, (dir_ / "policy.yaml").string(), out.string());
-    const bool fresh = !fs::exists(dir_ / "eval.csv");
-    std::ofstream csv(dir_ / "eval.csv", std::ios::app);
-    if (fresh) csv << "env_steps,episodes,successes,success_rate\n";
-    csv << env_steps_ << "," << outcome.episodes << "," << outcome.successes << ","
-        << formatNumber(outcome.success_rate) << "\n";
+    if (outcome.interrupted) {
+      say("the evaluation at " + std::to_string(env_steps_) + " env steps was interrupted; --resume " +
+          dir_.string() + " evaluates this checkpoint again");
+      return false;
+    }
+    {
+      const bool fresh = !fs::exists(dir_ / "eval.csv");
+      std::ofstream csv(dir_ / "eval.csv", std::ios::app);
+      if (fresh) csv << "env_steps,episodes,successes,success_rate\n";
+      csv << env_steps_ << "," << outcome.episodes << "," << outcome.successes << ","
+          << formatNumber(outcome.success_rate) << "\n";
+    }
+    clearEvaluationPending(dir_);
     say("evaluation at " + std::to_string(env_steps_) + " env steps: success " + formatNumber(outcome.success_rate) +
         " (" + std::to_string(outcome.successes) + "/" + std::to_string(outcome.episodes) + ")" +
         describeFailures(outcome, out.string()));
+    return true;
   }
 
   void restoreWorkers(const LoadedCheckpoint& loaded) {
@@ -474,7 +498,10 @@ class SacTrainer {
       if (saved) saveAll();
       if (options_.eval_every > 0 && (env_steps_ / options_.eval_every > before / options_.eval_every || last)) {
         if (!saved) saveAll();
-        evaluateNewest();
+        if (!evaluateNewest()) {
+          result.interrupted = true;
+          break;
+        }
       }
     }
     if (result.interrupted && env_steps_ > first_steps &&

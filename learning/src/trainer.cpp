@@ -210,8 +210,18 @@ class Trainer {
     sampler_->setPosition({uint64_t(s[0].item<int64_t>()), s[1].item<int64_t>(), s[2].item<int64_t>()});
     log_row_ = loaded.extras.at("log_row");
     truncateCsv(dir_ / "log.csv", loaded.info.iteration);
-    truncateCsv(dir_ / "eval.csv", loaded.info.iteration);
+    // The evaluation this checkpoint was in when the run stopped or was
+    // killed runs again (its row, if the kill came after it, goes first).
+    const bool pending = hooks_.evaluate && findPendingEvaluation(dir_) == loaded.info.iteration;
+    truncateCsv(dir_ / "eval.csv", loaded.info.iteration - (pending ? 1 : 0));
     say("resuming from " + newest + " (iteration " + std::to_string(loaded.info.iteration) + ")");
+    if (pending && !evaluate(loaded.info.iteration)) {
+      TrainResult result;
+      result.iteration = loaded.info.iteration;
+      result.interrupted = true;
+      result.checkpoint = newest;
+      return result;
+    }
     return run(loaded.info.iteration);
   }
 
@@ -244,8 +254,10 @@ class Trainer {
     return last_checkpoint_;
   }
 
-  void evaluate(int64_t iteration) {
-    if (!hooks_.evaluate) return;
+  // False if the evaluation was interrupted (nothing recorded; the pending
+  // mark stays for --resume).
+  bool evaluate(int64_t iteration) {
+    if (!hooks_.evaluate) return true;
     EvaluationRequest request;
     request.options = &options_;
     request.environment_id = dataset_->getInfo().environment_id;
@@ -253,13 +265,23 @@ class Trainer {
     request.policy_config = fs::absolute(dir_ / "policy.yaml").string();
     request.out_dir = fs::absolute(dir_ / "eval" / ("iter_" + std::to_string(iteration))).string();
     request.iteration = iteration;
+    markEvaluationPending(dir_, iteration);
     const EvaluationOutcome outcome = hooks_.evaluate(request);
-    std::ofstream eval(dir_ / "eval.csv", std::ios::app);
-    eval << iteration << "," << options_.eval_split << "," << outcome.episodes << "," << outcome.successes << ","
-         << formatNumber(outcome.success_rate) << "\n";
+    if (outcome.interrupted) {
+      say("iteration " + std::to_string(iteration) + ": the evaluation was interrupted; --resume " + dir_.string() +
+          " evaluates this checkpoint again");
+      return false;
+    }
+    {
+      std::ofstream eval(dir_ / "eval.csv", std::ios::app);
+      eval << iteration << "," << options_.eval_split << "," << outcome.episodes << "," << outcome.successes << ","
+           << formatNumber(outcome.success_rate) << "\n";
+    }
+    clearEvaluationPending(dir_);
     say("iteration " + std::to_string(iteration) + ": success " + std::to_string(outcome.successes) + "/" +
         std::to_string(outcome.episodes) + " on the " + options_.eval_split + " objects" +
         describeFailures(outcome, request.out_dir));
+    return true;
   }
 
   TrainResult run(int64_t first) {
@@ -309,7 +331,10 @@ class Trainer {
       const bool evaluation = options_.eval_every > 0 &&
                               (iteration % options_.eval_every == 0 || iteration == options_.iterations);
       if (checkpoint || evaluation) saveCheckpointAt(iteration);
-      if (evaluation) evaluate(iteration);
+      if (evaluation && !evaluate(iteration)) {
+        result.interrupted = true;
+        break;
+      }
     }
     if (result.interrupted && iteration > first && !fs::exists(dir_ / "checkpoints" / checkpointName(iteration)))
       saveCheckpointAt(iteration);

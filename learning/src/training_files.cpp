@@ -63,6 +63,17 @@ void truncateCsv(const fs::path& path, int64_t iteration) {
   writeText(path, kept);
 }
 
+void markEvaluationPending(const fs::path& dir, int64_t at) { writeText(dir / "eval_pending", std::to_string(at) + "\n"); }
+
+void clearEvaluationPending(const fs::path& dir) { fs::remove(dir / "eval_pending"); }
+
+int64_t findPendingEvaluation(const fs::path& dir) {
+  std::ifstream in(dir / "eval_pending");
+  int64_t at = -1;
+  if (!(in >> at) || at < 0) return -1;
+  return at;
+}
+
 void readTrainingYaml(const std::string& dir, const std::function<void(const YAML::Node&)>& read) {
   const fs::path file = fs::path(dir) / "train.yaml";
   if (!fs::exists(file)) throw LearningError("'" + dir + "' holds no training (no train.yaml)");

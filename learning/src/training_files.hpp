@@ -29,6 +29,14 @@ std::string formatNumber(double value);
 // Keeps the CSV's header and the rows whose first column is at most
 // `iteration` (a resumed run rewrites what came after its checkpoint).
 void truncateCsv(const std::filesystem::path& path, int64_t iteration);
+// DIR/eval_pending: the checkpoint being evaluated (its iteration or env
+// steps), written before the evaluation starts and removed once its row is
+// in eval.csv, so that a training stopped or killed during an evaluation
+// evaluates that checkpoint again when resumed.
+void markEvaluationPending(const std::filesystem::path& dir, int64_t at);
+void clearEvaluationPending(const std::filesystem::path& dir);
+// The pending evaluation's checkpoint, or -1 if none.
+int64_t findPendingEvaluation(const std::filesystem::path& dir);
 // DIR/policy.yaml: the torch_policy configuration of `checkpoint` on
 // `device` (what evaluation runs on; "cpu" unless the user asked), with a
 // comment line showing how to evaluate it on `task`.

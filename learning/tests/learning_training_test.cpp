@@ -20,12 +20,17 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <fcntl.h>
 #include <malloc.h>
+#include <signal.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <set>
+#include <thread>
 
 namespace manibench::learning {
 namespace {
@@ -435,6 +440,55 @@ TEST_F(LearningTraining, TrainEvaluatesThroughTheCommandLine) {
   const auto usage = runCli({"train", "--demos", file("reach.h5")});
   EXPECT_EQ(usage.exit_code, 2);
   EXPECT_TRUE(contains(usage.err, "name one algorithm")) << usage.err;
+}
+
+// Ctrl-C reaches the whole process group: the periodic evaluation's
+// `manibench eval` stops too (exit 130, its partial results written). The
+// training stops as interrupted, not as a failed evaluation, and --resume
+// evaluates that checkpoint again, keeping the episodes it had finished.
+TEST_F(LearningTraining, CtrlCDuringAnEvaluationStopsCleanlyAndResumeEvaluatesAgain) {
+  const std::string dir = file("ctrl_c_run"), pid_file = file("ctrl_c_run.pid");
+  std::thread training([&] {
+    const auto r = runCli({"train", "bc", "--demos", file("reach.h5"), "--out", dir, "--iterations", "40",
+                           "--batch-size", "16", "--eval-every", "20", "--eval-objects", "0", "--eval-episodes",
+                           "40"},
+                          {}, [&] {
+                            // In the forked child: a process group of its own
+                            // (the test's is not signalled), its id written.
+                            setpgid(0, 0);
+                            char text[32];
+                            const int n = snprintf(text, sizeof text, "%d", int(getpid()));
+                            const int fd = open(pid_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+                            if (fd >= 0 && write(fd, text, size_t(n)) == n) close(fd);
+                          });
+    EXPECT_EQ(r.exit_code, 130) << r.err;
+    EXPECT_TRUE(contains(r.err, "iteration 20: the evaluation was interrupted; --resume")) << r.err;
+    EXPECT_FALSE(contains(r.err, "failed")) << r.err;
+  });
+  // The signal once the evaluation at iteration 20 has journaled episodes.
+  const fs::path journal = fs::path(dir) / "eval" / "iter_20" / "journal.jsonl";
+  const auto journalLines = [&] {
+    const std::string text = fs::exists(journal) ? readFile(journal.string()) : std::string();
+    return std::count(text.begin(), text.end(), '\n');
+  };
+  for (int i = 0; i < 6000 && journalLines() < 3; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  const pid_t group = pid_t(std::atoi(readFile(pid_file).c_str()));
+  ASSERT_GT(group, 0);
+  EXPECT_GE(journalLines(), 3) << "the evaluation journaled no episode in 120 s";
+  kill(-group, SIGINT);
+  training.join();
+  EXPECT_FALSE(contains(readFile(dir + "/eval.csv"), "\n20,")) << readFile(dir + "/eval.csv");
+  EXPECT_TRUE(fs::exists(dir + "/checkpoints/iter_0000020.pt"));
+  EXPECT_FALSE(fs::exists(dir + "/checkpoints/iter_0000040.pt"));
+
+  const auto resumed = runCli({"train", "--resume", dir});
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  const std::string eval = readFile(dir + "/eval.csv");
+  EXPECT_TRUE(contains(eval, "\n20,train,40,")) << eval;
+  EXPECT_TRUE(contains(eval, "\n40,train,40,")) << eval;
+  EXPECT_EQ(std::count(eval.begin(), eval.end(), '\n'), 3) << eval;
+  EXPECT_TRUE(contains(readFile(dir + "/eval/iter_20/eval.log"), "resuming: ")) << readFile(dir + "/eval/iter_20/eval.log");
+  EXPECT_FALSE(fs::exists(dir + "/eval_pending"));
 }
 
 TEST_F(LearningTraining, BadInputsAreClearErrors) {

@@ -2,6 +2,7 @@
 
 #include "cli.hpp"
 
+#include <manibench/evaluation.hpp>
 #include <manibench/worker_pool.hpp>
 
 #include <nlohmann/json.hpp>
@@ -129,10 +130,24 @@ EvaluationOutcome runPolicyEvaluation(const std::string& environment, const std:
                                    "--trusted-policy"};
   args.insert(args.end(), extra.begin(), extra.end());
   args.insert(args.end(), {"--no-progress", "--out", out_dir});
+  // Each evaluation has a folder of its own (its checkpoint's), so a
+  // journal there is this evaluation's, stopped before it finished: what it
+  // finished is kept.
+  if (fs::exists(fs::path(out_dir) / kJournalFileName)) args.push_back("--resume");
   fs::create_directories(out_dir);
   const std::string log_path = out_dir + "/eval.log";
-  if (runManibench(args, log_path) != 0)
-    throw LearningError("the evaluation of " + policy_config + " failed (" + log_path + " says why)");
+  const bool resumed = args.back() == "--resume";
+  const int code = runManibench(args, log_path);
+  // 130: stopped (a Ctrl-C reaches the whole process group, the evaluation
+  // too), its partial results written: the training stops as interrupted.
+  if (code == 130 || (code != 0 && manibench::cli::StopSignals::isRequested())) {
+    EvaluationOutcome stopped;
+    stopped.interrupted = true;
+    return stopped;
+  }
+  if (code != 0)
+    throw LearningError("the evaluation of " + policy_config + (resumed ? " (resumed)" : "") + " failed (" +
+                        log_path + " says why)");
   std::ifstream in(out_dir + "/summary.json");
   const nlohmann::json summary = nlohmann::json::parse(in);
   EvaluationOutcome outcome;

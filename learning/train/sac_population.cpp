@@ -112,6 +112,7 @@ class Population {
                               {"--episodes-per-object", std::to_string(o_.eval_episodes), "--seed",
                                std::to_string(o_.eval_seed)},
                               (attempt / "eval").string());
+      if (outcome.interrupted) return false;  // resumed, it evaluates on from its journal
       std::cerr << "object " << object << ", attempt " << k << ": success " << formatRate(outcome.success_rate)
                 << " (" << outcome.successes << "/" << outcome.episodes << ")"
                 << describeFailures(outcome, (attempt / "eval").string()) << "\n";

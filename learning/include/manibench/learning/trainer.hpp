@@ -81,6 +81,10 @@ struct EvaluationOutcome {
   // episodes.csv.
   uint32_t episodes = 0, successes = 0, failures = 0;
   double success_rate = 0;
+  // The evaluation was stopped before it finished (Ctrl-C reaches the
+  // evaluating process too): the counts are not a result, the training
+  // stops as interrupted, and --resume evaluates the checkpoint again.
+  bool interrupted = false;
 };
 
 // "" when no episode failed, else "; N of them failed (why: OUT_DIR/episodes.csv)",
