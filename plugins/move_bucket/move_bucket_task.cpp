@@ -47,14 +47,15 @@ MoveBucketTask::MoveBucketTask(const Config& config)
     : cache_dir_(config.get<std::string>("cache_dir", "")),
       facts_(config, "move_bucket"),
       hold_steps_(config.get<uint32_t>("hold_steps", 10)),
-      buckets_(kTaskName, "bucket", readPartNetDir(config, kTaskName),
+      buckets_(kTaskName, "bucket", readPartNetFolders(config, kTaskName),
                {listGeneratedBuckets, [](const std::string& id) { return generateBucket(id); },
                 [this](const std::string& folder, const std::string& id) {
                   return loadPartNetBucket(folder, id, facts_.calcScale(id), cache_dir_);
                 },
                 nullptr, [this](BucketModel& model) { writeMeshFiles(model, cache_dir_); }, nullptr}) {
-  config.requireKnownKeys({"partnet_dir", "robot_dir", "cache_dir", "partnet_scale", "object_facts", "hold_steps"},
-                         "MoveBucket: task");
+  config.requireKnownKeys({"partnet_dir", "partnet_test_categories", "robot_dir", "cache_dir", "partnet_scale",
+                           "object_facts", "hold_steps"},
+                          "MoveBucket: task");
   if (hold_steps_ == 0) throw Error("MoveBucket: task.hold_steps must be positive", MB_INVALID_ARGUMENT);
   if (cache_dir_.empty()) cache_dir_ = getDefaultCacheRoot();
   // The observation layout (ObservationLayout) and the expert assume the

@@ -29,7 +29,7 @@ OpenCabinetTask::OpenCabinetTask(const Config& config, TargetKind kind)
       static_speed_(config.get<double>("static_speed", 0.1)),
       static_angular_speed_(config.get<double>("static_angular_speed", 1.0)),
       hold_steps_(config.get<uint32_t>("hold_steps", 10)),
-      cabinets_(taskName(kind), "cabinet", readPartNetDir(config, taskName(kind)),
+      cabinets_(taskName(kind), "cabinet", readPartNetFolders(config, taskName(kind)),
                 {[kind](const std::string& split) { return listGeneratedCabinets(kind, split); }, generateCabinet,
                  [facts = ObjectFacts(config, "open_cabinet")](const std::string& folder, const std::string& id) {
                    return loadPartNetCabinet(folder, id, facts);
@@ -42,8 +42,8 @@ OpenCabinetTask::OpenCabinetTask(const Config& config, TargetKind kind)
                  },
                  nullptr, [kind](const CabinetModel& cabinet) { return cabinet.getRefused(kind); }}) {
   config.requireKnownKeys(
-      {"partnet_dir", "partnet_scale", "object_facts", "robot_dir", "static_speed", "static_angular_speed",
-       "hold_steps"},
+      {"partnet_dir", "partnet_test_categories", "partnet_scale", "object_facts", "robot_dir", "static_speed",
+       "static_angular_speed", "hold_steps"},
       taskName(kind) + ": task");
   if (!(static_speed_ > 0) || !(static_angular_speed_ > 0) || hold_steps_ == 0)
     throw Error(taskName(kind) + ": static_speed, static_angular_speed and hold_steps must be positive",

@@ -38,15 +38,15 @@ PushChairTask::PushChairTask(const Config& config)
     : static_speed_(config.get<double>("static_speed", 0.1)),
       static_angular_speed_(config.get<double>("static_angular_speed", 0.2)),
       hold_steps_(config.get<uint32_t>("hold_steps", 10)),
-      chairs_(kTaskName, "chair", readPartNetDir(config, kTaskName),
+      chairs_(kTaskName, "chair", readPartNetFolders(config, kTaskName),
               {listGeneratedChairs, [](const std::string& id) { return generateChair(id); },
                [facts = ObjectFacts(config, "push_chair")](const std::string& folder, const std::string& id) {
                  return loadPartNetChair(folder, id, facts.calcScale(id));
                },
                nullptr, nullptr, nullptr}) {
   config.requireKnownKeys(
-      {"partnet_dir", "partnet_scale", "object_facts", "robot_dir", "static_speed", "static_angular_speed",
-       "hold_steps"},
+      {"partnet_dir", "partnet_test_categories", "partnet_scale", "object_facts", "robot_dir", "static_speed",
+       "static_angular_speed", "hold_steps"},
       "PushChair: task");
   if (!(static_speed_ > 0) || !(static_angular_speed_ > 0) || hold_steps_ == 0)
     throw Error("PushChair: static_speed, static_angular_speed and hold_steps must be positive", MB_INVALID_ARGUMENT);

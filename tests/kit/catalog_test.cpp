@@ -1,6 +1,7 @@
 // The kit's object ids and catalog (manibench/kit/object_ids.hpp,
-// catalog.hpp): numbered splits, models made once, and a PartNet folder's
-// unusable objects skipped with one warning each.
+// catalog.hpp): numbered splits, models made once, a PartNet folder's
+// unusable objects skipped with one warning each, and folders of several
+// categories split by category.
 #include <manibench/kit/catalog.hpp>
 
 #include <gtest/gtest.h>
@@ -92,6 +93,52 @@ TEST(ObjectCatalog, UnusablePartNetObjectsAreSkippedWithOneWarningEach) {
   EXPECT_EQ(warnings.find("skipping PartNet thing 100001"), std::string::npos) << warnings;
   // The skipped object itself still says why.
   expectMentions(catchMessage<kit::Error>([&] { catalog.get("100003"); }), {"cannot read"});
+  std::filesystem::remove_all(dir);
+}
+
+// Two category folders (the mini fixture's objects, one in each): by
+// category the test split is the named folder's objects, train the
+// other's; without, each folder's test.txt (none here: all train). Each
+// object is loaded from its own folder.
+TEST(ObjectCatalog, FoldersOfSeveralCategoriesSplitByCategory) {
+  const std::filesystem::path dir = ::testing::TempDir() + "categories_" + std::to_string(::getpid());
+  std::filesystem::remove_all(dir);
+  const std::string mini = std::string(MANIBENCH_TEST_SOURCE_DIR) + "/tests/fixtures/partnet_mini";
+  for (const auto& [category, id] : {std::pair{"Cupboard", "100001"}, std::pair{"Microwave", "100002"}}) {
+    std::filesystem::create_directories(dir / category);
+    std::filesystem::copy(mini + "/" + id, dir / category / id, std::filesystem::copy_options::recursive);
+  }
+  const std::vector<std::string> folders = {(dir / "Cupboard").string(), (dir / "Microwave").string() + "/"};
+  const kit::PartNetFolders by_category(folders, {"Microwave"});
+  EXPECT_EQ(by_category.list("test"), std::vector<std::string>{"100002"});
+  EXPECT_EQ(by_category.list("train"), std::vector<std::string>{"100001"});
+  EXPECT_EQ(kit::PartNetFolders::getCategory(folders[1]), "Microwave");
+  EXPECT_EQ(kit::PartNetFolders(folders, {}).list("train"), (std::vector<std::string>{"100001", "100002"}));
+  EXPECT_TRUE(kit::PartNetFolders(folders, {}).list("test").empty());
+  int made = 0;
+  const kit::ObjectCatalog<Model> catalog("Test", "thing", by_category, makeSource(made));
+  ::testing::internal::CaptureStderr();
+  EXPECT_TRUE(catalog.list("test").empty()) << "the fixture's 100002 has no handle";
+  EXPECT_EQ(catalog.list("train"), std::vector<std::string>{"100001"});
+  expectMentions(::testing::internal::GetCapturedStderr(),
+                 {"skipping PartNet thing 100002 (" + (dir / "Microwave" / "100002").string() + "): no handle"});
+  // Read from the task's keys, as a list and as one name.
+  const std::string yaml =
+      "partnet_dir: [" + folders[0] + ", " + folders[1] + "]\npartnet_test_categories: Microwave\n";
+  const kit::Config config(yaml.c_str());
+  EXPECT_EQ(kit::readPartNetFolders(config, "Test").list("test"), std::vector<std::string>{"100002"});
+  expectMentions(catchMessage<kit::Error>([&] {
+                   const std::string one = "partnet_dir: " + folders[0] + "\npartnet_test_categories: [Oven]";
+                   kit::readPartNetFolders(kit::Config(one.c_str()), "Test");
+                 }),
+                 {"Test: task.partnet_test_categories", "'Oven' is none of the folders' (Cupboard)"});
+  expectMentions(catchMessage<kit::Error>(
+                     [&] { kit::readPartNetFolders(kit::Config("partnet_test_categories: [Oven]"), "Test"); }),
+                 {"needs task.partnet_dir"});
+  // An id in two folders is refused, naming both.
+  std::filesystem::copy(mini + "/100001", dir / "Microwave" / "100001", std::filesystem::copy_options::recursive);
+  expectMentions(catchMessage<kit::Error>([&] { by_category.list("train"); }),
+                 {"object 100001 is in two folders", (dir / "Cupboard").string()});
   std::filesystem::remove_all(dir);
 }
 

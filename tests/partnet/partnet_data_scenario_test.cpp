@@ -18,6 +18,7 @@
 #include <iostream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "test_support.hpp"
 
@@ -71,6 +72,27 @@ TEST(PartNetData, TheOvenIsSkippedBecauseNoMovingLinkHasAHandle) {
   EXPECT_NE(result.exit_code, 0);
   EXPECT_NE(result.err.find("skipping PartNet cabinet 101773"), std::string::npos) << result.err;
   EXPECT_NE(result.err.find("no door or drawer with a handle"), std::string::npos) << result.err;
+}
+
+// Two category folders split by category: the cabinets' drawers are the
+// test split, the oven (refused: no handle on a moving link) all of train.
+TEST(PartNetData, FoldersOfTwoCategoriesSplitByCategory) {
+  REQUIRE_CATEGORY(cabinets, "StorageFurniture");
+  REQUIRE_CATEGORY(oven, "Oven");
+  const std::vector<std::string> keys = {"--set", "task.partnet_dir=[" + cabinets + ", " + oven + "]", "--set",
+                                         "task.partnet_test_categories=[StorageFurniture]"};
+  auto list = [&](const std::string& split) {
+    std::vector<std::string> args = {"objects", "OpenCabinetDrawer-v0", "--split", split};
+    args.insert(args.end(), keys.begin(), keys.end());
+    return runCli(args);
+  };
+  const auto test = list("test");
+  EXPECT_EQ(test.exit_code, 0) << test.out << test.err;
+  EXPECT_NE(test.out.find("47578_link_3"), std::string::npos) << test.out;
+  EXPECT_EQ(test.out.find("101773"), std::string::npos) << "the oven is not in test: " << test.out;
+  const auto train = list("train");
+  EXPECT_EQ(train.out.find("47578"), std::string::npos) << train.out;
+  EXPECT_NE(train.err.find("skipping PartNet cabinet 101773"), std::string::npos) << train.err;
 }
 
 TEST(PartNetData, EveryChairAndBucketLoads) {
