@@ -232,9 +232,15 @@ class OpenCabinetExpert : public mobile_panda::Expert<ExpertPhase> {
   // The whole robot servos the TCP to the goal.
   Eigen::VectorXd calcAction(const View& v, const Command& c) const;
   bool calcGraspTurned(const View& v) const;  // which of the hand's two grasps is nearer
+  void toggleAcross(const View& v);            // grasp_across_ on or off
   double calcFacingYaw(const View& v) const;   // the base's yaw goal
 
   bool grasp_turned_ = false;  // grasps with the hand turned half a turn about its axis
+  // After a grasp that never held: the hand turned a quarter turn about
+  // its axis (by across_sign_), the fingers closing along the handle's
+  // length (open_cabinet_expert.cpp, toggleAcross()).
+  bool grasp_across_ = false;
+  double across_sign_ = 1.0;
 
   bool nominal_ready_ = false;
   Eigen::Vector2d nominal_offset_ = Eigen::Vector2d::Zero();  // TCP from the base, base frame
@@ -244,6 +250,7 @@ class OpenCabinetExpert : public mobile_panda::Expert<ExpertPhase> {
   double base_follow_ = 1.0;   // how much the base follows while pulling
   double pull_lift_ = 0;           // the lift when the pull began
   double pull_handle_height_ = 0;  // the handle's height then
+  double pull_open_fraction_ = 0;  // the part's opened fraction then
 };
 
 }  // namespace open_cabinet
