@@ -64,22 +64,21 @@ SANITIZE_FLAGS = -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanit
 # at -O2, 66 s at -O1), and the build is most of CI's sanitizer time;
 # Simbody, libtorch and Mesa are Debian's uninstrumented -O2 either way.
 SANITIZE_OPT = -O1
-# Left out of the sanitized suite (`make test` runs them all), each because
-# the sanitizers would find nothing there that a shorter test does not
-# reach: the installed product and the .deb (deb_package, relocated_install,
-# out_of_tree_plugin: copying, packing and rebuilding the instrumented
-# tree), and the contact pile under CPodes (Simbody's integrator is
-# Debian's uninstrumented library; the same contact code runs instrumented
-# in DeterminismTest's ImplicitEuler pile tests). Together the slowest
-# sanitized tests; docs/robustness.md has the figures.
-SANITIZE_EXCLUDE = ^(deb_package|relocated_install|out_of_tree_plugin|ContactScenarioTest\..*WithCPodes)$$
-# The sanitized build leaves out the learning module (learning/: libtorch
-# is Debian's uninstrumented library, and its 22 units and 46 tests were
-# about a quarter of the sanitized build and a fifth of its suite): CI's
-# two builds and suites have to fit its 90 minutes on its slow days
-# (docs/robustness.md, "Sanitizers"). `make sanitize
-# SANITIZE_SCOPE=` builds and runs everything.
-SANITIZE_SCOPE ?= -DCMAKE_DISABLE_FIND_PACKAGE_Torch=ON
+# The sanitized suite is the unit tests (label `unit`): every
+# library, plugin and program the project ships runs in them, instrumented.
+# The long scenario tests (label `scenario`: whole expert episodes, the
+# contact pile under CPodes, demonstrations and videos over many episodes,
+# the installed product and the .deb, the viewer's window) are not built
+# there; `make test` builds and runs them all. Nor is the learning module
+# (learning/: libtorch is Debian's uninstrumented library; its 22 units and
+# 46 tests were a quarter of the sanitized build and a fifth of its suite),
+# nor the physics benchmark (bench/: its one test is a scenario test).
+# CI's two builds and suites have to fit its 90 minutes on its slow days:
+# docs/robustness.md ("Sanitizers") has the figures. `make sanitize
+# SANITIZE_SCOPE= SANITIZE_TESTS=` builds and runs everything.
+SANITIZE_SCOPE ?= -DCMAKE_DISABLE_FIND_PACKAGE_Torch=ON -DCMAKE_DISABLE_FIND_PACKAGE_mujoco=ON \
+  -DMANIBENCH_SCENARIO_TESTS=OFF
+SANITIZE_TESTS ?= -L unit
 # A test that hangs is stopped and named after 10 minutes instead of
 # CTest's default 25 (tests that need longer set their own TIMEOUT).
 SANITIZE_TIMEOUT = 600
@@ -93,7 +92,7 @@ sanitize: deps
 	cd $(SANITIZE_DIR) && ASAN_OPTIONS=detect_leaks=0:abort_on_error=1:handle_segv=0:allocator_may_return_null=1 \
 	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --output-on-failure -j $(JOBS) --timeout $(SANITIZE_TIMEOUT) \
-	  -E '$(SANITIZE_EXCLUDE)' $(CTEST_FLAGS)
+	  $(SANITIZE_TESTS) $(CTEST_FLAGS)
 
 # The Debian package: build/manibench_<version>_amd64.deb (README.md,
 # "Installing"); `dpkg-deb -I` shows its dependencies.
