@@ -35,8 +35,8 @@ class VideoWriter {
 class EpisodeVideo {
  public:
   EpisodeVideo(Environment& env, const std::string& path, int width, int height);
-  // From the front-right, above, looking at the robot's root where the
-  // reset put it (calcThirdPersonView).
+  // From the front-right, above, framed on the robot and the task's
+  // objects where the reset put them (calcThirdPersonView).
   void aimAtRobot();
   // A frame of the current state.
   void record();

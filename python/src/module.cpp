@@ -227,8 +227,8 @@ class PyEnvironment {
   }
 
   // A third-person RGB image (height x width x 3, uint8) of the current
-  // state: the CLI's videos' view (calcThirdPersonView), aimed at the
-  // robot's root where it is now.
+  // state: the CLI's videos' view (calcThirdPersonView), framed on the
+  // robot and the task's objects where they are now.
   py::array_t<std::uint8_t> render(int width, int height) {
     mb::Environment& env = upd();
     if (width <= 0 || height <= 0)

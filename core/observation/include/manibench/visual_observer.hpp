@@ -73,9 +73,11 @@ class CameraRig {
 
 // The one third-person view, of videos (`render --video`, `demos replay
 // --video`) and of Python's render(): a width x height camera (fovy 1 rad,
-// far 20 m) 2.5 m to the front-right of and 1.6 m above a point 0.6 m over
-// the root of `articulation` (over the origin when the scene has none),
-// looking at that point.
+// far 20 m) from the robot's side of the task's objects, 45 degrees to its
+// right and 24 degrees above, looking at the middle of every visual shape
+// (robot and objects, where they are now) and as near as keeps them all
+// in the frame (the root of `articulation`, or the origin, when nothing is
+// drawn).
 struct ThirdPersonView {
   CameraSpec camera;
   Pose pose;
