@@ -1,7 +1,7 @@
 // manibench: the host program. Loads plugins by name and runs them.
-//   manibench list | info | run | bench | config | render | objects | eval | demos | demo | train | plot | view
-// `train`, `plot` and `view` are other programs, manibench-train,
-// manibench-plot and manibench-view,
+//   manibench list | info | run | bench | config | render | objects | eval | demos | demo | train | plot | report | view
+// `train`, `plot`, `report` and `view` are other programs, manibench-train,
+// manibench-plot, manibench-report and manibench-view,
 // found beside this one (as git runs git-<command>): the learning module's
 // libtorch and the viewer's GLFW never load here.
 // Exit codes: 0 success, 1 failure (reported on stderr), 2 usage error.
@@ -59,6 +59,10 @@ Commands:
                             per object, train vs test), training curves or a
                             render folder's point cloud (matplotlib;
                             docs/evaluation.md)
+  report DIR                one HTML page of an eval folder: the tables with
+                            their intervals, why episodes failed, the figure,
+                            videos of a success and a failure per object, the
+                            certificate (docs/evaluation.md)
   view TASK                 a window on a task: free and task cameras, masks,
                             point cloud, overlay; drive the robot by keyboard
                             (--record FILE.h5), watch --policy NAME or
@@ -114,7 +118,7 @@ int dispatch(int argc, char** argv) {
     return runExternalCommand(command, argc, argv,
                               "the learning module, built where libtorch is installed (Debian's "
                               "libtorch-dev; scripts/install-deps installs it), docs/learning.md");
-  if (command == "plot")
+  if (command == "plot" || command == "report")
     return runExternalCommand(command, argc, argv,
                               "the Python package (built where pybind11, python3-dev and numpy are installed) "
                               "and matplotlib (Debian's python3-matplotlib; scripts/install-deps installs them)");
