@@ -114,19 +114,24 @@ def table(head: list[str], rows: list[list[str]], css_class: str) -> str:
     return "".join(out)
 
 
-def failed_episodes(episodes: list[dict]) -> list[list[str]]:
+def failed_episodes(episodes: list[dict], conditions: list[str]) -> list[list[str]]:
     """Each failed episode: object, level, seed, steps, the failure's kind
-    (crash, timeout, ... or empty for an episode that ran out of time or
-    ended unsuccessful) with its step, and the message (the unmet
-    conditions, or the failure's reason)."""
+    (crash, timeout, ... or "not successful" for an episode that ran to its
+    end unsuccessful) with its step, and the message (the failure's reason;
+    for an unsuccessful episode the success conditions unmet at its end,
+    from its condition columns)."""
     rows = []
     for e in episodes:
         if e.get("success") == "1":
             continue
         kind = e.get("failure") or "not successful"
         step = f" at step {e['failure_step']}" if e.get("failure_step") else ""
+        message = e.get("message", "")
+        if not message and not e.get("failure"):
+            unmet = [c for c in conditions if c != "success" and e.get(c) == "0"]
+            message = "unmet at the end: " + ", ".join(unmet) if unmet else ""
         rows.append([e.get("object", ""), e.get("level", ""), e.get("seed", ""), e.get("steps", ""),
-                     kind + step, e.get("message", "")])
+                     kind + step, message])
     return rows
 
 
@@ -260,7 +265,7 @@ def certificate_section(certificate: dict | None) -> str:
 STYLE = """
 body { font-family: sans-serif; margin: 2em; color: #222; }
 table { border-collapse: collapse; margin: 0.5em 0 1.5em; font-size: 0.9em; }
-th, td { border: 1px solid #ccc; padding: 0.2em 0.5em; text-align: right; }
+th, td { border: 1px solid #ccc; padding: 0.2em 0.5em; text-align: right; white-space: nowrap; }
 th { background: #f0f0f0; } td:first-child { text-align: left; }
 tr.overall td { font-weight: bold; background: #fafafa; }
 table.certificate td { text-align: left; font-family: monospace; font-size: 0.85em; }
@@ -301,7 +306,7 @@ def make_page(directory: str, objects: int = 5, size: str = "480x360", manibench
              "<h2>Per object</h2>", table(head, rows, "rates"),
              "<p>Intervals: Wilson per object; the overall row's resamples the objects.</p>"]
     failures = summary.get("failures") or {}
-    failed = failed_episodes(report["episodes"])
+    failed = failed_episodes(report["episodes"], summary.get("success_conditions", []))
     parts.append("<h2>Failed episodes</h2>")
     if failures:
         parts.append("<p>Failures by kind: " + ", ".join(f"{esc(k)} {esc(v)}" for k, v in failures.items()) + ".</p>")
