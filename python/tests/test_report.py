@@ -118,7 +118,8 @@ def test_each_video_is_the_reports_episode_run_again(report):
 def test_headless_chromium_shows_the_rate_and_plays_the_videos(report, tmp_path):
     out, _, summary = report
     page_url = (out / "report.html").as_uri()
-    browser = ["chromium", "--headless", "--no-sandbox", "--disable-gpu", f"--user-data-dir={tmp_path / 'profile'}"]
+    browser = ["chromium", "--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+               f"--user-data-dir={tmp_path / 'profile'}"]
     # Under make sanitize the interpreter preloads the ASan runtime; the
     # browser is not ours to check.
     env = {k: v for k, v in os.environ.items() if k != "LD_PRELOAD"}
