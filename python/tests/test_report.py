@@ -139,3 +139,13 @@ def test_headless_chromium_shows_the_rate_and_plays_the_videos(report, tmp_path)
     subprocess.run(browser + ["--window-size=1200,1600", f"--screenshot={shot}", page_url],
                    capture_output=True, timeout=120, check=True, env=env)
     assert shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and shot.stat().st_size > 20000
+
+
+def test_a_folder_that_is_no_evaluation_and_a_bad_size_are_refused_naming_why(tmp_path, report):
+    run = subprocess.run([BINARY, "report", str(tmp_path)], capture_output=True, text=True)
+    assert run.returncode == 1
+    assert f"{tmp_path}: no summary.json (not a `manibench eval --out` folder)" in run.stderr
+    assert not (tmp_path / "report.html").exists()
+    out = report[0]
+    run = subprocess.run([BINARY, "report", str(out), "--video-size", "big"], capture_output=True, text=True)
+    assert run.returncode == 2 and "--video-size must be WxH" in run.stderr
