@@ -293,7 +293,7 @@ def make_page(directory: str, objects: int = 5, size: str = "480x360", manibench
     head, rows = rate_rows(summary)
     title = f"{summary.get('task', '')}: {summary.get('policy', {}).get('name', '')} on the {summary.get('split', '')} split"
     facts = (f"{summary.get('episodes_run', 0)} of {summary.get('episodes_planned', 0)} episodes"
-             f"{'' if summary.get('complete', True) else ' (incomplete: ' + esc(summary.get('stop_reason', '')) + ')'}; "
+             f"{'' if summary.get('complete', True) else ' (incomplete: ' + str(summary.get('stop_reason', '')) + ')'}; "
              f"seed {summary.get('seed', '')}; {summary.get('observation_mode', '')} observations; "
              f"controller {summary.get('controller', '')}; at most {summary.get('max_episode_steps', '')} steps; "
              f"early done {'on' if summary.get('early_done', True) else 'off'}.")
