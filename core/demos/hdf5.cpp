@@ -3,22 +3,40 @@
 #include <algorithm>
 #include <fstream>
 #include <mutex>
+#include <vector>
 
 namespace manibench::demos_detail {
 namespace {
 
 // HDF5 prints its error stack to stderr by default; here errors become
 // exceptions with the stack as their reason.
+//
+// Nor does HDF5 close what is open at exit: a file whose close failed (its
+// last flush met a full disk) stays in HDF5's list half closed, and the
+// library's atexit clean-up then segfaulted closing it again (HDF5 1.10.8),
+// after the command had printed its error. Every file here is closed by
+// its Handle; one whose close failed has lost its unflushed tail anyway.
+// H5dont_atexit counts only before HDF5's first call: this is every
+// entry point's first (createFile, openForReading).
 void silenceHdf5() {
   static std::once_flag once;
-  std::call_once(once, [] { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); });
+  std::call_once(once, [] {
+    H5dont_atexit();
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  });
 }
 
-herr_t collectError(unsigned n, const H5E_error2_t* e, void* data) {
-  auto* text = static_cast<std::string*>(data);
-  if (n > 3) return 0;  // the innermost few say it
-  if (!text->empty()) *text += "; ";
-  *text += std::string(e->func_name ? e->func_name : "?") + ": " + (e->desc ? e->desc : "?");
+// The outermost few entries say what failed; the innermost says why (the
+// system call's errno: "No space left on device", "Not a directory").
+herr_t collectError(unsigned, const H5E_error2_t* e, void* data) {
+  auto* entries = static_cast<std::vector<std::string>*>(data);
+  std::string desc = e->desc ? e->desc : "?";
+  // The low-level driver's entries start with the time of day and a line
+  // break ("time = Sun Dec  6 22:13:27 2026\n, name = ..."): one line, no time.
+  const std::size_t time = desc.find("time = "), end = desc.find("\n, ", time);
+  if (time != std::string::npos && end != std::string::npos) desc.erase(time, end + 3 - time);
+  std::replace(desc.begin(), desc.end(), '\n', ' ');
+  entries->push_back(std::string(e->func_name ? e->func_name : "?") + ": " + desc);
   return 0;
 }
 
@@ -65,10 +83,15 @@ void Handle::reset() {
 }
 
 std::string takeErrorStack() {
-  std::string text;
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, collectError, &text);
+  std::vector<std::string> entries;
+  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, collectError, &entries);
   H5Eclear2(H5E_DEFAULT);
-  return text.empty() ? "no reason given" : text;
+  if (entries.empty()) return "no reason given";
+  std::string text = entries.front();
+  for (std::size_t i = 1; i < std::min<std::size_t>(entries.size(), 4); ++i) text += "; " + entries[i];
+  if (entries.size() > 5) text += "; ...";
+  if (entries.size() > 4) text += "; " + entries.back();
+  return text;
 }
 
 hid_t check(hid_t id, const std::string& what) {

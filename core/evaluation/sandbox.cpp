@@ -114,8 +114,15 @@ void restrictFiles(const SandboxSettings& settings, int abi) {
   close(ruleset);
 }
 
+// Only ever lowers: where the process already has a stricter hard limit (a
+// user's `ulimit -f`, a batch system's), that one stays, since an
+// unprivileged process cannot raise it and the policy is held by it anyway.
 void setLimit(int resource, uint64_t value, const char* name) {
-  const rlimit limit{rlim_t(value), rlim_t(value)};
+  rlimit current{};
+  if (getrlimit(resource, &current) != 0) fail(name, errno);
+  rlim_t wanted = rlim_t(value);
+  if (current.rlim_max != RLIM_INFINITY && current.rlim_max < wanted) wanted = current.rlim_max;
+  const rlimit limit{wanted, wanted};
   if (setrlimit(resource, &limit) != 0) fail(name, errno);
 }
 

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <csignal>
 #include <cstring>
 #include <cstdlib>
 #include <fstream>
@@ -271,6 +272,40 @@ TEST_F(ReachDemos, AStoppedGenerationKeepsEveryFinishedTrajectory) {
   EXPECT_LT(result.trajectories, 60u);
   const DemoReader reader(stopped);
   EXPECT_EQ(reader.getTrajectoryNames().size(), result.trajectories);
+  const auto env = makeDemoEnvironment(getBuildTreeRegistry(), reader.getInfo());
+  for (const std::string& name : reader.getTrajectoryNames())
+    EXPECT_TRUE(replayTrajectory(*env, reader.read(name), true).matches) << name;
+}
+
+// Issue 51's matrix, `demos generate`: a worker killed mid-run. Its episode
+// is a failed attempt (a crash), a worker is started in its place, and the
+// generation goes on to further levels until every object has its
+// trajectories, each of which replays bit for bit.
+TEST_F(ReachDemos, AKilledWorkerIsReplacedAndEveryObjectStillGetsItsTrajectories) {
+  const std::string killed = (dir_ / "killed.h5").string();
+  std::size_t kills = 0;
+  GenerationHooks hooks;
+  hooks.on_progress = [&](const GenerationProgress& p) {
+    if (p.kept < 1 || kills > 0) return;
+    std::vector<pid_t> children;
+    for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+      std::ifstream in(task.path() / "children");
+      for (pid_t pid = 0; in >> pid;) children.push_back(pid);
+    }
+    if (children.empty()) return;
+    ::kill(children.front(), SIGKILL);
+    ++kills;
+  };
+  const GenerationResult result = testing::generateDemoFile(kReach, killed, 3, 1, {"0", "1"}, hooks);
+  ASSERT_EQ(kills, 1u);
+  EXPECT_FALSE(result.interrupted);
+  EXPECT_TRUE(result.isComplete(3));
+  EXPECT_EQ(result.worker_restarts, 1u);
+  uint32_t failures = 0;
+  for (const GenerationObjectResult& o : result.objects) failures += o.failures;
+  EXPECT_EQ(failures, 1u);
+  const DemoReader reader(killed);
+  ASSERT_EQ(reader.getTrajectoryNames().size(), 6u);
   const auto env = makeDemoEnvironment(getBuildTreeRegistry(), reader.getInfo());
   for (const std::string& name : reader.getTrajectoryNames())
     EXPECT_TRUE(replayTrajectory(*env, reader.read(name), true).matches) << name;
