@@ -103,6 +103,13 @@ EvaluationResult parseHeader(const Json& h) {
   r.task.controller = h.at("controller");
   r.task.condition_names = h.at("success_conditions").get<std::vector<std::string>>();
   r.task.max_episode_steps = h.at("max_episode_steps");
+  // The planned objects with their categories (journals from before
+  // categories, and tasks without them, have none).
+  const Json categories = h.value("categories", Json::object());
+  for (const std::string& id : o.objects) {
+    r.task.split_objects.push_back(id);
+    r.task.split_categories.push_back(categories.value(id, std::string()));
+  }
   for (const EpisodeSpec& spec : makeEpisodeList(o.objects, o.levels, o.seed))
     if (spec.index % o.shards == o.shard) r.planned.push_back(spec);
   return r;
@@ -141,6 +148,12 @@ std::string formatJournalHeader(const EvaluationResult& result) {
   h["configuration"] = o.config_notes;
   h["max_episode_steps"] = result.task.max_episode_steps;
   h["success_conditions"] = result.task.condition_names;
+  // Only where the task names categories: other headers stay as they were.
+  const std::map<std::string, std::string> categories = getObjectCategories(result.task);
+  Json planned_categories = Json::object();
+  for (const std::string& id : getPlannedObjects(result))
+    if (categories.count(id)) planned_categories[id] = categories.at(id);
+  if (!planned_categories.empty()) h["categories"] = planned_categories;
   h["action_noise"] = o.action_noise;
   h["record_successes"] = o.record_successes;
   // Only when off: the headers of default runs stay as they were, so

@@ -31,7 +31,7 @@ enum Message : uint8_t {
 template <class Stream, class Info>
 void transferReady(Stream& s, Info& info) {
   s.fields(info.observation_mode, info.controller, info.condition_names, info.split_objects,
-           info.max_episode_steps, info.action_dim, info.observation_dim);
+           info.split_categories, info.max_episode_steps, info.action_dim, info.observation_dim);
 }
 
 // kRun: the episode to run.

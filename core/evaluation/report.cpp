@@ -127,7 +127,11 @@ EvaluationSummary summarize(const std::string& object_id,
 
 void writeSummaryJson(std::ostream& out, const EvaluationSummary& s,
                       const std::vector<std::string>& conditions, const std::string& indent) {
-  out << "{\"object\": " << escapeJson(s.object_id) << ", \"episodes\": " << s.episodes
+  if (s.objects)
+    out << "{\"category\": " << escapeJson(s.object_id) << ", \"objects\": " << s.objects;
+  else
+    out << "{\"object\": " << escapeJson(s.object_id);
+  out << ", \"episodes\": " << s.episodes
       << ", \"successes\": " << s.successes << ", \"failures\": " << s.failures
       << ", \"success_rate\": " << jsonNumber(s.success_rate, 6) << ", \"success_interval\": ["
       << jsonNumber(s.success_low, 6) << ", " << jsonNumber(s.success_high, 6) << "],\n"
@@ -161,7 +165,32 @@ std::string formatInterval(double low, double high) {
   return out.str();
 }
 
+// The intervals of a summary pooled over objects (the overall line, a
+// category's): a bootstrap that resamples those objects' counts.
+void calcPooledIntervals(EvaluationSummary& pooled, const std::vector<const EvaluationSummary*>& objects) {
+  std::vector<uint32_t> successes, successes_once, episodes;
+  std::vector<std::vector<uint32_t>> opened(pooled.opened_counts.size());
+  for (const EvaluationSummary* s : objects) {
+    for (std::size_t f = 0; f < s->opened_counts.size() && f < opened.size(); ++f)
+      opened[f].push_back(s->opened_counts[f]);
+    successes.push_back(s->successes);
+    successes_once.push_back(s->successes_once);
+    episodes.push_back(s->episodes);
+  }
+  calcOverallInterval(successes, episodes, pooled.success_low, pooled.success_high);
+  calcOverallInterval(successes_once, episodes, pooled.success_once_low, pooled.success_once_high);
+  for (std::size_t f = 0; f < opened.size(); ++f)
+    calcOverallInterval(opened[f], episodes, pooled.opened_low[f], pooled.opened_high[f]);
+}
+
 }  // namespace
+
+std::map<std::string, std::string> getObjectCategories(const EvaluationTaskInfo& task) {
+  std::map<std::string, std::string> categories;
+  for (std::size_t i = 0; i < task.split_objects.size() && i < task.split_categories.size(); ++i)
+    if (!task.split_categories[i].empty()) categories[task.split_objects[i]] = task.split_categories[i];
+  return categories;
+}
 
 void summarizeEvaluation(EvaluationResult& result) {
   const std::size_t conditions = result.task.condition_names.size();
@@ -185,23 +214,37 @@ void summarizeEvaluation(EvaluationResult& result) {
     if (!groups[object].empty())
       result.objects.push_back(summarize(object, groups[object], conditions, opening));
   result.overall = summarize("all", all, conditions, opening);
-  std::vector<uint32_t> successes, successes_once, episodes;
-  std::vector<std::vector<uint32_t>> opened(result.overall.opened_counts.size());
+  std::vector<const EvaluationSummary*> every;
   for (EvaluationSummary& s : result.objects) {
     calcWilsonInterval(s.successes, s.episodes, s.success_low, s.success_high);
     calcWilsonInterval(s.successes_once, s.episodes, s.success_once_low, s.success_once_high);
-    for (std::size_t f = 0; f < s.opened_counts.size(); ++f) {
+    for (std::size_t f = 0; f < s.opened_counts.size(); ++f)
       calcWilsonInterval(s.opened_counts[f], s.episodes, s.opened_low[f], s.opened_high[f]);
-      opened[f].push_back(s.opened_counts[f]);
-    }
-    successes.push_back(s.successes);
-    successes_once.push_back(s.successes_once);
-    episodes.push_back(s.episodes);
+    every.push_back(&s);
   }
-  calcOverallInterval(successes, episodes, result.overall.success_low, result.overall.success_high);
-  calcOverallInterval(successes_once, episodes, result.overall.success_once_low, result.overall.success_once_high);
-  for (std::size_t f = 0; f < opened.size(); ++f)
-    calcOverallInterval(opened[f], episodes, result.overall.opened_low[f], result.overall.opened_high[f]);
+  calcPooledIntervals(result.overall, every);
+
+  // Per category, where the task names objects' categories (PartNet
+  // folders): the category's episodes pooled, its interval a bootstrap
+  // over its objects as the overall line's is over all. An object without
+  // one among objects with one counts as "(none)".
+  result.categories.clear();
+  const std::map<std::string, std::string> categories = getObjectCategories(result.task);
+  if (categories.empty()) return;
+  std::map<std::string, std::vector<const EvaluationSummary*>> by_category;
+  for (const EvaluationSummary& s : result.objects) {
+    const auto found = categories.find(s.object_id);
+    by_category[found == categories.end() ? "(none)" : found->second].push_back(&s);
+  }
+  for (const auto& [category, objects] : by_category) {
+    std::vector<const EpisodeRecord*> episodes;
+    for (const EvaluationSummary* s : objects)
+      episodes.insert(episodes.end(), groups[s->object_id].begin(), groups[s->object_id].end());
+    EvaluationSummary pooled = summarize(category, episodes, conditions, opening);
+    pooled.objects = uint32_t(objects.size());
+    calcPooledIntervals(pooled, objects);
+    result.categories.push_back(std::move(pooled));
+  }
 }
 
 void printEvaluationTable(std::ostream& out, const EvaluationResult& result) {
@@ -240,6 +283,10 @@ void printEvaluationTable(std::ostream& out, const EvaluationResult& result) {
   for (std::size_t w : widths) width += w;
   out << std::string(width, '-') << "\n";
   row(result.overall);
+  if (!result.categories.empty()) {
+    out << "\nper category (its objects' episodes; interval: bootstrap over its objects):\n";
+    for (const EvaluationSummary& s : result.categories) row(s);
+  }
   const EvaluationSummary& all = result.overall;
   if (!all.opened_counts.empty()) {
     out << "\nopened at least (at any step):";
@@ -377,6 +424,15 @@ void writeEvaluationJson(std::ostream& out, const EvaluationResult& result) {
     writeSummaryJson(out, result.objects[i], conditions, "    ");
   }
   out << "\n  ],\n";
+  // Only where the task names categories: other reports stay as they were.
+  if (!result.categories.empty()) {
+    out << "  \"per_category\": [";
+    for (std::size_t i = 0; i < result.categories.size(); ++i) {
+      out << (i ? ",\n    " : "\n    ");
+      writeSummaryJson(out, result.categories[i], conditions, "    ");
+    }
+    out << "\n  ],\n";
+  }
   out << "  \"intervals\": {\"per_object\": \"Wilson score, 95 %\", \"overall\": \"bootstrap over objects, 95 % "
          "percentile, "
       << kBootstrapResamples << " resamples, SplitMix64 seed " << kBootstrapSeed

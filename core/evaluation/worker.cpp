@@ -240,6 +240,7 @@ EvaluationTaskInfo describeTask(const Environment& env, const std::string& split
   info.controller = env.getControllerDescription().name;
   info.condition_names = task.success_conditions;
   info.split_objects = env.listObjects(split);
+  for (const std::string& id : info.split_objects) info.split_categories.push_back(env.getObjectCategory(id));
   info.max_episode_steps = task.max_episode_steps;
   info.action_dim = env.getControllerDescription().action_dim;
   info.observation_dim = task.observation_dim;

@@ -180,6 +180,16 @@ std::vector<std::string> TaskInstance::listObjects(const std::string& split) con
   return toStrings(ids, count);
 }
 
+std::string TaskInstance::getObjectCategory(const std::string& object_id) const {
+  if (!MB_HAS_FIELD(mb_task_descriptor, get_object_category, descriptor_->header.struct_size) ||
+      !descriptor_->get_object_category)
+    return {};
+  const char* category = nullptr;
+  callPlugin("task", description_.name, "get_object_category", descriptor_->get_object_category, handle_,
+             object_id.c_str(), &category);
+  return category ? category : "";
+}
+
 void TaskInstance::buildScene(SceneBridge& scene, const std::string& object_id) {
   callPlugin("task", description_.name, "build_scene", descriptor_->build_scene, handle_,
              SceneBridge::getApi(), scene.getHandle(), object_id.c_str());

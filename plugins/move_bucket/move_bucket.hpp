@@ -213,6 +213,9 @@ class MoveBucketTask : public sdk::Task {
   // the way to it in the plane), fallen (tipped past kTipped): what the
   // survey classifies a failure by (manibench/outcome.hpp).
   std::vector<double> measureProgress(const SceneView& scene) const override;
+  std::string getObjectCategory(const std::string& object_id) const override {
+    return buckets_.getCategory(object_id);
+  }
 
  private:
   RewardInputs measure(const SceneView& scene, double action_norm) const;

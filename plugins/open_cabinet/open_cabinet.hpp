@@ -162,6 +162,7 @@ class OpenCabinetTask : public sdk::Task {
   // over B.4's), blocked (the robot's body touches anything), opened (the
   // opened fraction of the joint range: the evaluation's opening curve).
   std::vector<double> measureProgress(const SceneView& scene) const override;
+  std::string getObjectCategory(const std::string& object_id) const override;
 
   // The reward as a function of the quantities it reads (C.1.1), for tests:
   // gripper-handle distance (m), opened fraction of the joint range, target

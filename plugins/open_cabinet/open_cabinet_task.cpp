@@ -88,6 +88,11 @@ std::vector<std::string> OpenCabinetTask::listObjects(const std::string& split) 
   return ids;
 }
 
+// The cabinet's ("45633" of "45633_link_1"): its folder's.
+std::string OpenCabinetTask::getObjectCategory(const std::string& object_id) const {
+  return cabinets_.getCategory(splitObjectId(object_id).first);
+}
+
 void OpenCabinetTask::buildScene(SceneView& scene, const std::string& object_id) {
   const auto [cabinet_id, link] = splitObjectId(object_id);
   cabinet_ = cabinets_.get(cabinet_id);

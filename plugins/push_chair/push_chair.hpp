@@ -168,6 +168,9 @@ class PushChairTask : public sdk::Task {
   // (the way to the target's radius covered), fallen (past the upright
   // tilt).
   std::vector<double> measureProgress(const SceneView& scene) const override;
+  std::string getObjectCategory(const std::string& object_id) const override {
+    return chairs_.getCategory(object_id);
+  }
 
   double static_speed_, static_angular_speed_;
   uint32_t hold_steps_;

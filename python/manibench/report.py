@@ -76,19 +76,26 @@ def esc(value: Any) -> str:
     return html.escape(str(value))
 
 
-def rate_rows(summary: dict) -> tuple[list[str], list[list[str]]]:
+def rate_rows(summary: dict, by: str = "object") -> tuple[list[str], list[list[str]]]:
     """The per-object table (and the overall row last): episodes, success
     with its interval, success once and at the end, each condition and the
-    opening curve where the task has one."""
-    per_object = summary.get("per_object", [])
+    opening curve where the task has one. by="category": the same per
+    category (summary.json's per_category, where the task names them),
+    with each category's number of objects and no overall row."""
     overall = summary.get("overall") or {}
+    if by == "category":
+        entries = summary.get("per_category", [])
+    else:
+        entries = summary.get("per_object", []) + ([dict(overall, object="all")] if overall else [])
     conditions = [c for c in summary.get("success_conditions", []) if c != "success"]
     fractions = [p["fraction"] for p in (overall.get("opening_curve") or [])]
-    head = ["object", "episodes", "success", "95 % interval", "success once", "success at end"]
+    head = [by] + (["objects"] if by == "category" else [])
+    head += ["episodes", "success", "95 % interval", "success once", "success at end"]
     head += conditions + [f"opened {100 * f:g} %" for f in fractions] + ["mean steps"]
     rows = []
-    for entry in per_object + ([dict(overall, object="all")] if overall else []):
-        row = [entry.get("object", ""), str(entry.get("episodes", "")),
+    for entry in entries:
+        row = [entry.get(by, "")] + ([str(entry.get("objects", ""))] if by == "category" else [])
+        row += [str(entry.get("episodes", "")),
                percent(entry.get("success_rate", 0)), interval(entry.get("success_interval")),
                percent(entry.get("success_once_rate", entry.get("success_rate", 0))),
                percent(entry.get("success_at_end_rate", entry.get("success_rate", 0)))]
@@ -305,6 +312,9 @@ def make_page(directory: str, objects: int = 5, size: str = "480x360", manibench
              f"<p>{esc(facts)}</p>",
              "<h2>Per object</h2>", table(head, rows, "rates"),
              "<p>Intervals: Wilson per object; the overall row's resamples the objects.</p>"]
+    if summary.get("per_category"):
+        parts += ["<h2>Per category</h2>", table(*rate_rows(summary, "category"), "rates categories"),
+                  "<p>A category's rate pools its objects' episodes; its interval resamples its objects.</p>"]
     failures = summary.get("failures") or {}
     failed = failed_episodes(report["episodes"], summary.get("success_conditions", []))
     parts.append("<h2>Failed episodes</h2>")

@@ -149,3 +149,26 @@ def test_a_folder_that_is_no_evaluation_and_a_bad_size_are_refused_naming_why(tm
     out = report[0]
     run = subprocess.run([BINARY, "report", str(out), "--video-size", "big"], capture_output=True, text=True)
     assert run.returncode == 2 and "--video-size must be WxH" in run.stderr
+
+
+def test_a_task_with_categories_gets_a_table_per_category(tmp_path):
+    """Two PartNet folders (the hand-made fixture's two cabinets, one per
+    folder): the page's category table is summary.json's per_category."""
+    source = os.path.join(os.environ.get("MANIBENCH_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", "..")),
+                          "tests", "fixtures", "partnet_mini")
+    folders = []
+    for category, object_id in (("Cupboard", "100001"), ("Chest", "100002")):
+        shutil.copytree(os.path.join(source, object_id), tmp_path / "data" / category / object_id)
+        (tmp_path / "data" / category / "test.txt").write_text(object_id + "\n")
+        folders.append(str(tmp_path / "data" / category))
+    out = tmp_path / "out"
+    subprocess.run([BINARY, "eval", "OpenCabinetDrawer-v0", "--policy", "open_cabinet_expert", "--levels", "0",
+                    "--trusted-policy", "--no-progress", "--set", f"task.partnet_dir=[{', '.join(folders)}]",
+                    "--set", "task.partnet_scale=1", "--out", str(out)], check=True, capture_output=True)
+    run = subprocess.run([BINARY, "report", str(out), "--videos", "0"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    page = parse((out / "report.html").read_text())
+    rows = page.tables["rates categories"]
+    summary = json.loads((out / "summary.json").read_text())
+    assert [r[0] for r in rows[1:]] == [c["category"] for c in summary["per_category"]] == ["Chest", "Cupboard"]
+    assert [r[1] for r in rows[1:]] == ["1", "1"]

@@ -5,8 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "eval_test_support.hpp"
@@ -145,6 +147,37 @@ TEST(EvalProtocols, TheOpeningCurveCountsTheEpisodesThatOpenedEachFraction) {
   for (const auto& e : readCsv(reach / "episodes.csv")) EXPECT_EQ(e.at("max_opened"), "");
   EXPECT_FALSE(contains(readFile(reach / "summary.csv"), "opened_"));
   EXPECT_FALSE(contains(r.out, "opened at least"));
+}
+
+// Rates per category (ABI 1.8's get_object_category): a PartNet object's
+// category is its folder's name. Two categories of one object each: each
+// category's line pools its objects' episodes; a task without categories
+// (the Reach runs above) has no such lines.
+TEST(EvalProtocols, RatesPerCategoryPoolTheirObjectsAndTheReportVerifies) {
+  TempDir data, out;
+  const fs::path mini = fs::path(MANIBENCH_TEST_SOURCE_DIR) / "tests/fixtures/partnet_mini";
+  for (const auto& [category, id] : std::vector<std::pair<std::string, std::string>>{{"Cupboard", "100001"},
+                                                                                    {"Chest", "100002"}}) {
+    fs::create_directories(data / category);
+    fs::copy(mini / id, data / category / id, fs::copy_options::recursive);
+    std::ofstream(data / category / "test.txt") << id << "\n";
+  }
+  const std::string folders = "task.partnet_dir=[" + (data / "Cupboard").string() + ", " + (data / "Chest").string() + "]";
+  const auto r = runEval(out, {"OpenCabinetDrawer-v0", "--policy", "open_cabinet_expert", "--levels", "0-1",
+                               "--set", folders, "--set", "task.partnet_scale=1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  EXPECT_TRUE(contains(r.out, "per category")) << r.out;
+  const std::string json = readFile(out / "summary.json");
+  EXPECT_TRUE(contains(json, "\"per_category\": [")) << json;
+  EXPECT_TRUE(contains(json, "{\"category\": \"Chest\", \"objects\": 1, \"episodes\": 2,")) << json;
+  EXPECT_TRUE(contains(json, "{\"category\": \"Cupboard\", \"objects\": 1, \"episodes\": 2,")) << json;
+  EXPECT_TRUE(contains(readFile(out / "journal.jsonl"), "\"categories\":{\"100001_link_1\":\"Cupboard\"")) << r.out;
+  const auto v = testing::runCli({"eval", "--verify", out.path().string()});
+  EXPECT_EQ(v.exit_code, 0) << v.err << v.out;
+
+  TempDir reach;
+  ASSERT_EQ(runEval(reach, kReach).exit_code, 0);
+  EXPECT_FALSE(contains(readFile(reach / "summary.json"), "per_category"));
 }
 
 }  // namespace

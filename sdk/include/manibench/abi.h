@@ -58,7 +58,7 @@ extern "C" {
 #endif
 
 #define MB_ABI_MAJOR 1
-#define MB_ABI_MINOR 7
+#define MB_ABI_MINOR 8
 #define MB_ENTRY_POINT_NAME "manibench_plugin_entry"
 
 /* True when `field` of struct type `type` lies within `size` bytes. */
@@ -376,6 +376,15 @@ typedef struct mb_task_descriptor {
   mb_status (*measure_progress)(mb_task* task, const mb_scene_api* api,
                                 mb_scene* scene, double* out, uint32_t count,
                                 mb_error* err);
+
+  /* ---- ABI 1.8: optional (NULL, or beyond struct_size in an older
+   * plugin: no categories) ----------------------------------------------- */
+  /* The category of an object of list_objects, for the evaluation's rates
+   * per category (a PartNet-Mobility object's is its folder's name, e.g.
+   * "StorageFurniture"); "" when it has none (a generated object). The text
+   * stays valid while the task lives. */
+  mb_status (*get_object_category)(mb_task* task, const char* object_id,
+                                   const char** out_category, mb_error* err);
 } mb_task_descriptor;
 
 /* ---- controller ------------------------------------------------------- */

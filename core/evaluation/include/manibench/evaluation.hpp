@@ -16,6 +16,7 @@
 #include <limits>
 #include <memory>
 #include <stdexcept>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -132,7 +133,8 @@ inline constexpr double kOpeningFractions[] = {0.25, 0.5, 0.75, 0.9};
 
 // Aggregate of a group of episodes (one object, or all).
 struct EvaluationSummary {
-  std::string object_id;  // "all" for the overall line
+  std::string object_id;  // "all" for the overall line; a category's name
+  uint32_t objects = 0;   // a category's objects (0 for an object's line, the overall's)
   uint32_t episodes = 0;
   uint32_t successes = 0;
   uint32_t failures = 0;  // episodes that did not run to their end
@@ -235,6 +237,9 @@ struct EvaluationTaskInfo {
   std::string controller;
   std::vector<std::string> condition_names;
   std::vector<std::string> split_objects;
+  // Each split object's category (ABI 1.8, Environment::getObjectCategory),
+  // in split_objects' order; "" for none.
+  std::vector<std::string> split_categories;
   uint32_t max_episode_steps = 0;
   uint32_t action_dim = 0;
   uint32_t observation_dim = 0;
@@ -252,6 +257,8 @@ struct EvaluationResult {
   std::vector<EpisodeRecord> episodes;     // those that finished, by index
   std::vector<EvaluationSummary> objects;  // per object, in episode-list order
   EvaluationSummary overall;
+  // Per category, by name, where the task names any (getObjectCategories).
+  std::vector<EvaluationSummary> categories;
   bool interrupted = false;  // stopped before every planned episode ran
   std::string stop_reason;   // why, when interrupted ("interrupted by the user", ...)
   uint32_t worker_restarts = 0;
@@ -312,6 +319,8 @@ std::vector<FileDigest> calcInputDigests(const PluginRegistry& registry, const E
 // Per-object and overall summaries of `result.episodes` (failed episodes
 // count as unsuccessful, with every condition unsatisfied).
 void summarizeEvaluation(EvaluationResult& result);
+// The split objects' categories, by id, those with one only.
+std::map<std::string, std::string> getObjectCategories(const EvaluationTaskInfo& task);
 
 // Output. The CSV files and the JSON hold the same numbers; timings appear
 // only in the JSON's "timing" object, so that two runs of the same

@@ -84,6 +84,9 @@ class Environment {
   // The task's objects of `split`, less those whose scene failed to build
   // in this environment (getSkippedObjects).
   std::vector<std::string> listObjects(const std::string& split) const;
+  // An object's category (a PartNet-Mobility object's folder's name), ""
+  // where the task gives none.
+  std::string getObjectCategory(const std::string& object_id) const { return task_->getObjectCategory(object_id); }
   // Objects whose scene could not be built, with the reason (the file and
   // element at fault). The constructor builds the first object that loads:
   // one unloadable object of a user's folder warns and is skipped, it never

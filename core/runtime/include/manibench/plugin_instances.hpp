@@ -70,6 +70,9 @@ class TaskInstance {
   const TaskDescription& getDescription() const { return description_; }
   const std::string& getLibraryPath() const { return library_path_; }
   std::vector<std::string> listObjects(const std::string& split) const;
+  // ABI 1.8: an object's category ("" where it has none, or the plugin
+  // predates it).
+  std::string getObjectCategory(const std::string& object_id) const;
   void buildScene(SceneBridge& scene, const std::string& object_id);
   void reset(SceneBridge& scene, uint64_t seed);
   void observe(SceneBridge& scene, Eigen::VectorXd& out);

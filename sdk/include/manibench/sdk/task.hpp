@@ -87,6 +87,9 @@ class Task {
   // One value per TaskSpec::progress_signals, of the scene as it is (ABI
   // 1.6). Reads only: the host may call it between any two steps.
   virtual std::vector<double> measureProgress(const SceneView&) const { return {}; }
+  // The category of an object of listObjects (ABI 1.8): a PartNet-Mobility
+  // object's folder's name ("StorageFurniture"), "" for none.
+  virtual std::string getObjectCategory(const std::string& /*object_id*/) const { return {}; }
 };
 
 namespace detail {
@@ -97,6 +100,7 @@ struct TaskHandle {
   SegmentTable observation;
   StringTable conditions, masks, joints, progress;
   std::map<std::string, std::unique_ptr<StringTable>> objects;
+  std::map<std::string, std::string> categories;  // by object id, as asked
   uint32_t held_steps = 0;  // TaskSpec::success_hold_steps' count
 
   TaskHandle(std::unique_ptr<Task> t, TaskSpec s)
@@ -173,6 +177,16 @@ struct TaskTrampolines {
       if (!table) table = std::make_unique<StringTable>(h.task->listObjects(key));
       *out_ids = table->data();
       *out_count = table->count();
+    });
+  }
+  static mb_status getObjectCategory(mb_task* t, const char* object_id, const char** out_category,
+                                     mb_error* err) {
+    return guard(err, [&] {
+      TaskHandle& h = *asTask(t);
+      const std::string id = object_id ? object_id : "";
+      auto found = h.categories.find(id);
+      if (found == h.categories.end()) found = h.categories.emplace(id, h.task->getObjectCategory(id)).first;
+      *out_category = found->second.c_str();
     });
   }
   static mb_status buildScene(mb_task* t, const mb_scene_api* api, mb_scene* scene,
@@ -274,6 +288,7 @@ bool registerTask(const char* name, const char* summary) {
   d->get_state = &TaskTrampolines<T>::getState;
   d->set_state = &TaskTrampolines<T>::setState;
   d->measure_progress = &TaskTrampolines<T>::measureProgress;
+  d->get_object_category = &TaskTrampolines<T>::getObjectCategory;
   return true;
 }
 

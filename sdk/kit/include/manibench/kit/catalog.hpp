@@ -135,6 +135,11 @@ class ObjectCatalog {
   const PartNetFolders& getPartNetFolders() const { return partnet_; }
   // The first folder ("" when generated): what a one-folder task reads.
   std::string getPartNetDir() const { return partnet_.empty() ? std::string() : partnet_.getFolders().front(); }
+  // An object's category (Task::getObjectCategory): the name of the
+  // PartNet folder holding it, "" for a generated one.
+  std::string getCategory(const std::string& id) const {
+    return isPartNet() ? PartNetFolders::getCategory(partnet_.findFolder(id)) : std::string();
+  }
 
   // The model of `id`, made on first use and kept.
   std::shared_ptr<const Model> get(const std::string& id) const {
