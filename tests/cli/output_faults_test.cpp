@@ -1,8 +1,9 @@
 // Issue 51's matrix, the output side: an output that cannot be created and a
 // full disk, for every command that writes results (eval, demos generate,
-// demos convert). Each ends with exit status 1 and an error naming the file
-// and the system's reason, never a crash; what eval had journaled before
-// the disk filled is kept, and `--resume` completes the run.
+// demos merge, demos convert). Each ends with exit status 1 and an error
+// naming the file and the system's reason, never a crash; what eval had
+// journaled before the disk filled is kept, and `--resume` completes the
+// run.
 //
 // The full disk is RLIMIT_FSIZE with SIGXFSZ ignored (both inherited by the
 // command and its workers): a write past the limit fails with EFBIG ("File
@@ -106,6 +107,19 @@ TEST(OutputFaults, AFullDiskIsAClearErrorAndEvalKeepsWhatItJournaled) {
   EXPECT_EQ(generate.exit_code, 1) << generate.err;
   EXPECT_NE(generate.err.find(demos), std::string::npos) << generate.err;
   EXPECT_NE(generate.err.find("File too large"), std::string::npos) << generate.err;
+
+  // demos merge: the same (the shards stay as they were).
+  std::vector<std::string> shards;
+  for (const char* shard : {"1/2", "2/2"}) {
+    shards.push_back((dir / ("shard" + std::string(1, shard[0]) + ".h5")).string());
+    ASSERT_EQ(runCli(with(kGenerate, {"--shard", shard, "--out", shards.back()})).exit_code, 0);
+  }
+  const std::string merged = (dir / "merged.h5").string();
+  const auto merge = runCli({"demos", "merge", shards[0], shards[1], "--out", merged}, {}, limitFileSize(8192));
+  EXPECT_EQ(merge.exit_code, 1) << merge.err;
+  EXPECT_NE(merge.err.find(merged), std::string::npos) << merge.err;
+  EXPECT_NE(merge.err.find("File too large"), std::string::npos) << merge.err;
+  ASSERT_EQ(runCli({"demos", "merge", shards[0], shards[1], "--out", merged}).exit_code, 0);
 
   // demos convert: each trajectory it could not write is named.
   const std::string source = (dir / "source.h5").string();
