@@ -252,6 +252,7 @@ class OpenCabinetExpert : public mobile_panda::Expert<ExpertPhase> {
   double pull_lift_ = 0;           // the lift when the pull began
   double pull_handle_height_ = 0;  // the handle's height then
   double pull_open_fraction_ = 0;  // the part's opened fraction then
+  Eigen::Vector3d pull_grip_ = Eigen::Vector3d::Zero();  // the TCP then, in the handle's frame
 };
 
 }  // namespace open_cabinet
