@@ -37,8 +37,9 @@ run in worker processes: a policy that crashes, hangs or returns NaN or a
 wrong-size action fails only its episode (recorded with the reason and step).
 Prints a table per object (episodes, success rate, each success condition's
 satisfactory rate; for doors and drawers the share of episodes that opened
-25, 50, 75 and 90 % of the range) and writes summary.csv, episodes.csv and
-summary.json.
+25, 50, 75 and 90 % of the range), a row per category where the objects
+have one (a PartNet folder's name), and writes summary.csv, episodes.csv
+and summary.json.
 certificate.json says what the results came from (SHA-256 of the plugins,
 the policy's files, each object's files, the configuration). Ctrl-C stops
 the run and writes the results collected so far.
